@@ -1,0 +1,80 @@
+#pragma once
+// The field grid of the paper (§3.1): L columns along the field length and W rows along its
+// width, with the attack-direction normalisation of §7.1 (DESIGN.md §3).
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace ssl_formation {
+
+// A point on the field in millimetres, centre of the field at (0, 0).
+struct Point {
+  double x = 0.0;
+  double y = 0.0;
+  friend bool operator==(const Point&, const Point&) = default;
+};
+
+// Field size in millimetres (the playing area without the boundary).
+struct FieldSize {
+  double length_mm = 9000.0;  // Division B
+  double width_mm = 6000.0;
+  friend bool operator==(const FieldSize&, const FieldSize&) = default;
+  bool valid() const;
+};
+
+// A grid cell: x counts columns along the length, y rows along the width.
+struct Cell {
+  int x = 0;
+  int y = 0;
+  friend bool operator==(const Cell&, const Cell&) = default;
+};
+
+// Which way the opponent attacks in the feed's coordinates. The model always sees an opponent
+// attacking towards +x; the other side is rotated by 180 degrees.
+enum class AttackDirection { positive_x, negative_x };
+
+std::optional<AttackDirection> parse_attack_direction(std::string_view text);  // "+x" or "-x"
+std::string_view to_string(AttackDirection direction);
+
+// The rotation is its own inverse, so the same call undoes it for output.
+Point normalise(Point feed_point, AttackDirection opponent_attacks);
+
+class Grid {
+ public:
+  // Upper bound on L*W: keeps S = (L*W)^3 within 32-bit state indices.
+  static constexpr int max_cells = 256;
+
+  // Throws std::invalid_argument for sizes outside 1..max_cells cells.
+  Grid(int length_cells, int width_cells);
+
+  // Parses "LxW" such as "3x2"; std::nullopt with a reason on error.
+  static std::optional<Grid> parse(std::string_view text, std::string* error = nullptr);
+
+  int length() const { return length_; }  // L, columns along x
+  int width() const { return width_; }    // W, rows along y
+  int cell_count() const { return length_ * width_; }
+  std::string to_string() const;  // "3x2"
+
+  // The cell of a point of the normalised field, clamped so that the boundary area and
+  // anything beyond land in the edge cells.
+  Cell cell_of(Point normalised_point, const FieldSize& field) const;
+  Point centre_of(Cell cell, const FieldSize& field) const;
+
+  // Cells numbered x*W + y, the digit order of the state index (DESIGN.md §3).
+  int cell_id(Cell cell) const { return cell.x * width_ + cell.y; }
+  Cell cell_from_id(int id) const { return Cell{id / width_, id % width_}; }
+  bool contains(Cell cell) const {
+    return cell.x >= 0 && cell.x < length_ && cell.y >= 0 && cell.y < width_;
+  }
+
+  friend bool operator==(const Grid&, const Grid&) = default;
+
+ private:
+  int length_;
+  int width_;
+};
+
+}  // namespace ssl_formation
