@@ -1,0 +1,99 @@
+#include "ssl_formation/app/options.hpp"
+
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+namespace ssl_formation::app {
+
+Grid ModelOptions::parsed_grid() const {
+  std::string error;
+  const auto parsed = Grid::parse(grid, &error);
+  if (!parsed) throw UsageError("--grid: " + error);
+  return *parsed;
+}
+
+SamplerConfig ModelOptions::sampler_config() const {
+  SamplerConfig config;
+  config.grid = parsed_grid();
+  if (!std::isfinite(step_s) || step_s <= 0.0) {
+    std::ostringstream text;
+    text << "--step must be a positive number of seconds, not " << step_s;
+    throw UsageError(text.str());
+  }
+  config.step_s = step_s;
+  const auto color = parse_team_color(opponent_color);
+  if (!color) throw UsageError("--opponent-color must be yellow or blue, not '" + opponent_color + "'");
+  config.opponent_color = *color;
+  const auto attacks = parse_attack_direction(opponent_attacks);
+  if (!attacks) throw UsageError("--opponent-attacks must be +x or -x, not '" + opponent_attacks + "'");
+  config.opponent_attacks = *attacks;
+  config.field = FieldSize{field_length_mm, field_width_mm};
+  if (!config.field.valid()) {
+    throw UsageError("--field-length and --field-width must be positive millimetres");
+  }
+  config.use_geometry = !ignore_geometry;
+  return config;
+}
+
+void add_model_options(po::options_description& options, ModelOptions& model) {
+  options.add_options()
+      ("grid", po::value(&model.grid)->default_value(model.grid),
+       "grid LxW: L cells along the field length, W along its width")
+      ("step", po::value(&model.step_s)->default_value(model.step_s),
+       "seconds of data time (t_capture) between two formations")
+      ("opponent-color", po::value(&model.opponent_color)->default_value(model.opponent_color),
+       "the opponent's colour: yellow or blue")
+      ("opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),
+       "the direction the opponent attacks in the feed's coordinates: +x or -x")
+      ("field-length", po::value(&model.field_length_mm)->default_value(model.field_length_mm),
+       "field length in mm until a geometry packet says otherwise")
+      ("field-width", po::value(&model.field_width_mm)->default_value(model.field_width_mm),
+       "field width in mm until a geometry packet says otherwise")
+      ("ignore-geometry", po::bool_switch(&model.ignore_geometry),
+       "keep --field-length/--field-width even when geometry packets arrive");
+}
+
+void add_vision_options(po::options_description& options, NetworkOptions& network) {
+  options.add_options()
+      ("vision-address", po::value(&network.vision_address)->default_value(network.vision_address),
+       "SSL-Vision multicast group:port to listen on (grSim: 224.5.23.2:10020)")
+      ("interface", po::value(&network.interface)->default_value(network.interface),
+       "IPv4 address of the interface to join on, or 'all' for every interface");
+}
+
+bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,
+                        const std::string& usage_line, const std::string& description,
+                        const po::positional_options_description* positional) {
+  po::options_description all(options);
+  all.add_options()("help,h", "show this help with the defaults and exit");
+  po::variables_map values;
+  try {
+    po::command_line_parser parser(argc, argv);
+    parser.options(all);
+    if (positional) parser.positional(*positional);
+    po::store(parser.run(), values);
+    if (values.count("help")) {
+      std::cout << "Usage: " << usage_line << "\n" << description << "\n\n" << all << "\n";
+      return false;
+    }
+    po::notify(values);
+  } catch (const po::error& e) {
+    throw UsageError(e.what());
+  }
+  return true;
+}
+
+int run_main(const char* program, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::cerr << program << ": error: " << e.what() << " (see " << program << " --help)\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << program << ": " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace ssl_formation::app

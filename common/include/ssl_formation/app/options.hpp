@@ -1,0 +1,59 @@
+#pragma once
+// One option parser for every program (Boost.Program_options), so the same thing has the same
+// name everywhere: --vision-address, --interface, --table, --grid, --step, --opponent-color,
+// --opponent-attacks, --field-length, --field-width.
+
+#include <boost/program_options.hpp>
+#include <string>
+#include <vector>
+
+#include "ssl_formation/formation.hpp"
+#include "ssl_formation/grid.hpp"
+#include "ssl_formation/sampler.hpp"
+
+namespace ssl_formation::app {
+
+namespace po = boost::program_options;
+
+// Thrown for a bad option value; main() prints it as one line and exits with 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr const char* default_vision_address = "224.5.23.2:10006";
+inline constexpr const char* default_prediction_address = "224.5.23.4:10040";
+inline constexpr const char* default_interface = "127.0.0.1";
+inline constexpr const char* default_table = "formation-table.bin";
+
+// The model's options: what the sampler and the table need to agree on.
+struct ModelOptions {
+  std::string grid = "3x2";
+  double step_s = 2.0;
+  std::string opponent_color = "yellow";
+  std::string opponent_attacks = "+x";
+  double field_length_mm = 9000.0;
+  double field_width_mm = 6000.0;
+  bool ignore_geometry = false;
+
+  Grid parsed_grid() const;  // throws UsageError
+  SamplerConfig sampler_config() const;  // validates everything; throws UsageError
+};
+void add_model_options(po::options_description& options, ModelOptions& model);
+
+struct NetworkOptions {
+  std::string vision_address = default_vision_address;
+  std::string interface = default_interface;
+};
+void add_vision_options(po::options_description& options, NetworkOptions& network);
+
+// Parses argv. Prints --help (with defaults) and returns false when the program should exit 0.
+// Throws UsageError for anything wrong, with one line of explanation.
+bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,
+                        const std::string& usage_line, const std::string& description,
+                        const po::positional_options_description* positional = nullptr);
+
+// Runs `body` and turns UsageError into "PROGRAM: error: ..." on stderr and exit code 2, and
+// any other exception into "PROGRAM: ..." and exit code 1.
+int run_main(const char* program, const std::function<int()>& body);
+
+}  // namespace ssl_formation::app

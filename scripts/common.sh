@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Shared by scripts/test.sh and scripts/demo.sh: installs what the build needs from Debian and
+# configures and builds the project. Sourced, not run.
+
+SSLF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+# Debian 12 packages the build and the tests need.
+SSLF_PACKAGES=(cmake ninja-build g++ pkg-config protobuf-compiler libprotobuf-dev
+  libboost-dev libboost-program-options-dev libboost-iostreams-dev
+  libspdlog-dev libfmt-dev zlib1g-dev libgtest-dev libgmock-dev libbenchmark-dev)
+
+sslf_install_packages() {
+  local missing=()
+  local package
+  for package in "${SSLF_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+      missing+=("$package")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  echo "Installing from Debian: ${missing[*]}"
+  local sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "error: need root (or sudo) to install: ${missing[*]}" >&2; return 1; }
+    sudo="sudo"
+  fi
+  $sudo apt-get update -qq || return 1
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" || return 1
+}
+
+# sslf_build BUILD_DIR [cmake args...]
+sslf_build() {
+  local build_dir="$1"
+  shift
+  cmake -S "$SSLF_ROOT" -B "$build_dir" -G Ninja "$@" >"$build_dir.configure.log" 2>&1 || {
+    cat "$build_dir.configure.log" >&2
+    return 1
+  }
+  cmake --build "$build_dir" -j "$(nproc)"
+}
