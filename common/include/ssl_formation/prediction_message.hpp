@@ -1,0 +1,29 @@
+#pragma once
+// Converts a formation and its prediction into the FormationPrediction message the predictor
+// multicasts, and into the one readable line it prints.
+
+#include <string>
+
+#include "formation_prediction.pb.h"
+#include "ssl_formation/predictor.hpp"
+#include "ssl_formation/sampler.hpp"
+
+namespace ssl_formation {
+
+struct PredictionContext {
+  const StateCodec* codec = nullptr;
+  FieldSize field;
+  AttackDirection opponent_attacks = AttackDirection::positive_x;
+  TeamColor opponent_color = TeamColor::yellow;
+  double step_s = 2.0;
+  std::uint64_t table_transitions = 0;
+};
+
+// Fills `out` (cleared first; reusing one message avoids allocation per packet).
+void fill_prediction_message(const Formation& current, const Prediction& prediction,
+                             const PredictionContext& context, proto::FormationPrediction& out);
+
+// "t=12.00 frame=6 now C(1,1) [0:(0,1) 1:(1,0) ...] | +1 C(2,1) p=0.82 [0:(1,1) ...] conf=0.412 | +2 ..."
+std::string describe_prediction(const Formation& current, const Prediction& prediction);
+
+}  // namespace ssl_formation
