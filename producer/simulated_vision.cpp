@@ -120,7 +120,12 @@ SimulatedFormation SimulatedVision::next() {
   formation.source = FormationSource::play;
   formation.play = current_play_;
   formation.play_step = current_step_;
+  // Plays are drawn for a 9 x 6 m field; another field size stretches them.
   formation.opponent = play_formation(current_play_, current_step_);
+  for (Point& p : formation.opponent) {
+    p.x *= config_.field.length_mm / 9000.0;
+    p.y *= config_.field.width_mm / 6000.0;
+  }
   if (++current_step_ == formations_per_play) current_play_ = -1;
   build_packets(formation);
   return formation;
@@ -146,7 +151,9 @@ void SimulatedVision::build_packets(SimulatedFormation& formation) {
   std::array<Point, robots_per_team> ours_feed;
   for (int id = 0; id < robots_per_team; ++id) {
     opponent_feed[static_cast<std::size_t>(id)] = observe(formation.opponent[static_cast<std::size_t>(id)]);
-    ours_feed[static_cast<std::size_t>(id)] = observe(our_team[static_cast<std::size_t>(id)]);
+    const Point ours = our_team[static_cast<std::size_t>(id)];
+    ours_feed[static_cast<std::size_t>(id)] =
+        observe(Point{ours.x * config_.field.length_mm / 9000.0, ours.y * config_.field.width_mm / 6000.0});
   }
   // The ball is at the feet of the opponent's most advanced robot.
   const auto leader = std::max_element(formation.opponent.begin(), formation.opponent.end(),

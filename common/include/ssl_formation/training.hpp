@@ -1,0 +1,44 @@
+#pragma once
+// Training: the sampler feeding the transition table. The live trainer, offline training from
+// logs and the tests all run exactly this code, fed from a socket, a file or a vector.
+
+#include <cstdint>
+
+#include "ssl_formation/sampler.hpp"
+#include "ssl_formation/transition_table.hpp"
+
+class SSL_WrapperPacket;
+
+namespace ssl_formation {
+
+class Training {
+ public:
+  // `table` may hold earlier counts (a resumed table); its grid must be the sampler's.
+  // Throws std::invalid_argument if the grids differ.
+  Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before = 0);
+  // The sampler's handler points at this object's table.
+  Training(const Training&) = delete;
+  Training& operator=(const Training&) = delete;
+
+  void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
+
+  const TransitionTable& table() const { return table_; }
+  const FormationSampler& sampler() const { return sampler_; }
+  // Formations sampled, including those of the resumed table.
+  std::uint64_t samples() const { return samples_before_ + sampler_.counters().samples; }
+  // Counts added since the last call to mark_saved(): lets a daemon skip saving an unchanged table.
+  bool changed_since_save() const { return table_.transitions() != saved_transitions_ || samples() != saved_samples_; }
+  void mark_saved() {
+    saved_transitions_ = table_.transitions();
+    saved_samples_ = samples();
+  }
+
+ private:
+  TransitionTable table_;
+  FormationSampler sampler_;
+  std::uint64_t samples_before_;
+  std::uint64_t saved_transitions_;
+  std::uint64_t saved_samples_;
+};
+
+}  // namespace ssl_formation

@@ -1,0 +1,33 @@
+#include "table_watcher.hpp"
+
+#include <sys/stat.h>
+
+namespace ssl_formation::predictor {
+
+TableWatcher::TableWatcher(std::filesystem::path path, Grid expected_grid)
+    : path_(std::move(path)), expected_grid_(expected_grid) {}
+
+std::optional<TableWatcher::Identity> TableWatcher::identify() const {
+  struct stat info {};
+  if (::stat(path_.c_str(), &info) != 0) return std::nullopt;
+  return Identity{static_cast<std::uintmax_t>(info.st_ino),
+                  static_cast<std::int64_t>(info.st_mtim.tv_sec) * 1000000000 + info.st_mtim.tv_nsec,
+                  static_cast<std::uintmax_t>(info.st_size)};
+}
+
+TableWatcher::Change TableWatcher::poll() {
+  const std::optional<Identity> now = identify();
+  if (!now || (seen_ && *now == *seen_)) return Change::none;
+  seen_ = now;
+  TableLoadResult loaded = load_table(path_, expected_grid_);
+  if (!loaded) {
+    last_error_ = loaded.message;
+    return Change::failed;
+  }
+  table_ = std::move(loaded.stored);
+  last_error_.clear();
+  ++reloads_;
+  return Change::loaded;
+}
+
+}  // namespace ssl_formation::predictor

@@ -1,0 +1,45 @@
+#pragma once
+// Follows the trainer's table file: loads it when it appears and again whenever it is replaced
+// (the trainer renames a new file over the old one, which changes its inode and mtime). A file
+// that fails to load is reported once and the table in use is kept.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "ssl_formation/grid.hpp"
+#include "ssl_formation/table_file.hpp"
+
+namespace ssl_formation::predictor {
+
+class TableWatcher {
+ public:
+  TableWatcher(std::filesystem::path path, Grid expected_grid);
+
+  enum class Change { none, loaded, failed };
+  // Looks at the file once; loads it if it changed since the last look.
+  Change poll();
+
+  const std::optional<StoredTable>& table() const { return table_; }
+  const std::string& last_error() const { return last_error_; }
+  std::uint64_t reloads() const { return reloads_; }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  struct Identity {
+    std::uintmax_t inode = 0;
+    std::int64_t mtime_ns = 0;
+    std::uintmax_t size = 0;
+    friend bool operator==(const Identity&, const Identity&) = default;
+  };
+  std::optional<Identity> identify() const;
+
+  std::filesystem::path path_;
+  Grid expected_grid_;
+  std::optional<Identity> seen_;
+  std::optional<StoredTable> table_;
+  std::string last_error_;
+  std::uint64_t reloads_ = 0;
+};
+
+}  // namespace ssl_formation::predictor

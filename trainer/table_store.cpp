@@ -1,0 +1,54 @@
+#include "table_store.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <stdexcept>
+
+namespace ssl_formation::trainer {
+
+std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
+                                        const SamplerConfig& config, bool reset) {
+  std::error_code ignored;
+  if (reset || !std::filesystem::exists(table_path, ignored)) {
+    if (reset) spdlog::info("--reset: starting an empty {} table; {} will be replaced at the first save",
+                            config.grid.to_string(), table_path.string());
+    else spdlog::info("no table at {} yet: starting an empty {} table", table_path.string(),
+                      config.grid.to_string());
+    return std::make_unique<Training>(config, TransitionTable(config.grid));
+  }
+  TableLoadResult loaded = load_table(table_path, config.grid);
+  if (!loaded) {
+    throw std::runtime_error(loaded.message +
+                             "; the file is left as it is: give another --table, or --reset to "
+                             "replace it with an empty table");
+  }
+  StoredTable& stored = *loaded.stored;
+  if (stored.metadata.step_s != config.step_s) {
+    throw std::runtime_error(table_path.string() + " was trained with --step " +
+                             std::to_string(stored.metadata.step_s) + ", not " +
+                             std::to_string(config.step_s) +
+                             ": its transitions mean another time scale; use the same --step, "
+                             "another --table, or --reset");
+  }
+  spdlog::info("resumed {}: grid {}, {} transitions, {} formations, {} states seen",
+               table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),
+               stored.metadata.samples, stored.table.rows_seen());
+  return std::make_unique<Training>(config, std::move(stored.table), stored.metadata.samples);
+}
+
+bool save_training(const std::filesystem::path& table_path, Training& training) {
+  TableMetadata metadata;
+  metadata.field = training.sampler().field();
+  metadata.step_s = training.sampler().config().step_s;
+  metadata.samples = training.samples();
+  const TableSaveResult result = save_table(table_path, training.table(), metadata);
+  if (!result) {
+    spdlog::error("{}", result.message);
+    return false;
+  }
+  training.mark_saved();
+  spdlog::debug("saved {} ({} transitions)", table_path.string(), training.table().transitions());
+  return true;
+}
+
+}  // namespace ssl_formation::trainer

@@ -1,0 +1,24 @@
+#pragma once
+// Where the trainer's table comes from and goes to: resume an existing table file (or refuse
+// one of another grid or step unless --reset), and save it atomically with its metadata.
+
+#include <filesystem>
+#include <memory>
+
+#include "ssl_formation/sampler.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/training.hpp"
+
+namespace ssl_formation::trainer {
+
+// Opens the training for `table_path`: resumes its counts if the file exists, or starts empty.
+// Throws std::runtime_error, with the file's own message and what to do, when the file cannot
+// be resumed (corrupt, another grid or step) and `reset` is false. With `reset` the old file is
+// left alone until the first save replaces it.
+std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
+                                        const SamplerConfig& config, bool reset);
+
+// Saves the training's table atomically; logs and returns false on failure.
+bool save_training(const std::filesystem::path& table_path, Training& training);
+
+}  // namespace ssl_formation::trainer
