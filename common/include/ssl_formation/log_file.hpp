@@ -1,0 +1,171 @@
+#pragma once
+// The official SSL log file (DESIGN.md §5): "SSL_LOG_FILE", a big-endian int32 version (1), then
+// messages of big-endian int64 receive time (ns), int32 type, int32 size and size payload bytes.
+// `.log.gz` is the same stream gzip-compressed; the reader takes either, whatever the name.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ssl_vision_wrapper.pb.h"
+
+struct gzFile_s;  // zlib's file, kept out of this header
+
+namespace ssl_formation {
+
+enum class LogMessageType : std::int32_t {
+  blank = 0,
+  unknown = 1,
+  legacy_vision = 2,  // SSL_WrapperPacket of the 2010 schema
+  referee = 3,
+  vision = 4,  // SSL_WrapperPacket
+  tracker = 5,
+  // Last message of an indexed file (ssl-go-tools): its payload is every message's int64
+  // offset, then the int64 distance from the end of the file back to it, then "INDEXED".
+  index = 6,
+};
+
+inline constexpr std::string_view kLogFileMagic = "SSL_LOG_FILE";
+inline constexpr std::int32_t kLogFileVersion = 1;
+inline constexpr std::size_t kLogFileHeaderSize = 16;     // magic + version
+inline constexpr std::size_t kLogMessageHeaderSize = 16;  // time + type + size
+inline constexpr std::string_view kLogIndexMarker = "INDEXED";
+// Larger sizes (and negative ones) are taken as corruption: no real message comes near it.
+inline constexpr std::int64_t kLogMaxMessageSize = 16 * 1024 * 1024;
+
+struct LogMessage {
+  std::int64_t receive_time_ns = 0;
+  std::int32_t type = 0;
+  std::string payload;
+  std::uint64_t offset = 0;  // of the message header in the uncompressed stream
+};
+
+// What a reader has seen so far. Every message counts once in `messages` and once by type.
+struct LogReadCounters {
+  std::uint64_t messages = 0;
+  std::uint64_t vision = 0;         // type 4
+  std::uint64_t legacy_vision = 0;  // type 2
+  std::uint64_t referee = 0;        // type 3
+  std::uint64_t tracker = 0;        // type 5
+  std::uint64_t index = 0;          // type 6
+  std::uint64_t unknown = 0;        // type 1 and types outside 0-6
+  std::uint64_t parse_errors = 0;   // type 4 or 2 payloads that did not decode (next_vision only)
+  std::uint64_t bytes = 0;          // uncompressed bytes consumed, file header included
+  std::uint64_t blank = 0;          // type 0
+  // Type 2 packets that decoded but lack a usable detection frame (next_vision only).
+  std::uint64_t legacy_unusable = 0;
+};
+
+namespace detail {
+struct GzFileCloser {
+  void operator()(gzFile_s* file) const;
+};
+using GzFilePtr = std::unique_ptr<gzFile_s, GzFileCloser>;
+}  // namespace detail
+
+// Reads messages one by one through a buffer, reusing its storage: no allocation per message.
+class LogReader {
+ public:
+  // Opens and checks the header. On failure returns nullopt and sets *error (if given) to a
+  // message naming the path and the problem.
+  static std::optional<LogReader> open(const std::filesystem::path& path, std::string* error);
+
+  // Next raw message; false at the end of the file or on an error. An index message ends the
+  // file: it is counted but not read or returned (a long log's index may exceed the size limit).
+  // error() is empty after a clean end, else it names the byte offset of the bad message header.
+  bool next(LogMessage& out);
+  // Next vision packet (type 4, and type 2 when its detection frame is usable; the 2010 geometry
+  // is dropped since its field numbers mean other things now), skipping and counting the others.
+  // Packets that fail to parse are counted as parse_errors and skipped.
+  bool next_vision(SSL_WrapperPacket& packet, std::int64_t* receive_time_ns = nullptr);
+
+  const std::string& error() const { return error_; }
+  const LogReadCounters& counters() const { return counters_; }
+  const std::filesystem::path& path() const { return path_; }
+  std::uint64_t offset() const { return offset_; }  // bytes consumed so far (uncompressed)
+  std::uint64_t compressed_size() const { return compressed_size_; }  // the file on disk
+  std::uint64_t compressed_offset() const;  // how far into the file on disk, for progress bars
+
+ private:
+  struct Header {
+    std::int64_t receive_time_ns;
+    std::int32_t type;
+    std::int32_t size;
+    std::uint64_t offset;
+  };
+
+  explicit LogReader(std::filesystem::path path, detail::GzFilePtr file);
+  // The next message's header and payload; the payload view stays valid until the next call.
+  bool next_view(Header& header, std::string_view& payload);
+  void count(std::int32_t type);
+  // Makes at least n buffered bytes available if the file has them; false if not.
+  bool fill(std::size_t n);
+  std::size_t available() const { return end_ - begin_; }
+  void consume(std::size_t n);
+  // Fills `scratch_` with a payload too large for the buffer; returns the bytes got.
+  std::size_t read_large(std::size_t size);
+  bool fail(std::string message);
+  // zlib's own error after a short read (corrupt or cut-off gzip data), or empty.
+  std::string gz_problem() const;
+
+  std::filesystem::path path_;
+  detail::GzFilePtr file_;
+  std::unique_ptr<char[]> buffer_;
+  std::size_t begin_ = 0;
+  std::size_t end_ = 0;
+  bool eof_ = false;   // the file has no more bytes
+  bool done_ = false;  // clean end or error: next() returns false from now on
+  std::string scratch_;
+  std::string error_;
+  LogReadCounters counters_;
+  std::uint64_t offset_ = 0;
+  std::uint64_t compressed_size_ = 0;
+};
+
+// Writes a log, gzip-compressed when the path ends in ".gz". Failed writes are sticky.
+class LogWriter {
+ public:
+  static std::optional<LogWriter> create(const std::filesystem::path& path, std::string* error);
+
+  // Refuses (false, error()) payloads over kLogMaxMessageSize, which no reader would accept.
+  bool write(std::int32_t type, std::int64_t receive_time_ns, std::string_view payload);
+  bool write_vision(const SSL_WrapperPacket& packet, std::int64_t receive_time_ns);
+  // indexed: append an index message (payload: the big-endian int64 offset of every message
+  // header), its own offset as int64 and "INDEXED". false + error() on any failure. The
+  // destructor closes an unclosed writer without an index, silently.
+  bool close(bool indexed = false);
+
+  const std::string& error() const { return error_; }
+  std::uint64_t offset() const { return offset_; }  // uncompressed bytes written so far
+
+ private:
+  explicit LogWriter(std::filesystem::path path, detail::GzFilePtr file);
+  bool put(const void* data, std::size_t size);
+  bool put_message(std::int32_t type, std::int64_t receive_time_ns, std::string_view payload);
+
+  std::filesystem::path path_;
+  detail::GzFilePtr file_;
+  std::string error_;
+  std::uint64_t offset_ = 0;
+  std::int64_t last_time_ns_ = 0;
+  std::vector<std::int64_t> message_offsets_;
+  std::string scratch_;
+  bool failed_ = false;
+};
+
+// A whole file's vision packets, plus the error text if reading stopped early (everything read
+// before it is kept) and the counters.
+struct LogVisionPackets {
+  std::vector<SSL_WrapperPacket> packets;
+  std::vector<std::int64_t> receive_times_ns;
+  std::string error;
+  LogReadCounters counters;
+};
+
+LogVisionPackets read_vision_log(const std::filesystem::path& path);
+
+}  // namespace ssl_formation

@@ -1,0 +1,464 @@
+#include "ssl_formation/log_file.hpp"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <system_error>
+#include <utility>
+
+namespace ssl_formation {
+
+namespace {
+
+// Big enough that a whole vision packet (a few hundred bytes, geometry a few KiB) is nearly
+// always contiguous in it, so the payload is parsed in place.
+constexpr std::size_t kReadBufferSize = 256 * 1024;
+constexpr unsigned kGzBufferSize = 128 * 1024;
+
+std::int64_t load_be64(const char* p) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | static_cast<unsigned char>(p[i]);
+  return static_cast<std::int64_t>(v);
+}
+
+std::int32_t load_be32(const char* p) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(p[i]);
+  return static_cast<std::int32_t>(v);
+}
+
+void store_be64(char* p, std::int64_t value) {
+  const auto v = static_cast<std::uint64_t>(value);
+  for (int i = 0; i < 8; ++i) p[i] = static_cast<char>((v >> (56 - 8 * i)) & 0xff);
+}
+
+void store_be32(char* p, std::int32_t value) {
+  const auto v = static_cast<std::uint32_t>(value);
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<char>((v >> (24 - 8 * i)) & 0xff);
+}
+
+bool ends_with_gz(const std::filesystem::path& path) {
+  const std::string name = path.filename().string();
+  return name.size() >= 3 && name.compare(name.size() - 3, 3, ".gz") == 0;
+}
+
+std::string errno_text(int err) { return err != 0 ? std::strerror(err) : "out of memory"; }
+
+// zlib prefixes its messages with the path it was given; ours already start with it.
+std::string strip_path(std::string message, const std::filesystem::path& path) {
+  const std::string prefix = path.string() + ": ";
+  if (message.compare(0, prefix.size(), prefix) == 0) message.erase(0, prefix.size());
+  return message;
+}
+
+// A type-2 packet decoded with today's schema is usable when the detection fields that mean the
+// same in the 2010 schema are there. The 2010 geometry used other field numbers (field 1 was the
+// line width), so it is dropped rather than misread. Required fields nobody downstream needs are
+// given neutral values, so the packet is initialized and can be written or sent again.
+bool adopt_legacy(SSL_WrapperPacket& packet) {
+  if (!packet.has_detection()) return false;
+  SSL_DetectionFrame& frame = *packet.mutable_detection();
+  if (!frame.has_frame_number() || !frame.has_t_capture() || !frame.has_camera_id()) return false;
+  for (const auto& ball : frame.balls())
+    if (!ball.has_x() || !ball.has_y()) return false;
+  for (const auto* robots : {&frame.robots_yellow(), &frame.robots_blue()})
+    for (const auto& robot : *robots)
+      if (!robot.has_x() || !robot.has_y()) return false;
+  packet.clear_geometry();
+  if (!frame.has_t_sent()) frame.set_t_sent(frame.t_capture());
+  for (auto& ball : *frame.mutable_balls()) {
+    if (!ball.has_confidence()) ball.set_confidence(1.0f);
+    if (!ball.has_pixel_x()) ball.set_pixel_x(0.0f);
+    if (!ball.has_pixel_y()) ball.set_pixel_y(0.0f);
+  }
+  for (auto* robots : {frame.mutable_robots_yellow(), frame.mutable_robots_blue()})
+    for (auto& robot : *robots) {
+      if (!robot.has_confidence()) robot.set_confidence(1.0f);
+      if (!robot.has_pixel_x()) robot.set_pixel_x(0.0f);
+      if (!robot.has_pixel_y()) robot.set_pixel_y(0.0f);
+    }
+  return true;
+}
+
+}  // namespace
+
+namespace detail {
+void GzFileCloser::operator()(gzFile_s* file) const {
+  if (file != nullptr) gzclose(file);
+}
+}  // namespace detail
+
+// ---------------------------------------------------------------------------------------------
+// LogReader
+
+LogReader::LogReader(std::filesystem::path path, detail::GzFilePtr file)
+    : path_(std::move(path)),
+      file_(std::move(file)),
+      buffer_(std::make_unique<char[]>(kReadBufferSize)) {}
+
+std::optional<LogReader> LogReader::open(const std::filesystem::path& path, std::string* error) {
+  const auto set_error = [&](const std::string& message) {
+    if (error != nullptr) *error = path.string() + ": " + message;
+  };
+  errno = 0;
+  gzFile file = gzopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    set_error("cannot open: " + errno_text(errno));
+    return std::nullopt;
+  }
+  gzbuffer(file, kGzBufferSize);  // before the first read, as zlib requires
+  LogReader reader(path, detail::GzFilePtr(file));
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  reader.compressed_size_ = ec ? 0 : static_cast<std::uint64_t>(size);
+
+  reader.fill(kLogFileHeaderSize);
+  int gz_error = Z_OK;
+  const char* gz_message = gzerror(file, &gz_error);
+  if (gz_error != Z_OK && gz_error != Z_BUF_ERROR) {
+    set_error("cannot read: " + strip_path(gz_message, path));
+    return std::nullopt;
+  }
+  const char* data = reader.buffer_.get() + reader.begin_;
+  if (reader.available() == 0) {
+    set_error("not an SSL log file (empty)");
+    return std::nullopt;
+  }
+  if (reader.available() < kLogFileMagic.size() ||
+      std::string_view(data, kLogFileMagic.size()) != kLogFileMagic) {
+    set_error("not an SSL log file (bad header at byte 0)");
+    return std::nullopt;
+  }
+  if (reader.available() < kLogFileHeaderSize) {
+    set_error("truncated header at byte " + std::to_string(kLogFileMagic.size()) +
+              ": the version needs 4 bytes, " +
+              std::to_string(reader.available() - kLogFileMagic.size()) + " remain");
+    return std::nullopt;
+  }
+  const std::int32_t version = load_be32(data + kLogFileMagic.size());
+  if (version != kLogFileVersion) {
+    set_error("unsupported log version " + std::to_string(version) + " at byte " +
+              std::to_string(kLogFileMagic.size()));
+    return std::nullopt;
+  }
+  reader.consume(kLogFileHeaderSize);
+  reader.counters_.bytes = reader.offset_;
+  return reader;
+}
+
+void LogReader::consume(std::size_t n) {
+  begin_ += n;
+  offset_ += n;
+}
+
+bool LogReader::fill(std::size_t n) {
+  if (available() >= n) return true;
+  if (begin_ > 0) {
+    std::memmove(buffer_.get(), buffer_.get() + begin_, available());
+    end_ -= begin_;
+    begin_ = 0;
+  }
+  while (end_ < n && !eof_) {
+    const int got =
+        gzread(file_.get(), buffer_.get() + end_, static_cast<unsigned>(kReadBufferSize - end_));
+    if (got <= 0) {
+      eof_ = true;  // a read error (got < 0) is reported by gz_problem()
+      break;
+    }
+    end_ += static_cast<std::size_t>(got);
+  }
+  return available() >= n;
+}
+
+std::size_t LogReader::read_large(std::size_t size) {
+  scratch_.resize(size);
+  std::size_t got = std::min(size, available());
+  std::memcpy(scratch_.data(), buffer_.get() + begin_, got);
+  consume(got);
+  while (got < size && !eof_) {
+    const int n = gzread(file_.get(), scratch_.data() + got, static_cast<unsigned>(size - got));
+    if (n <= 0) {
+      eof_ = true;
+      break;
+    }
+    got += static_cast<std::size_t>(n);
+    offset_ += static_cast<std::size_t>(n);
+  }
+  return got;
+}
+
+std::string LogReader::gz_problem() const {
+  int code = Z_OK;
+  const char* message = gzerror(file_.get(), &code);
+  if (code == Z_OK) return {};
+  // Z_BUF_ERROR: the gzip stream stops in the middle, i.e. the file was cut off.
+  if (code == Z_BUF_ERROR) return " (the gzip stream is cut off)";
+  return " (gzip: " + strip_path(message != nullptr ? message : "", path_) + ")";
+}
+
+bool LogReader::fail(std::string message) {
+  error_ = path_.string() + ": " + std::move(message);
+  done_ = true;
+  return false;
+}
+
+void LogReader::count(std::int32_t type) {
+  ++counters_.messages;
+  switch (static_cast<LogMessageType>(type)) {
+    case LogMessageType::blank:
+      ++counters_.blank;
+      break;
+    case LogMessageType::legacy_vision:
+      ++counters_.legacy_vision;
+      break;
+    case LogMessageType::referee:
+      ++counters_.referee;
+      break;
+    case LogMessageType::vision:
+      ++counters_.vision;
+      break;
+    case LogMessageType::tracker:
+      ++counters_.tracker;
+      break;
+    case LogMessageType::index:
+      ++counters_.index;
+      break;
+    case LogMessageType::unknown:
+    default:
+      ++counters_.unknown;
+      break;
+  }
+}
+
+bool LogReader::next_view(Header& header, std::string_view& payload) {
+  if (done_ || !file_) return false;
+  const std::uint64_t at = offset_;
+  if (!fill(kLogMessageHeaderSize)) {
+    const std::string gz = gz_problem();
+    if (available() == 0 && gz.empty()) {
+      done_ = true;  // clean end
+      return false;
+    }
+    if (available() == 0) return fail("read failed at byte " + std::to_string(at) + gz);
+    return fail("truncated message header at byte " + std::to_string(at) + ": " +
+                std::to_string(kLogMessageHeaderSize) + " bytes needed, " +
+                std::to_string(available()) + " remain" + gz);
+  }
+  const char* data = buffer_.get() + begin_;
+  header.receive_time_ns = load_be64(data);
+  header.type = load_be32(data + 8);
+  header.size = load_be32(data + 12);
+  header.offset = at;
+  if (header.type == static_cast<std::int32_t>(LogMessageType::index)) {
+    // The index closes an indexed file; what follows it is the index itself and its trailer,
+    // which a sequential reader has no use for (and which may exceed the size limit below).
+    count(header.type);
+    done_ = true;
+    return false;
+  }
+  if (header.size < 0 || header.size > kLogMaxMessageSize) {
+    return fail("absurd message size " + std::to_string(header.size) + " at byte " +
+                std::to_string(at));
+  }
+  const auto size = static_cast<std::size_t>(header.size);
+  if (kLogMessageHeaderSize + size <= kReadBufferSize) {
+    if (!fill(kLogMessageHeaderSize + size)) {
+      return fail("truncated message at byte " + std::to_string(at) + ": header says " +
+                  std::to_string(size) + " bytes, " +
+                  std::to_string(available() - kLogMessageHeaderSize) + " remain" + gz_problem());
+    }
+    payload = std::string_view(buffer_.get() + begin_ + kLogMessageHeaderSize, size);
+    consume(kLogMessageHeaderSize + size);
+  } else {
+    consume(kLogMessageHeaderSize);
+    const std::size_t got = read_large(size);
+    if (got < size) {
+      return fail("truncated message at byte " + std::to_string(at) + ": header says " +
+                  std::to_string(size) + " bytes, " + std::to_string(got) + " remain" +
+                  gz_problem());
+    }
+    payload = scratch_;
+  }
+  counters_.bytes = offset_;
+  count(header.type);
+  return true;
+}
+
+bool LogReader::next(LogMessage& out) {
+  Header header{};
+  std::string_view payload;
+  if (!next_view(header, payload)) return false;
+  out.receive_time_ns = header.receive_time_ns;
+  out.type = header.type;
+  out.payload.assign(payload.data(), payload.size());  // reuses out.payload's capacity
+  out.offset = header.offset;
+  return true;
+}
+
+bool LogReader::next_vision(SSL_WrapperPacket& packet, std::int64_t* receive_time_ns) {
+  Header header{};
+  std::string_view payload;
+  while (next_view(header, payload)) {
+    const int size = static_cast<int>(payload.size());
+    bool ok = false;
+    if (header.type == static_cast<std::int32_t>(LogMessageType::vision)) {
+      ok = packet.ParseFromArray(payload.data(), size);
+      if (!ok) ++counters_.parse_errors;
+    } else if (header.type == static_cast<std::int32_t>(LogMessageType::legacy_vision)) {
+      if (!packet.ParsePartialFromArray(payload.data(), size)) {
+        ++counters_.parse_errors;
+      } else {
+        ok = adopt_legacy(packet);
+        if (!ok) ++counters_.legacy_unusable;
+      }
+    }
+    if (ok) {
+      if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::uint64_t LogReader::compressed_offset() const {
+  if (!file_) return 0;
+  const auto at = gzoffset(file_.get());
+  return at < 0 ? 0 : static_cast<std::uint64_t>(at);
+}
+
+// ---------------------------------------------------------------------------------------------
+// LogWriter
+
+LogWriter::LogWriter(std::filesystem::path path, detail::GzFilePtr file)
+    : path_(std::move(path)), file_(std::move(file)) {}
+
+std::optional<LogWriter> LogWriter::create(const std::filesystem::path& path, std::string* error) {
+  errno = 0;
+  // "T": zlib writes the bytes through uncompressed, so both kinds share one code path.
+  gzFile file = gzopen(path.c_str(), ends_with_gz(path) ? "wb6" : "wbT");
+  if (file == nullptr) {
+    if (error != nullptr) *error = path.string() + ": cannot create: " + errno_text(errno);
+    return std::nullopt;
+  }
+  gzbuffer(file, kGzBufferSize);
+  LogWriter writer(path, detail::GzFilePtr(file));
+  char header[kLogFileHeaderSize];
+  std::memcpy(header, kLogFileMagic.data(), kLogFileMagic.size());
+  store_be32(header + kLogFileMagic.size(), kLogFileVersion);
+  if (!writer.put(header, sizeof header)) {
+    if (error != nullptr) *error = writer.error_;
+    return std::nullopt;
+  }
+  return writer;
+}
+
+bool LogWriter::put(const void* data, std::size_t size) {
+  if (size == 0) return true;  // gzwrite returns 0 for 0 bytes, which reads as an error
+  const int written = gzwrite(file_.get(), data, static_cast<unsigned>(size));
+  if (written != static_cast<int>(size)) {
+    int code = Z_OK;
+    const char* message = gzerror(file_.get(), &code);
+    error_ = path_.string() + ": cannot write at byte " + std::to_string(offset_) + ": " +
+             (code == Z_ERRNO ? errno_text(errno) : strip_path(message, path_));
+    failed_ = true;
+    return false;
+  }
+  offset_ += size;
+  return true;
+}
+
+bool LogWriter::put_message(std::int32_t type, std::int64_t receive_time_ns,
+                            std::string_view payload) {
+  char header[kLogMessageHeaderSize];
+  store_be64(header, receive_time_ns);
+  store_be32(header + 8, type);
+  store_be32(header + 12, static_cast<std::int32_t>(payload.size()));
+  const auto at = static_cast<std::int64_t>(offset_);
+  if (!put(header, sizeof header) || !put(payload.data(), payload.size())) return false;
+  message_offsets_.push_back(at);
+  last_time_ns_ = receive_time_ns;
+  return true;
+}
+
+bool LogWriter::write(std::int32_t type, std::int64_t receive_time_ns, std::string_view payload) {
+  if (!file_) {
+    error_ = path_.string() + ": already closed";
+    return false;
+  }
+  if (failed_) return false;
+  if (type == static_cast<std::int32_t>(LogMessageType::index)) {
+    // Readers stop at an index message, so one in the middle would hide the rest of the log.
+    error_ = path_.string() + ": index messages are written by close(true), not write()";
+    return false;
+  }
+  if (payload.size() > static_cast<std::size_t>(kLogMaxMessageSize)) {
+    error_ = path_.string() + ": message of " + std::to_string(payload.size()) + " bytes at byte " +
+             std::to_string(offset_) + " exceeds the " + std::to_string(kLogMaxMessageSize) +
+             "-byte limit readers accept";
+    return false;
+  }
+  return put_message(type, receive_time_ns, payload);
+}
+
+bool LogWriter::write_vision(const SSL_WrapperPacket& packet, std::int64_t receive_time_ns) {
+  if (!packet.IsInitialized()) {
+    error_ = path_.string() +
+             ": vision packet lacks required fields: " + packet.InitializationErrorString();
+    return false;
+  }
+  packet.SerializeToString(&scratch_);  // reuses scratch_'s capacity
+  return write(static_cast<std::int32_t>(LogMessageType::vision), receive_time_ns, scratch_);
+}
+
+bool LogWriter::close(bool indexed) {
+  if (!file_) {
+    error_ = path_.string() + ": already closed";
+    return false;
+  }
+  bool ok = !failed_;
+  if (ok && indexed) {
+    // As ssl-go-tools writes it: the index message's payload is every message's offset, then
+    // the distance from the end of the file back to the index message, then "INDEXED".
+    const std::size_t trailer = 8 + kLogIndexMarker.size();
+    std::string payload(message_offsets_.size() * 8 + trailer, '\0');
+    char* p = payload.data();
+    for (const std::int64_t at : message_offsets_) {
+      store_be64(p, at);
+      p += 8;
+    }
+    store_be64(p, static_cast<std::int64_t>(kLogMessageHeaderSize + payload.size()));
+    std::memcpy(p + 8, kLogIndexMarker.data(), kLogIndexMarker.size());
+    ok = put_message(static_cast<std::int32_t>(LogMessageType::index), last_time_ns_, payload);
+  }
+  errno = 0;
+  const int result = gzclose(file_.release());
+  if (ok && result != Z_OK) {
+    error_ = path_.string() + ": cannot finish writing: " +
+             (result == Z_ERRNO ? errno_text(errno) : std::string(zError(result)));
+    ok = false;
+  }
+  failed_ = failed_ || !ok;
+  return ok;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+LogVisionPackets read_vision_log(const std::filesystem::path& path) {
+  LogVisionPackets out;
+  std::optional<LogReader> reader = LogReader::open(path, &out.error);
+  if (!reader) return out;
+  SSL_WrapperPacket packet;
+  std::int64_t receive_time_ns = 0;
+  while (reader->next_vision(packet, &receive_time_ns)) {
+    out.packets.push_back(std::move(packet));
+    out.receive_times_ns.push_back(receive_time_ns);
+    packet.Clear();
+  }
+  out.error = reader->error();
+  out.counters = reader->counters();
+  return out;
+}
+
+}  // namespace ssl_formation
