@@ -101,7 +101,8 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
   counters_.robots_accepted += frame_scratch_.size();
   if (frame_scratch_.empty()) ++counters_.frames_without_opponent;
 
-  if (anchored_ && t < newest_s_ - config_.clock_reset_s) {
+  const double clock_reset_s = config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
+  if (anchored_ && t < newest_s_ - clock_reset_s) {
     ++counters_.clock_resets;
     restart();
   }

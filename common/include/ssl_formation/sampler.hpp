@@ -34,9 +34,10 @@ struct SamplerConfig {
   // max(camera_timeout_s, 1.5 * step_s): a camera of a 2 s simulated feed is live, a dead one
   // stops holding samples back after that.
   double camera_timeout_s = 1.0;
-  // Frames more than this far behind the last sample mean the data clock restarted (a new log,
-  // a restarted simulator): the sampler starts over instead of dropping everything as late.
-  double clock_reset_s = 10.0;
+  // Frames more than this far behind the newest frame mean the data clock restarted (a new log,
+  // a restarted simulator or producer): the sampler starts over instead of dropping everything
+  // as late. 0 means two steps; network reordering is milliseconds, never that much.
+  double clock_reset_s = 0.0;
   std::uint32_t max_robot_id = 1000;
   std::uint32_t max_camera_id = 63;
   std::uint32_t max_robots_per_frame = 32;  // per team; more than this is not a real frame

@@ -1,0 +1,416 @@
+// End-to-end tests of the three daemons: the real binaries as processes, real multicast sockets
+// on 127.0.0.1 (each test on its own group and port), real table files.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <boost/asio/io_context.hpp>
+#include <mutex>
+#include <regex>
+#include <thread>
+
+#include "child_process.hpp"
+#include "simulated_vision.hpp"
+#include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/prediction_message.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/training.hpp"
+
+namespace ssl_formation {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ChildProcess;
+using testing::TempDir;
+
+const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
+const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
+
+std::string new_group() { return testing::unique_group(testing::free_udp_port()); }
+
+// The table the library computes from the producer's stream for `seed`.
+TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
+                                std::uint64_t* samples = nullptr) {
+  sim::SimulationConfig config;
+  config.seed = seed;
+  config.cameras = cameras;
+  sim::SimulatedVision vision(config);
+  Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
+  for (int i = 0; i < count; ++i) {
+    for (const auto& packet : vision.next().packets) training.add(packet);
+  }
+  if (samples) *samples = training.samples();
+  return training.table();
+}
+
+std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> entries(const TransitionTable& table) {
+  std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> out;
+  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
+    out.emplace_back(from, to, c);
+  });
+  return out;
+}
+
+std::vector<std::string> trainer_args(const std::string& group, const std::filesystem::path& table) {
+  return {"--vision-address", group, "--table", table.string(), "--status-interval", "0.1",
+          "--flush-interval", "60"};
+}
+
+// Runs the producer to the end on `group`.
+void produce(const TempDir& dir, const std::string& group, std::uint64_t seed, int count,
+             std::vector<std::string> extra = {}) {
+  std::vector<std::string> args{"--vision-address", group, "--seed", std::to_string(seed),
+                                "--count", std::to_string(count), "--period", "0.002",
+                                "--status-interval", "100"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const auto result = testing::run_to_end(producer_program, args, dir.path(), "producer-" + std::to_string(seed));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+}
+
+// Stops a trainer with SIGTERM once it has sampled `formations`, and checks it exits cleanly.
+void stop_trainer_after(ChildProcess& trainer, int formations) {
+  ASSERT_TRUE(trainer.wait_for_stderr("formations=" + std::to_string(formations) + " ", 10s))
+      << trainer.stderr_text();
+  trainer.signal(SIGTERM);
+  const auto code = trainer.wait(5s);
+  ASSERT_TRUE(code.has_value()) << "trainer did not exit on SIGTERM";
+  EXPECT_EQ(*code, 0) << trainer.stderr_text();
+}
+
+// Collects FormationPrediction messages from a group, on a thread of its own.
+class PredictionListener {
+ public:
+  explicit PredictionListener(const std::string& group) {
+    std::string error;
+    const auto endpoint = net::parse_multicast_endpoint(group, &error);
+    receiver_ = std::make_unique<net::ProtoMulticastReceiver<proto::FormationPrediction>>(io_, *endpoint);
+    receiver_->start([this](const proto::FormationPrediction& message, const net::udp::endpoint&) {
+      std::lock_guard lock(mutex_);
+      messages_.push_back(message);
+    });
+    thread_ = std::thread([this] { io_.run(); });
+  }
+  ~PredictionListener() {
+    io_.stop();
+    thread_.join();
+  }
+  std::vector<proto::FormationPrediction> wait_for(std::size_t n, std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      {
+        std::lock_guard lock(mutex_);
+        if (messages_.size() >= n) return messages_;
+      }
+      std::this_thread::sleep_for(10ms);
+    }
+    std::lock_guard lock(mutex_);
+    return messages_;
+  }
+
+ private:
+  boost::asio::io_context io_;
+  std::unique_ptr<net::ProtoMulticastReceiver<proto::FormationPrediction>> receiver_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::vector<proto::FormationPrediction> messages_;
+};
+
+TEST(Daemons, TrainerTableHoldsExactlyTheLibrarysTransitions) {
+  TempDir dir;
+  const std::string group = new_group();
+  ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(), "trainer");
+  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
+  produce(dir, group, 11, 300);
+  stop_trainer_after(trainer, 300);
+
+  const TableLoadResult loaded = load_table(dir / "table.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.message;
+  std::uint64_t samples = 0;
+  const TransitionTable expected = reference_table(11, 300, 1, &samples);
+  EXPECT_GT(expected.transitions(), 1000u);
+  EXPECT_EQ(entries(loaded.stored->table), entries(expected));
+  EXPECT_EQ(loaded.stored->metadata.samples, samples);
+}
+
+TEST(Daemons, FourCameraFeedTrainsTheSameTableAsOneCamera) {
+  TempDir dir;
+  const std::string group = new_group();
+  ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(), "trainer");
+  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
+  produce(dir, group, 21, 200, {"--cameras", "4", "--camera-overlap", "400"});
+  stop_trainer_after(trainer, 200);
+  const TableLoadResult loaded = load_table(dir / "table.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.message;
+  EXPECT_EQ(entries(loaded.stored->table), entries(reference_table(21, 200, 1)));
+}
+
+TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
+  TempDir dir;
+  const std::filesystem::path table_path = dir / "table.bin";
+  const TransitionTable table = reference_table(3, 2000);
+  ASSERT_TRUE(save_table(table_path, table, TableMetadata{}));
+  const std::string vision = new_group();
+  const std::string predictions = new_group();
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--prediction-address", predictions,
+                          "--table", table_path.string(), "--horizon", "3"},
+                         dir.path(), "predictor");
+  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
+  PredictionListener listener(predictions);
+  produce(dir, vision, 4, 60);
+  const auto received = listener.wait_for(60, 10s);
+  ASSERT_EQ(received.size(), 60u);
+
+  // The same stream through the library.
+  sim::SimulatedVision vision_stream(sim::SimulationConfig{.seed = 4});
+  std::vector<std::string> expected;
+  SamplerConfig config;
+  FormationSampler sampler(config, [&](const FormationSample& sample) {
+    const Prediction prediction = predict(table, sample.formation, 3);
+    PredictionContext context;
+    context.codec = &table.codec();
+    context.table_transitions = table.transitions();
+    proto::FormationPrediction message;
+    fill_prediction_message(sample.formation, prediction, context, message);
+    expected.push_back(message.SerializeAsString());
+  });
+  for (int i = 0; i < 60; ++i) {
+    for (const auto& packet : vision_stream.next().packets) sampler.add(packet);
+  }
+  ASSERT_EQ(expected.size(), 60u);
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    ASSERT_EQ(received[i].SerializeAsString(), expected[i]) << "prediction " << i << ":\n"
+                                                            << received[i].DebugString();
+  }
+  EXPECT_EQ(received[5].steps_size(), 3);
+  // One readable line per prediction on stdout.
+  ASSERT_TRUE(predictor.wait_for_stdout("t=118.00 frame=59", 5s));
+  predictor.signal(SIGINT);
+  EXPECT_EQ(predictor.wait(2s), 0);
+}
+
+TEST(Daemons, ProducerSendsNinetyPercentPlaysOverTenThousandCycles) {
+  TempDir dir;
+  // 10,000 cycles are about 25,000 formations; nobody needs to listen for the proportions.
+  const auto result = testing::run_to_end(
+      producer_program,
+      {"--vision-address", new_group(), "--period", "0", "--count", "25000", "--seed", "99"},
+      dir.path(), "producer");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::smatch match;
+  const std::regex summary(R"(done: 25000 formations \((\d+) from plays = ([\d.]+)%, (\d+) random = ([\d.]+)%\))");
+  ASSERT_TRUE(std::regex_search(result.err, match, summary)) << result.err;
+  EXPECT_NEAR(std::stod(match[2]), 90.0, 2.0);
+  EXPECT_NEAR(std::stod(match[4]), 10.0, 2.0);
+}
+
+TEST(Daemons, ProducerPacketsRoundTripThroughOurSchema) {
+  TempDir dir;
+  const std::string group = new_group();
+  boost::asio::io_context io;
+  std::string error;
+  net::MulticastReceiver receiver(io, *net::parse_multicast_endpoint(group, &error));
+  std::vector<std::string> datagrams;
+  receiver.start([&](std::span<const std::byte> data, const net::udp::endpoint&) {
+    datagrams.emplace_back(reinterpret_cast<const char*>(data.data()), data.size());
+  });
+  std::thread io_thread([&] { io.run_for(8s); });
+  produce(dir, group, 8, 20, {"--cameras", "4", "--jitter-mm", "15", "--opponent-color", "blue"});
+  std::this_thread::sleep_for(300ms);
+  io.stop();
+  io_thread.join();
+  // 20 formations x 4 cameras, plus a geometry packet every 3 s of data time (10 of them).
+  ASSERT_EQ(datagrams.size(), 90u);
+  int detections = 0;
+  int robots = 0;
+  for (const std::string& bytes : datagrams) {
+    SSL_WrapperPacket packet;
+    ASSERT_TRUE(packet.ParseFromString(bytes));
+    ASSERT_TRUE(packet.IsInitialized());
+    EXPECT_EQ(packet.SerializeAsString(), bytes);
+    if (packet.has_detection()) {
+      ++detections;
+      robots += packet.detection().robots_blue_size() + packet.detection().robots_yellow_size();
+    }
+  }
+  EXPECT_EQ(detections, 80);
+  EXPECT_GE(robots, 20 * 12);  // both teams, each robot at least once per formation
+}
+
+TEST(Daemons, TrainerSavesOnSigtermAndResumesItsCounts) {
+  TempDir dir;
+  const std::string group = new_group();
+  const auto table_path = dir / "table.bin";
+  std::uint64_t first_transitions = 0;
+  {
+    ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer1");
+    ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
+    produce(dir, group, 5, 100);
+    stop_trainer_after(trainer, 100);
+    const auto loaded = load_table(table_path, Grid(3, 2));
+    ASSERT_TRUE(loaded) << loaded.message;
+    first_transitions = loaded.stored->table.transitions();
+    EXPECT_EQ(entries(loaded.stored->table), entries(reference_table(5, 100)));
+  }
+  {
+    ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer2");
+    ASSERT_TRUE(trainer.wait_for_stderr("resumed", 5s)) << trainer.stderr_text();
+    ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
+    produce(dir, group, 5, 100);
+    stop_trainer_after(trainer, 100);
+  }
+  const auto loaded = load_table(table_path, Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.message;
+  EXPECT_EQ(loaded.stored->table.transitions(), 2 * first_transitions);
+  EXPECT_EQ(loaded.stored->metadata.samples, 200u);
+}
+
+TEST(Daemons, TrainerRefusesATableOfAnotherGridUnlessReset) {
+  TempDir dir;
+  const auto table_path = dir / "table.bin";
+  ASSERT_TRUE(save_table(table_path, reference_table(1, 50), TableMetadata{}));
+  const auto before = testing::run_to_end(trainer_program,
+                                          {"--table", table_path.string(), "--grid", "6x4",
+                                           "--vision-address", new_group()},
+                                          dir.path(), "refused", 5s);
+  EXPECT_EQ(before.exit_code, 1);
+  EXPECT_NE(before.err.find("3x2"), std::string::npos) << before.err;
+  EXPECT_NE(before.err.find("6x4"), std::string::npos) << before.err;
+  EXPECT_NE(before.err.find("--reset"), std::string::npos) << before.err;
+  ASSERT_TRUE(load_table(table_path, Grid(3, 2)));  // untouched
+
+  const std::string group = new_group();
+  ChildProcess trainer(trainer_program,
+                       {"--table", table_path.string(), "--grid", "6x4", "--reset",
+                        "--vision-address", group, "--status-interval", "0.1"},
+                       dir.path(), "reset");
+  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
+  trainer.signal(SIGTERM);
+  EXPECT_EQ(trainer.wait(5s), 0);
+  EXPECT_TRUE(load_table(table_path, Grid(6, 4)));
+}
+
+TEST(Daemons, PredictorWaitsForTheTableAndPicksUpReplacements) {
+  TempDir dir;
+  const auto table_path = dir / "table.bin";
+  const std::string vision = new_group();
+  const std::string predictions = new_group();
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--prediction-address", predictions,
+                          "--table", table_path.string(), "--reload-interval", "0.05", "--quiet"},
+                         dir.path(), "predictor");
+  ASSERT_TRUE(predictor.wait_for_stderr("waiting for the table", 5s)) << predictor.stderr_text();
+  PredictionListener listener(predictions);
+
+  const TransitionTable first = reference_table(1, 100);
+  ASSERT_TRUE(save_table(table_path, first, TableMetadata{}));
+  ASSERT_TRUE(predictor.wait_for_stderr("(reload 1)", 5s)) << predictor.stderr_text();
+  produce(dir, vision, 2, 5);
+  auto received = listener.wait_for(5, 5s);
+  ASSERT_EQ(received.size(), 5u);
+  EXPECT_EQ(received.back().table_transitions(), first.transitions());
+
+  const TransitionTable second = reference_table(1, 400);
+  ASSERT_NE(first.transitions(), second.transitions());
+  ASSERT_TRUE(save_table(table_path, second, TableMetadata{}));  // atomic rename, as the trainer
+  ASSERT_TRUE(predictor.wait_for_stderr("(reload 2)", 5s)) << predictor.stderr_text();
+  produce(dir, vision, 2, 5);
+  received = listener.wait_for(10, 5s);
+  ASSERT_EQ(received.size(), 10u);
+  EXPECT_EQ(received.back().table_transitions(), second.transitions());
+  EXPECT_TRUE(predictor.running());
+}
+
+TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
+  TempDir dir;
+  const std::string vision_a = new_group();
+  const std::string vision_b = new_group();
+  const std::string predictions_a = new_group();
+  const std::string predictions_b = new_group();
+  const TransitionTable table = reference_table(3, 500);
+  ASSERT_TRUE(save_table(dir / "predict.bin", table, TableMetadata{}));
+  ChildProcess trainer_a(trainer_program, trainer_args(vision_a, dir / "a.bin"), dir.path(), "trainer-a");
+  ChildProcess trainer_b(trainer_program, trainer_args(vision_b, dir / "b.bin"), dir.path(), "trainer-b");
+  ChildProcess predictor_a(predictor_program,
+                           {"--vision-address", vision_a, "--prediction-address", predictions_a,
+                            "--table", (dir / "predict.bin").string(), "--quiet"},
+                           dir.path(), "predictor-a");
+  ChildProcess predictor_b(predictor_program,
+                           {"--vision-address", vision_b, "--prediction-address", predictions_b,
+                            "--table", (dir / "predict.bin").string(), "--quiet"},
+                           dir.path(), "predictor-b");
+  for (ChildProcess* p : {&trainer_a, &trainer_b, &predictor_a, &predictor_b}) {
+    ASSERT_TRUE(p->wait_for_stderr("listening on", 5s)) << p->stderr_text();
+  }
+  PredictionListener listen_a(predictions_a);
+  PredictionListener listen_b(predictions_b);
+  produce(dir, vision_a, 6, 40);
+  stop_trainer_after(trainer_a, 40);
+  EXPECT_EQ(listen_a.wait_for(40, 5s).size(), 40u);
+  trainer_b.signal(SIGTERM);
+  ASSERT_EQ(trainer_b.wait(5s), 0);
+  std::this_thread::sleep_for(200ms);
+  EXPECT_TRUE(listen_b.wait_for(1, 0ms).empty());
+  const auto a = load_table(dir / "a.bin", Grid(3, 2));
+  const auto b = load_table(dir / "b.bin", Grid(3, 2));
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(entries(a.stored->table), entries(reference_table(6, 40)));
+  EXPECT_EQ(b.stored->table.transitions(), 0u);
+  EXPECT_NE(trainer_b.stderr_text().find("packets=0 "), std::string::npos);
+}
+
+TEST(Daemons, SharedOptionsHelpAndErrors) {
+  TempDir dir;
+  for (const auto& program : {producer_program, trainer_program, predictor_program}) {
+    const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
+    EXPECT_EQ(help.exit_code, 0) << program;
+    for (const std::string option : {"--vision-address", "--interface arg (=127.0.0.1)", "--step",
+                                     "--opponent-color arg (=yellow)", "--opponent-attacks",
+                                     "--field-length arg (=9000)", "--field-width arg (=6000)"}) {
+      EXPECT_NE(help.out.find(option), std::string::npos) << program << " lacks " << option;
+    }
+    const auto bad = testing::run_to_end(program, {"--no-such-option"}, dir.path(), "bad", 5s);
+    EXPECT_EQ(bad.exit_code, 2) << program;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    const auto bad_value = testing::run_to_end(program, {"--vision-address", "10.1.2.3:10006"},
+                                               dir.path(), "bad-value", 5s);
+    EXPECT_EQ(bad_value.exit_code, 2) << program << bad_value.err;
+  }
+  for (const auto& program : {trainer_program, predictor_program}) {
+    const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
+    EXPECT_NE(help.out.find("--table arg (=formation-table.bin)"), std::string::npos);
+    EXPECT_NE(help.out.find("--grid arg (=3x2)"), std::string::npos);
+  }
+}
+
+TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
+  TempDir dir;
+  for (const int signal_number : {SIGINT, SIGTERM}) {
+    const std::string group = new_group();
+    std::vector<std::unique_ptr<ChildProcess>> daemons;
+    daemons.push_back(std::make_unique<ChildProcess>(
+        trainer_program, trainer_args(group, dir / "t.bin"), dir.path(), "trainer"));
+    daemons.push_back(std::make_unique<ChildProcess>(
+        predictor_program, std::vector<std::string>{"--vision-address", group, "--table", (dir / "t.bin").string(), "--prediction-address", new_group()},
+        dir.path(), "predictor"));
+    daemons.push_back(std::make_unique<ChildProcess>(
+        producer_program, std::vector<std::string>{"--vision-address", group, "--period", "0.05"},
+        dir.path(), "producer"));
+    for (auto& d : daemons) {
+      ASSERT_TRUE(d->wait_for_stderr("info:", 5s));
+    }
+    std::this_thread::sleep_for(300ms);
+    for (auto& d : daemons) {
+      const auto start = std::chrono::steady_clock::now();
+      d->signal(signal_number);
+      const auto code = d->wait(1s);
+      EXPECT_TRUE(code.has_value()) << d->stderr_text();
+      EXPECT_EQ(code.value_or(-1), 0);
+      EXPECT_LT(std::chrono::steady_clock::now() - start, 1s);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ssl_formation

@@ -1,0 +1,73 @@
+#pragma once
+// Runs one of our programs as a real process for end-to-end tests: its stdout and stderr go to
+// files the test can read and wait on; the destructor kills whatever is still running, so a
+// failing test leaves no process behind.
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ssl_formation::testing {
+
+class ChildProcess {
+ public:
+  ChildProcess(const std::filesystem::path& program, std::vector<std::string> arguments,
+               const std::filesystem::path& output_dir, const std::string& name);
+  ~ChildProcess();
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  pid_t pid() const { return pid_; }
+  void signal(int signal_number) const;
+  // Waits for the process to end; its exit code, or nullopt on time-out (or if killed by a
+  // signal: then `signalled` is set).
+  std::optional<int> wait(std::chrono::milliseconds timeout, int* signalled = nullptr);
+  bool running();
+
+  std::string stdout_text() const;
+  std::string stderr_text() const;
+  // Waits until stderr (or stdout) contains `text`; false on time-out or if the process ended.
+  bool wait_for_stderr(const std::string& text, std::chrono::milliseconds timeout);
+  bool wait_for_stdout(const std::string& text, std::chrono::milliseconds timeout);
+
+ private:
+  pid_t pid_ = -1;
+  bool reaped_ = false;
+  int status_ = 0;
+  std::filesystem::path stdout_path_;
+  std::filesystem::path stderr_path_;
+};
+
+// Runs a program to completion (bounded by `timeout`), returning its exit code and output.
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+RunResult run_to_end(const std::filesystem::path& program, std::vector<std::string> arguments,
+                     const std::filesystem::path& output_dir, const std::string& name,
+                     std::chrono::milliseconds timeout = std::chrono::seconds(60));
+
+// A fresh folder for one test, removed at destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A UDP port no socket on this machine uses right now (the kernel picks it), and a random
+// administratively scoped multicast group, so tests that ctest runs in parallel never share
+// traffic. Both stay on loopback: every program in the tests sends and joins on 127.0.0.1.
+std::uint16_t free_udp_port();
+std::string unique_group(std::uint16_t port);  // "239.x.y.z:PORT"
+
+}  // namespace ssl_formation::testing
