@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Runs the whole system on this machine's loopback: ssl-producer sends the paper's simulated
+# opponent, ssl-trainer learns the table, ssl-predictor predicts the next formations and prints
+# one line per prediction. Stops all three on Ctrl-C or after --duration seconds.
+#
+#   scripts/demo.sh [--duration SECONDS] [--period SECONDS] [--grid LxW] [--horizon N]
+#                   [--cameras N] [--keep-table]
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+duration=0
+period=0.1
+grid=3x2
+horizon=2
+cameras=4
+keep_table=0
+usage() { sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; }
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --duration) duration="$2"; shift 2 ;;
+    --period) period="$2"; shift 2 ;;
+    --grid) grid="$2"; shift 2 ;;
+    --horizon) horizon="$2"; shift 2 ;;
+    --cameras) cameras="$2"; shift 2 ;;
+    --keep-table) keep_table=1; shift ;;
+    -h|--help) usage; exit 0 ;;
+    *) echo "demo.sh: unknown option '$1'" >&2; usage >&2; exit 2 ;;
+  esac
+done
+
+build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
+sslf_install_packages
+echo "Building in $build_dir ..."
+sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
+  tail -50 "$build_dir.build.log" >&2
+  exit 1
+}
+
+run_dir="$build_dir/demo"
+mkdir -p "$run_dir"
+table="$run_dir/formation-table.bin"
+[ "$keep_table" = 1 ] || rm -f "$table"
+
+# Everything on loopback: the programs' default interface is 127.0.0.1.
+vision=224.5.23.2:10006
+predictions=224.5.23.4:10040
+pids=()
+cleanup() {
+  trap - EXIT INT TERM
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+  echo
+  echo "Stopped. Logs and the learned table are in $run_dir"
+}
+trap cleanup EXIT
+trap 'exit 0' INT TERM
+
+"$build_dir/trainer/ssl-trainer" --vision-address "$vision" --table "$table" --grid "$grid" \
+  --flush-interval 1 --status-interval 5 2>"$run_dir/trainer.log" &
+pids+=($!)
+"$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
+  --table "$table" --grid "$grid" --horizon "$horizon" --reload-interval 0.5 \
+  2>"$run_dir/predictor.log" &
+pids+=($!)
+sleep 0.5
+"$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
+  --cameras "$cameras" 2>"$run_dir/producer.log" &
+pids+=($!)
+
+cat <<EOT
+ssl-producer -> $vision -> ssl-trainer + ssl-predictor -> predictions on $predictions
+One formation every $period s (2 s of data time each), grid $grid, $cameras cameras.
+Each line: the sample time, the opponent's centroid cell and robot cells now, then for each
+predicted step the centroid, its probability and the robots' predicted cells ('?' = never seen
+that state: it holds its cell) and the confidence. Ctrl-C stops everything.
+EOT
+sleep 0.2
+for pid in "${pids[@]}"; do
+  kill -0 "$pid" 2>/dev/null || { echo "a daemon failed to start; see $run_dir/*.log" >&2; tail -5 "$run_dir"/*.log >&2; exit 1; }
+done
+
+if [ "$duration" != 0 ]; then
+  sleep "$duration"
+else
+  wait "${pids[0]}"
+fi
