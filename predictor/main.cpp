@@ -27,6 +27,7 @@ struct PredictorOptions {
   sf::app::NetworkOptions network;
   std::string table = sf::app::default_table;
   std::string prediction_address = sf::app::default_prediction_address;
+  std::string prediction_interface;  // empty: as --interface (127.0.0.1 when that is 'all')
   int ttl = sf::net::kDefaultMulticastTtl;
   int horizon = 2;
   double reload_interval_s = 0.5;
@@ -52,6 +53,12 @@ int list_states(const sf::Grid& grid) {
   return std::cout ? 0 : 1;
 }
 
+std::string prediction_interface(const PredictorOptions& options) {
+  if (!options.prediction_interface.empty()) return options.prediction_interface;
+  return options.network.interface == "all" ? std::string(sf::app::default_interface)
+                                            : options.network.interface;
+}
+
 // The daemon: vision in, predictions out.
 class PredictorDaemon {
  public:
@@ -65,11 +72,7 @@ class PredictorDaemon {
                   sf::app::parse_interface_option(options.network.interface, true),
                   options.receive_buffer_bytes),
         sender_(io, sf::app::parse_group_option("prediction-address", options.prediction_address),
-                sf::app::parse_interface_option(options.network.interface == "all"
-                                                    ? std::string(sf::app::default_interface)
-                                                    : options.network.interface,
-                                                false)
-                    .address,
+                sf::app::parse_interface_option(prediction_interface(options), false).address,
                 options.ttl) {}
 
   void start() {
@@ -77,10 +80,10 @@ class PredictorDaemon {
     receiver_.start([this](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
       sampler_.add(packet);
     });
-    spdlog::info("listening on {} (interface {}); predictions to {}; horizon {}; opponent {} "
-                 "attacking {}; grid {}, step {} s",
+    spdlog::info("listening on {} (interface {}); predictions to {} (interface {}); horizon {}; "
+                 "opponent {} attacking {}; grid {}, step {} s",
                  options_.network.vision_address, options_.network.interface,
-                 options_.prediction_address, options_.horizon, sf::to_string(config_.opponent_color),
+                 options_.prediction_address, prediction_interface(options_), options_.horizon, sf::to_string(config_.opponent_color),
                  sf::to_string(config_.opponent_attacks), config_.grid.to_string(), config_.step_s);
     check_table();
     if (!watcher_.table()) {
@@ -192,6 +195,8 @@ int main(int argc, char** argv) {
          "table file written by ssl-trainer; reloaded whenever it is replaced")
         ("prediction-address", po::value(&o.prediction_address)->default_value(o.prediction_address),
          "multicast group:port the FormationPrediction messages go to")
+        ("prediction-interface", po::value(&o.prediction_interface)->default_value("", "as --interface"),
+         "IPv4 address of the interface to send predictions from (127.0.0.1 when --interface all)")
         ("ttl", po::value(&o.ttl)->default_value(o.ttl), "multicast TTL of the predictions")
         ("horizon", po::value(&o.horizon)->default_value(o.horizon), "formations to predict ahead")
         ("reload-interval", po::value(&o.reload_interval_s)->default_value(o.reload_interval_s),
