@@ -24,11 +24,10 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
   }
   StoredTable& stored = *loaded.stored;
   if (stored.metadata.step_s != config.step_s) {
-    throw std::runtime_error(table_path.string() + " was trained with --step " +
-                             std::to_string(stored.metadata.step_s) + ", not " +
-                             std::to_string(config.step_s) +
-                             ": its transitions mean another time scale; use the same --step, "
-                             "another --table, or --reset");
+    throw std::runtime_error(fmt::format(
+        "{} was trained with --step {}, not {}: its transitions mean another time scale; use the "
+        "same --step, another --table, or --reset",
+        table_path.string(), stored.metadata.step_s, config.step_s));
   }
   spdlog::info("resumed {}: grid {}, {} transitions, {} formations, {} states seen",
                table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),

@@ -81,6 +81,10 @@ class FormationSampler {
   // Feeds one packet; calls the handler for every sample it completes (zero, one or two).
   void add(const SSL_WrapperPacket& packet);
 
+  // Forgets the stream so far (cameras, clock, previous formation) but keeps the field size and
+  // the counters: the next packet starts a new stream, and no transition spans the two.
+  void start_new_stream() { restart(); }
+
   const SamplerConfig& config() const { return config_; }
   const StateCodec& codec() const { return codec_; }
   const FieldSize& field() const { return field_; }

@@ -21,6 +21,8 @@ class Training {
   Training& operator=(const Training&) = delete;
 
   void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
+  // A new log file: its first formation follows nothing (no transition across two files).
+  void start_new_stream() { sampler_.start_new_stream(); }
 
   const TransitionTable& table() const { return table_; }
   const FormationSampler& sampler() const { return sampler_; }

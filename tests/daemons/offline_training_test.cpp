@@ -1,0 +1,144 @@
+// ssl-trainer without the network: --from-log and merge, as processes on real files.
+
+#include <gtest/gtest.h>
+
+#include "child_process.hpp"
+#include "simulated_vision.hpp"
+#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/training.hpp"
+
+namespace ssl_formation {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::TempDir;
+
+const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+
+// Writes the simulated stream of `seed` as an official log, as a recorder would.
+void write_simulated_log(const std::filesystem::path& path, std::uint64_t seed, int formations,
+                         int cameras = 1) {
+  sim::SimulationConfig config;
+  config.seed = seed;
+  config.cameras = cameras;
+  sim::SimulatedVision vision(config);
+  std::string error;
+  auto writer = LogWriter::create(path, &error);
+  ASSERT_TRUE(writer) << error;
+  for (int i = 0; i < formations; ++i) {
+    const sim::SimulatedFormation f = vision.next();
+    for (const auto& packet : f.packets) {
+      ASSERT_TRUE(writer->write_vision(packet, static_cast<std::int64_t>(f.t_capture * 1e9)));
+    }
+    // Referee and tracker messages are in real logs too: they must be skipped.
+    ASSERT_TRUE(writer->write(3, static_cast<std::int64_t>(f.t_capture * 1e9), "referee"));
+    ASSERT_TRUE(writer->write(5, static_cast<std::int64_t>(f.t_capture * 1e9), "tracker"));
+  }
+  ASSERT_TRUE(writer->close());
+}
+
+// What the library computes from the same files, one stream per file.
+TransitionTable library_table(const std::vector<std::filesystem::path>& logs, std::uint64_t* samples = nullptr) {
+  Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
+  for (const auto& log : logs) {
+    training.start_new_stream();
+    for (const auto& packet : read_vision_log(log).packets) training.add(packet);
+  }
+  if (samples) *samples = training.samples();
+  return training.table();
+}
+
+std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> entries(const TransitionTable& table) {
+  std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> out;
+  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
+    out.emplace_back(from, to, c);
+  });
+  return out;
+}
+
+testing::RunResult trainer(const TempDir& dir, std::vector<std::string> args, const std::string& name) {
+  return testing::run_to_end(trainer_program, std::move(args), dir.path(), name, 60s);
+}
+
+TEST(OfflineTraining, FromLogTrainsWhatTheLibraryComputes) {
+  TempDir dir;
+  write_simulated_log(dir / "a.log.gz", 1, 400, 4);
+  const auto run = trainer(dir, {"--from-log", (dir / "a.log.gz").string(), "--table", (dir / "t.bin").string()}, "train");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("skipped 400 referee, 400 tracker"), std::string::npos) << run.err;
+  const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.message;
+  std::uint64_t samples = 0;
+  const TransitionTable expected = library_table({dir / "a.log.gz"}, &samples);
+  EXPECT_EQ(samples, 400u);
+  EXPECT_EQ(entries(loaded.stored->table), entries(expected));
+  EXPECT_EQ(loaded.stored->metadata.samples, 400u);
+}
+
+TEST(OfflineTraining, MergeEqualsTrainingOnBothLogsTogether) {
+  TempDir dir;
+  write_simulated_log(dir / "a.log", 1, 300);
+  write_simulated_log(dir / "b.log.gz", 2, 500);
+  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "ta.bin").string()}, "a").exit_code, 0);
+  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "b.log.gz").string(), "--table", (dir / "tb.bin").string()}, "b").exit_code, 0);
+  const auto both = trainer(dir, {"--from-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
+                                  "--table", (dir / "tab.bin").string()}, "ab");
+  ASSERT_EQ(both.exit_code, 0) << both.err;
+  const auto merge = trainer(dir, {"merge", (dir / "ta.bin").string(), (dir / "tb.bin").string(), "-o",
+                                   (dir / "merged.bin").string()}, "merge");
+  ASSERT_EQ(merge.exit_code, 0) << merge.err;
+
+  const auto merged = load_table(dir / "merged.bin", Grid(3, 2));
+  const auto together = load_table(dir / "tab.bin", Grid(3, 2));
+  ASSERT_TRUE(merged && together);
+  EXPECT_EQ(entries(merged.stored->table), entries(together.stored->table));
+  EXPECT_EQ(merged.stored->metadata.samples, 800u);
+  EXPECT_EQ(together.stored->metadata.samples, 800u);
+  EXPECT_EQ(entries(together.stored->table), entries(library_table({dir / "a.log", dir / "b.log.gz"})));
+}
+
+TEST(OfflineTraining, MergeRefusesDifferentGridsClearly) {
+  TempDir dir;
+  write_simulated_log(dir / "a.log", 1, 50);
+  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "small.bin").string()}, "a").exit_code, 0);
+  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "large.bin").string(), "--grid", "12x9"}, "b").exit_code, 0);
+  const auto merge = trainer(dir, {"merge", (dir / "small.bin").string(), (dir / "large.bin").string(), "-o",
+                                   (dir / "out.bin").string()}, "merge");
+  EXPECT_EQ(merge.exit_code, 1);
+  EXPECT_NE(merge.err.find("12x9"), std::string::npos) << merge.err;
+  EXPECT_NE(merge.err.find("3x2"), std::string::npos) << merge.err;
+  EXPECT_NE(merge.err.find("different grids"), std::string::npos) << merge.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.bin"));
+  EXPECT_EQ(trainer(dir, {"merge", "-o", (dir / "out.bin").string()}, "none").exit_code, 2);
+}
+
+TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
+  TempDir dir;
+  write_simulated_log(dir / "a.log", 1, 200);
+  const auto size = std::filesystem::file_size(dir / "a.log");
+  std::filesystem::resize_file(dir / "a.log", size / 2);
+  const auto run = trainer(dir, {"--from-log", (dir / "a.log").string(), (dir / "missing.log").string(),
+                                 "--table", (dir / "t.bin").string()}, "damaged");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("truncated message at byte"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("missing.log: cannot open"), std::string::npos) << run.err;
+  const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.message;
+  EXPECT_EQ(entries(loaded.stored->table), entries(library_table({dir / "a.log"})));
+  EXPECT_GT(loaded.stored->table.transitions(), 300u);
+}
+
+TEST(OfflineTraining, ResumesAnExistingTable) {
+  TempDir dir;
+  write_simulated_log(dir / "a.log", 1, 100);
+  for (int run = 0; run < 2; ++run) {
+    ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "t.bin").string()}, "run").exit_code, 0);
+  }
+  const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(loaded.stored->table.transitions(), 2 * library_table({dir / "a.log"}).transitions());
+}
+
+}  // namespace
+}  // namespace ssl_formation
