@@ -1,0 +1,119 @@
+// Offline training throughput against its floor, a bare loop that only reads and parses the same
+// log. Frames are SSL-Vision detection frames of 6 yellow + 6 blue robots and a ball at 60 Hz.
+// Run: build/benchmarks/log_benchmarks (scripts/bench.sh prints the ratio).
+
+#include <benchmark/benchmark.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <random>
+
+#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/training.hpp"
+#include "ssl_formation/vision_packet.hpp"
+
+namespace sf = ssl_formation;
+
+namespace {
+
+constexpr int frames_in_log = 200000;
+
+// Writes the benchmark log once per process (plain and gzip), in the temp folder.
+const std::filesystem::path& log_path(bool gzip) {
+  static const auto base = std::filesystem::temp_directory_path() /
+                           ("sslf-bench-" + std::to_string(::getpid()));
+  static const std::filesystem::path plain = base.string() + ".log";
+  static const std::filesystem::path compressed = base.string() + ".log.gz";
+  static const bool written = [] {
+    std::mt19937 random(5);
+    std::normal_distribution<double> step(0.0, 15.0);
+    std::vector<sf::Point> yellow(6);
+    std::vector<sf::Point> blue(6);
+    for (int i = 0; i < 6; ++i) {
+      yellow[static_cast<std::size_t>(i)] = {-3000.0 + 1000 * i, -1000.0};
+      blue[static_cast<std::size_t>(i)] = {-3000.0 + 1000 * i, 1000.0};
+    }
+    for (const auto& path : {plain, compressed}) {
+      std::string error;
+      auto writer = sf::LogWriter::create(path, &error);
+      if (!writer) throw std::runtime_error(error);
+      std::mt19937 frame_random(6);
+      for (int frame = 0; frame < frames_in_log; ++frame) {
+        sf::DetectionFrameSpec spec;
+        spec.frame_number = static_cast<std::uint32_t>(frame);
+        spec.t_capture = 1700000000.0 + frame / 60.0;
+        for (std::uint32_t id = 0; id < 6; ++id) {
+          auto& y = yellow[id];
+          auto& b = blue[id];
+          y = {std::clamp(y.x + step(frame_random), -4500.0, 4500.0), std::clamp(y.y + step(frame_random), -3000.0, 3000.0)};
+          b = {std::clamp(b.x + step(frame_random), -4500.0, 4500.0), std::clamp(b.y + step(frame_random), -3000.0, 3000.0)};
+          spec.yellow.push_back({id, y});
+          spec.blue.push_back({id, b});
+        }
+        spec.balls.push_back({0.0, 0.0});
+        if (frame % 180 == 0) {
+          SSL_WrapperPacket packet = sf::make_detection_packet(spec);
+          sf::fill_geometry(*packet.mutable_geometry(), sf::FieldSize{9000, 6000});
+          writer->write_vision(packet, static_cast<std::int64_t>(spec.t_capture * 1e9));
+        } else {
+          writer->write_vision(sf::make_detection_packet(spec), static_cast<std::int64_t>(spec.t_capture * 1e9));
+        }
+      }
+      if (!writer->close()) throw std::runtime_error(writer->error());
+    }
+    std::atexit([] {
+      std::error_code ignored;
+      std::filesystem::remove(plain, ignored);
+      std::filesystem::remove(compressed, ignored);
+    });
+    return true;
+  }();
+  (void)written;
+  return gzip ? compressed : plain;
+}
+
+// The floor: read and parse every vision packet, nothing else.
+void BM_ReadAndParse(benchmark::State& state) {
+  const auto& path = log_path(state.range(0) != 0);
+  std::int64_t frames = 0;
+  SSL_WrapperPacket packet;
+  for (auto _ : state) {
+    std::string error;
+    auto reader = sf::LogReader::open(path, &error);
+    while (reader->next_vision(packet)) {
+      benchmark::DoNotOptimize(packet.detection().frame_number());
+      ++frames;
+    }
+  }
+  state.SetItemsProcessed(frames);
+  state.SetLabel(state.range(0) ? ".log.gz" : ".log");
+}
+BENCHMARK(BM_ReadAndParse)->ArgName("gzip")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Offline training: the same loop feeding the Training the live trainer uses.
+void BM_OfflineTraining(benchmark::State& state) {
+  const auto& path = log_path(state.range(0) != 0);
+  std::int64_t frames = 0;
+  SSL_WrapperPacket packet;
+  std::uint64_t transitions = 0;
+  for (auto _ : state) {
+    sf::SamplerConfig config;
+    config.step_s = 2.0;
+    sf::Training training(config, sf::TransitionTable(config.grid));
+    std::string error;
+    auto reader = sf::LogReader::open(path, &error);
+    while (reader->next_vision(packet)) {
+      training.add(packet);
+      ++frames;
+    }
+    transitions = training.table().transitions();
+  }
+  state.SetItemsProcessed(frames);
+  state.counters["transitions"] = static_cast<double>(transitions);
+  state.SetLabel(state.range(0) ? ".log.gz" : ".log");
+}
+BENCHMARK(BM_OfflineTraining)->ArgName("gzip")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
