@@ -1,0 +1,113 @@
+#pragma once
+// The table file of DESIGN.md §4: a transition table with what its counts mean (grid, field
+// size, step, totals), saved atomically and loaded with every field checked.
+//
+// Layout, all integers little-endian, doubles as their IEEE-754 bits in a little-endian u64:
+//
+//   offset size  field
+//        0    8  magic "SSLFTABL"
+//        8    4  u32 format version (table_file_version)
+//       12    4  u32 grid length L (cells along x)
+//       16    4  u32 grid width W (cells along y)
+//       20    4  u32 encoding: 0 dense, 1 sparse
+//       24    8  f64 field length in mm
+//       32    8  f64 field width in mm
+//       40    8  f64 step in s
+//       48    8  u64 formations sampled while training
+//       56    8  u64 transitions: the sum of all counts
+//       64    8  u64 rows: dense S; sparse the number of row records
+//       72    8  u64 entries: dense S*S; sparse the number of (to, count) pairs
+//       80    4  u32 CRC-32 of bytes 0..79 (the header checksum)
+//       84       counts:
+//                  dense:  S*S u32 counts, row-major (FROM by row, TO by column)
+//                  sparse: `rows` records in increasing FROM order, each
+//                          u32 from, u32 n (>= 1), then n pairs u32 to, u32 count (> 0)
+//                          in increasing TO order
+//      end-4   4  u32 CRC-32 of every byte before it (the file checksum)
+//
+// The header has its own checksum so that the size fields can be trusted before the file
+// length is compared with them: that is what tells a truncated file (shorter than its trusted
+// header says) from a corrupt one (a flipped byte anywhere, including in a size field).
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "ssl_formation/grid.hpp"
+#include "ssl_formation/transition_table.hpp"
+
+namespace ssl_formation {
+
+inline constexpr std::uint32_t table_file_version = 1;
+
+// What the counts mean, saved next to them.
+struct TableMetadata {
+  FieldSize field;
+  double step_s = 2.0;
+  std::uint64_t samples = 0;  // formations sampled while training
+  friend bool operator==(const TableMetadata&, const TableMetadata&) = default;
+};
+
+struct StoredTable {
+  TransitionTable table;
+  TableMetadata metadata;
+};
+
+enum class TableFileError {
+  none,
+  cannot_open,    // missing, unreadable or not a regular file
+  not_a_table,    // bad magic
+  wrong_version,  // a format version this build cannot read
+  wrong_grid,     // a valid table of another grid than the caller expects
+  truncated,      // shorter than its (checksum-verified) header says
+  corrupt,        // checksum mismatch, trailing bytes or inconsistent content
+  io_error,       // a read failed
+};
+
+std::string_view to_string(TableFileError error);
+
+struct TableLoadResult {
+  std::optional<StoredTable> stored;
+  TableFileError error = TableFileError::none;
+  std::string message;  // empty on success; otherwise names the path and the problem
+  explicit operator bool() const { return error == TableFileError::none && stored.has_value(); }
+};
+
+// Reads a table file without ever writing to it. The checks run in this order, and the first
+// that fails decides the error: open; magic (not_a_table, or truncated for a file that is a
+// strict prefix of the magic, including an empty file); version (wrong_version, checked before
+// any checksum because another version may lay out or checksum its header differently); header
+// length and header checksum (truncated, corrupt); header fields (corrupt); expected_grid
+// (wrong_grid, naming both grids); file length against the header (truncated if shorter,
+// corrupt if longer); file checksum (corrupt); then every count (corrupt).
+// `storage` chooses the in-memory layout of the loaded table; `automatic` keeps large grids
+// sparse, so loading a sparse 12x9 file never allocates S*S.
+TableLoadResult load_table(const std::filesystem::path& path,
+                           std::optional<Grid> expected_grid = std::nullopt,
+                           TableStorage storage = TableStorage::automatic);
+
+struct TableSaveResult {
+  bool ok = false;
+  std::string message;  // empty on success; otherwise names the path and the cause
+  explicit operator bool() const { return ok; }
+};
+
+// Test hooks into save_table.
+struct SaveHooks {
+  // Called once the temporary file is written, fsynced and closed, before it is renamed over
+  // the target. Returning false aborts the save as a crash at that moment would, except that
+  // the temporary file is removed.
+  std::function<bool()> before_rename;
+};
+
+// Writes the table to a temporary file in the same folder (`path` + ".tmp-<pid>-<n>"), fsyncs
+// it, renames it over `path` and fsyncs the folder, so that a reader or a crash at any moment
+// sees either the old file or the new one, never part of one. On failure the temporary file is
+// removed and `path` is left as it was. Dense tables are written densely, sparse ones as rows.
+TableSaveResult save_table(const std::filesystem::path& path, const TransitionTable& table,
+                           const TableMetadata& metadata, const SaveHooks& hooks = {});
+
+}  // namespace ssl_formation

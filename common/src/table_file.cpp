@@ -1,0 +1,692 @@
+#include "ssl_formation/table_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <utility>
+#include <vector>
+
+namespace ssl_formation {
+
+namespace {
+
+static_assert(std::numeric_limits<double>::is_iec559, "doubles are stored as IEEE-754 bits");
+
+constexpr std::array<std::uint8_t, 8> magic = {'S', 'S', 'L', 'F', 'T', 'A', 'B', 'L'};
+constexpr std::uint64_t version_offset = 8;
+constexpr std::uint64_t header_fields_size = 80;  // everything the header checksum covers
+constexpr std::uint64_t header_size = header_fields_size + 4;
+constexpr std::uint64_t checksum_size = 4;
+constexpr std::uint32_t encoding_dense = 0;
+constexpr std::uint32_t encoding_sparse = 1;
+constexpr std::size_t io_chunk = std::size_t{1} << 16;
+
+// ---- Little-endian encoding, byte by byte so the host's layout never matters.
+
+void put_u32(std::uint8_t* out, std::uint32_t value) {
+  for (int i = 0; i < 4; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
+}
+void put_u64(std::uint8_t* out, std::uint64_t value) {
+  for (int i = 0; i < 8; ++i) out[i] = static_cast<std::uint8_t>(value >> (8 * i));
+}
+std::uint32_t get_u32(const std::uint8_t* in) {
+  std::uint32_t value = 0;
+  for (int i = 0; i < 4; ++i) value |= std::uint32_t{in[i]} << (8 * i);
+  return value;
+}
+std::uint64_t get_u64(const std::uint8_t* in) {
+  std::uint64_t value = 0;
+  for (int i = 0; i < 8; ++i) value |= std::uint64_t{in[i]} << (8 * i);
+  return value;
+}
+
+// zlib's crc32 takes a uInt length; our chunks are far below that, but large spans are split
+// anyway so the function is correct for any size.
+std::uint32_t crc_update(std::uint32_t crc, const std::uint8_t* data, std::size_t size) {
+  uLong value = crc;
+  while (size > 0) {
+    const std::size_t part = std::min<std::size_t>(size, std::numeric_limits<uInt>::max());
+    value = ::crc32(value, data, static_cast<uInt>(part));
+    data += part;
+    size -= part;
+  }
+  return static_cast<std::uint32_t>(value);
+}
+std::uint32_t crc_of(const std::uint8_t* data, std::size_t size) {
+  return crc_update(static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0)), data, size);
+}
+
+std::string errno_text(int error) { return std::strerror(error); }
+
+class FileDescriptor {
+ public:
+  explicit FileDescriptor(int fd = -1) : fd_(fd) {}
+  ~FileDescriptor() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FileDescriptor(const FileDescriptor&) = delete;
+  FileDescriptor& operator=(const FileDescriptor&) = delete;
+  int get() const { return fd_; }
+  bool valid() const { return fd_ >= 0; }
+  void reset(int fd) {
+    close();
+    fd_ = fd;
+  }
+  // Closes now and reports the error, because close can be the first to report a failed write.
+  int close() {
+    const int fd = std::exchange(fd_, -1);
+    return fd >= 0 && ::close(fd) != 0 ? errno : 0;
+  }
+
+ private:
+  int fd_;
+};
+
+// The table's dimensions as the file states them.
+struct Header {
+  std::uint32_t version = 0;
+  std::uint32_t length = 0;
+  std::uint32_t width = 0;
+  std::uint32_t encoding = 0;
+  TableMetadata metadata;
+  std::uint64_t transitions = 0;
+  std::uint64_t rows = 0;
+  std::uint64_t entries = 0;
+};
+
+std::array<std::uint8_t, header_size> encode_header(const Header& header) {
+  std::array<std::uint8_t, header_size> out{};
+  std::copy(magic.begin(), magic.end(), out.begin());
+  put_u32(&out[8], header.version);
+  put_u32(&out[12], header.length);
+  put_u32(&out[16], header.width);
+  put_u32(&out[20], header.encoding);
+  put_u64(&out[24], std::bit_cast<std::uint64_t>(header.metadata.field.length_mm));
+  put_u64(&out[32], std::bit_cast<std::uint64_t>(header.metadata.field.width_mm));
+  put_u64(&out[40], std::bit_cast<std::uint64_t>(header.metadata.step_s));
+  put_u64(&out[48], header.metadata.samples);
+  put_u64(&out[56], header.transitions);
+  put_u64(&out[64], header.rows);
+  put_u64(&out[72], header.entries);
+  put_u32(&out[header_fields_size], crc_of(out.data(), header_fields_size));
+  return out;
+}
+
+Header decode_header(const std::uint8_t* in) {
+  Header header;
+  header.version = get_u32(&in[8]);
+  header.length = get_u32(&in[12]);
+  header.width = get_u32(&in[16]);
+  header.encoding = get_u32(&in[20]);
+  header.metadata.field.length_mm = std::bit_cast<double>(get_u64(&in[24]));
+  header.metadata.field.width_mm = std::bit_cast<double>(get_u64(&in[32]));
+  header.metadata.step_s = std::bit_cast<double>(get_u64(&in[40]));
+  header.metadata.samples = get_u64(&in[48]);
+  header.transitions = get_u64(&in[56]);
+  header.rows = get_u64(&in[64]);
+  header.entries = get_u64(&in[72]);
+  return header;
+}
+
+bool valid_step(double step_s) { return std::isfinite(step_s) && step_s > 0.0; }
+
+// ---- Loading
+
+// Reads a byte range of the file through a fixed buffer, so that loading costs memory in
+// proportion to the table it builds, never to the file. pread leaves the file offset alone and
+// the descriptor is read-only, so nothing here can change the file.
+class ChunkReader {
+ public:
+  ChunkReader(int fd, std::uint64_t begin, std::uint64_t end)
+      : fd_(fd), next_(begin), end_(end), buffer_(io_chunk) {}
+
+  // 0 on success, else an errno value; EOF before `end` reports ENODATA.
+  int read(std::uint8_t* out, std::size_t size) {
+    while (size > 0) {
+      if (pos_ == filled_) {
+        if (const int error = refill(); error != 0) return error;
+      }
+      const std::size_t part = std::min(size, filled_ - pos_);
+      std::memcpy(out, &buffer_[pos_], part);
+      pos_ += part;
+      out += part;
+      size -= part;
+    }
+    return 0;
+  }
+  int read_u32(std::uint32_t& value) {
+    if (filled_ - pos_ >= 4) {  // the common case, without the copy
+      value = get_u32(&buffer_[pos_]);
+      pos_ += 4;
+      return 0;
+    }
+    std::uint8_t bytes[4];
+    if (const int error = read(bytes, 4); error != 0) return error;
+    value = get_u32(bytes);
+    return 0;
+  }
+  // Exposes each chunk in turn until `end`; used to checksum a range.
+  template <typename Visit>
+  int for_each_chunk(Visit&& visit) {
+    while (true) {
+      if (pos_ == filled_) {
+        if (next_ == end_) return 0;
+        if (const int error = refill(); error != 0) return error;
+      }
+      visit(&buffer_[pos_], filled_ - pos_);
+      pos_ = filled_;
+    }
+  }
+
+ private:
+  int refill() {
+    if (next_ >= end_) return ENODATA;
+    const std::size_t want =
+        static_cast<std::size_t>(std::min<std::uint64_t>(buffer_.size(), end_ - next_));
+    ssize_t got = 0;
+    do {
+      got = ::pread(fd_, buffer_.data(), want, static_cast<off_t>(next_));
+    } while (got < 0 && errno == EINTR);
+    if (got < 0) return errno;
+    if (got == 0) return ENODATA;  // the file shrank under us
+    next_ += static_cast<std::uint64_t>(got);
+    pos_ = 0;
+    filled_ = static_cast<std::size_t>(got);
+    return 0;
+  }
+
+  int fd_;
+  std::uint64_t next_;
+  std::uint64_t end_;
+  std::vector<std::uint8_t> buffer_;
+  std::size_t pos_ = 0;
+  std::size_t filled_ = 0;
+};
+
+TableLoadResult load_failure(TableFileError error, const std::filesystem::path& path,
+                             const std::string& what) {
+  TableLoadResult result;
+  result.error = error;
+  result.message = path.string() + ": " + what;
+  return result;
+}
+
+TableLoadResult read_failure(const std::filesystem::path& path, int error) {
+  if (error == ENODATA) {
+    return load_failure(TableFileError::truncated, path,
+                        "truncated: the file ended while it was being read");
+  }
+  return load_failure(TableFileError::io_error, path, "read failed: " + errno_text(error));
+}
+
+// Everything a header must satisfy before its sizes are trusted; a reason if it does not.
+std::optional<std::string> header_problem(const Header& header) {
+  const std::uint32_t max = static_cast<std::uint32_t>(Grid::max_cells);
+  if (header.length < 1 || header.width < 1 || header.length > max || header.width > max ||
+      header.length * header.width > max) {
+    return "invalid grid " + std::to_string(header.length) + "x" + std::to_string(header.width) +
+           " in the header";
+  }
+  if (!header.metadata.field.valid()) return std::string("invalid field size in the header");
+  if (!valid_step(header.metadata.step_s)) return std::string("invalid step in the header");
+  const std::uint64_t cells = std::uint64_t{header.length} * header.width;
+  const std::uint64_t states = cells * cells * cells;
+  if (header.encoding == encoding_dense) {
+    if (header.rows != states || header.entries != states * states) {
+      return std::string("dense row and entry counts do not match the grid");
+    }
+  } else if (header.encoding == encoding_sparse) {
+    // Every row record holds at least one entry and at most S.
+    if (header.rows > states || header.entries < header.rows ||
+        header.entries > header.rows * states) {
+      return std::string("sparse row and entry counts are inconsistent");
+    }
+  } else {
+    return "unknown count encoding " + std::to_string(header.encoding);
+  }
+  if (header.entries == 0 && header.transitions != 0) {
+    return std::string("nonzero transition total with no counts");
+  }
+  return std::nullopt;
+}
+
+std::uint64_t body_size(const Header& header) {
+  return header.encoding == encoding_dense ? header.entries * 4
+                                           : header.rows * 8 + header.entries * 8;
+}
+
+// Reads the counts into `table`; a reason on inconsistent content or an errno on a failed read.
+struct BodyProblem {
+  std::optional<std::string> content;
+  int read_error = 0;
+};
+
+BodyProblem read_dense_body(ChunkReader& reader, TransitionTable& table, std::uint64_t& sum) {
+  const StateIndex states = table.codec().state_count();
+  for (StateIndex from = 0; from < states; ++from) {
+    for (StateIndex to = 0; to < states; ++to) {
+      std::uint32_t count = 0;
+      if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+      if (count == 0) continue;
+      table.add(from, to, count);
+      sum += count;
+    }
+  }
+  return {};
+}
+
+BodyProblem read_sparse_body(ChunkReader& reader, const Header& header, TransitionTable& table,
+                             std::uint64_t& sum) {
+  const StateIndex states = table.codec().state_count();
+  std::uint64_t entries_read = 0;
+  std::optional<StateIndex> previous_from;
+  for (std::uint64_t row = 0; row < header.rows; ++row) {
+    std::uint32_t from = 0;
+    std::uint32_t n = 0;
+    if (const int error = reader.read_u32(from); error != 0) return {std::nullopt, error};
+    if (const int error = reader.read_u32(n); error != 0) return {std::nullopt, error};
+    const std::string where =
+        "row record " + std::to_string(row) + " (from state " + std::to_string(from) + ")";
+    if (from >= states) return {where + ": state index out of range", 0};
+    if (previous_from && from <= *previous_from) return {where + ": rows out of order", 0};
+    if (n == 0 || n > header.entries - entries_read) {
+      return {where + ": entry count " + std::to_string(n) + " is inconsistent", 0};
+    }
+    previous_from = from;
+    std::optional<StateIndex> previous_to;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      std::uint32_t to = 0;
+      std::uint32_t count = 0;
+      if (const int error = reader.read_u32(to); error != 0) return {std::nullopt, error};
+      if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+      if (to >= states) return {where + ": target state index out of range", 0};
+      if (previous_to && to <= *previous_to) return {where + ": targets out of order", 0};
+      if (count == 0) return {where + ": zero count stored", 0};
+      previous_to = to;
+      table.add(from, to, count);
+      sum += count;
+    }
+    entries_read += n;
+  }
+  if (entries_read != header.entries) {
+    return {"the rows hold " + std::to_string(entries_read) + " entries, the header says " +
+                std::to_string(header.entries),
+            0};
+  }
+  return {};
+}
+
+// ---- Saving
+
+// Writes through a fixed buffer, keeping the CRC of everything written and the first error,
+// so that callers inside a visitor (which cannot stop early) just keep going until the end.
+class BufferedWriter {
+ public:
+  explicit BufferedWriter(int fd) : fd_(fd) { buffer_.reserve(io_chunk); }
+
+  void write(const std::uint8_t* data, std::size_t size) {
+    if (error_ != 0) return;
+    crc_ = crc_update(crc_, data, size);
+    while (size > 0) {
+      const std::size_t part = std::min(size, io_chunk - buffer_.size());
+      buffer_.insert(buffer_.end(), data, data + part);
+      data += part;
+      size -= part;
+      if (buffer_.size() == io_chunk) flush();
+    }
+  }
+  void write_u32(std::uint32_t value) {
+    std::uint8_t bytes[4];
+    put_u32(bytes, value);
+    write(bytes, 4);
+  }
+  void write_zero_u32s(std::uint64_t n) {
+    static const std::array<std::uint8_t, 4096> zeros{};
+    std::uint64_t bytes = n * 4;
+    while (bytes > 0 && error_ == 0) {
+      const std::size_t part = static_cast<std::size_t>(std::min<std::uint64_t>(bytes, 4096));
+      write(zeros.data(), part);
+      bytes -= part;
+    }
+  }
+  void flush() {
+    const std::uint8_t* data = buffer_.data();
+    std::size_t left = buffer_.size();
+    while (left > 0 && error_ == 0) {
+      const ssize_t wrote = ::write(fd_, data, left);
+      if (wrote < 0) {
+        if (errno != EINTR) error_ = errno;
+        continue;
+      }
+      data += wrote;
+      left -= static_cast<std::size_t>(wrote);
+    }
+    buffer_.clear();
+  }
+  std::uint32_t crc() const { return crc_; }
+  int error() const { return error_; }
+
+ private:
+  int fd_;
+  std::vector<std::uint8_t> buffer_;
+  std::uint32_t crc_ = static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0));
+  int error_ = 0;
+};
+
+// The temporary file of one save: removed on every way out unless it was renamed into place.
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
+  ~TemporaryFile() {
+    fd.close();
+    if (!renamed_) ::unlink(path_.c_str());
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  void mark_renamed() { renamed_ = true; }
+
+  FileDescriptor fd;
+
+ private:
+  std::filesystem::path path_;
+  bool renamed_ = false;
+};
+
+std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
+  // The pid keeps processes apart, the counter keeps concurrent saves of one process apart.
+  static std::atomic<unsigned> counter{0};
+  std::filesystem::path temp = path;
+  temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  return temp;
+}
+
+TableSaveResult save_failure(const std::filesystem::path& path, const std::string& what) {
+  return TableSaveResult{false, "cannot save table " + path.string() + ": " + what};
+}
+
+}  // namespace
+
+std::string_view to_string(TableFileError error) {
+  switch (error) {
+    case TableFileError::none:
+      return "none";
+    case TableFileError::cannot_open:
+      return "cannot_open";
+    case TableFileError::not_a_table:
+      return "not_a_table";
+    case TableFileError::wrong_version:
+      return "wrong_version";
+    case TableFileError::wrong_grid:
+      return "wrong_grid";
+    case TableFileError::truncated:
+      return "truncated";
+    case TableFileError::corrupt:
+      return "corrupt";
+    case TableFileError::io_error:
+      return "io_error";
+  }
+  return "unknown";
+}
+
+TableLoadResult load_table(const std::filesystem::path& path, std::optional<Grid> expected_grid,
+                           TableStorage storage) {
+  int fd_value = -1;
+  do {
+    fd_value = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY);
+  } while (fd_value < 0 && errno == EINTR);
+  if (fd_value < 0) {
+    return load_failure(TableFileError::cannot_open, path, "cannot open: " + errno_text(errno));
+  }
+  const FileDescriptor fd(fd_value);
+  struct stat info {};
+  if (::fstat(fd.get(), &info) != 0) {
+    return load_failure(TableFileError::io_error, path, "cannot stat: " + errno_text(errno));
+  }
+  if (!S_ISREG(info.st_mode)) {
+    return load_failure(TableFileError::cannot_open, path, "cannot open: not a regular file");
+  }
+  const auto file_size = static_cast<std::uint64_t>(info.st_size);
+
+  // Magic.
+  std::array<std::uint8_t, header_size> header_bytes{};
+  const std::uint64_t header_available = std::min<std::uint64_t>(file_size, header_size);
+  if (header_available > 0) {
+    ChunkReader reader(fd.get(), 0, header_available);
+    if (const int error = reader.read(header_bytes.data(), header_available); error != 0) {
+      return read_failure(path, error);
+    }
+  }
+  const std::size_t magic_available =
+      static_cast<std::size_t>(std::min<std::uint64_t>(header_available, magic.size()));
+  if (!std::equal(magic.begin(), magic.begin() + magic_available, header_bytes.begin())) {
+    return load_failure(TableFileError::not_a_table, path,
+                        "not a table file: bad magic (a table file starts with \"SSLFTABL\")");
+  }
+  if (magic_available < magic.size()) {
+    // A strict prefix of the magic (an empty file included) is most likely a cut-off table.
+    return load_failure(TableFileError::truncated, path,
+                        "truncated: " + std::to_string(file_size) + " bytes, shorter than the " +
+                            std::to_string(magic.size()) + "-byte magic");
+  }
+
+  // Version, before any checksum: another version may lay out or checksum its header otherwise.
+  if (file_size < version_offset + 4) {
+    return load_failure(TableFileError::truncated, path,
+                        "truncated: " + std::to_string(file_size) +
+                            " bytes, the header is cut off before the format version");
+  }
+  const std::uint32_t version = get_u32(&header_bytes[version_offset]);
+  if (version != table_file_version) {
+    return load_failure(TableFileError::wrong_version, path,
+                        "format version " + std::to_string(version) +
+                            ", but this program reads version " +
+                            std::to_string(table_file_version));
+  }
+
+  // Header.
+  if (file_size < header_size) {
+    return load_failure(TableFileError::truncated, path,
+                        "truncated: " + std::to_string(file_size) + " bytes, shorter than the " +
+                            std::to_string(header_size) + "-byte header");
+  }
+  if (crc_of(header_bytes.data(), header_fields_size) !=
+      get_u32(&header_bytes[header_fields_size])) {
+    return load_failure(TableFileError::corrupt, path,
+                        "header checksum mismatch: the file is corrupt");
+  }
+  const Header header = decode_header(header_bytes.data());
+  if (const auto problem = header_problem(header)) {
+    return load_failure(TableFileError::corrupt, path, "corrupt: " + *problem);
+  }
+  const Grid grid(static_cast<int>(header.length), static_cast<int>(header.width));
+  if (expected_grid && *expected_grid != grid) {
+    TableLoadResult result;
+    result.error = TableFileError::wrong_grid;
+    result.message = path.string() + " holds a " + grid.to_string() + " grid, expected " +
+                     expected_grid->to_string();
+    return result;
+  }
+
+  // Length.
+  const std::uint64_t expected_size = header_size + body_size(header) + checksum_size;
+  if (file_size < expected_size) {
+    return load_failure(TableFileError::truncated, path,
+                        "truncated: " + std::to_string(file_size) + " bytes, its header says " +
+                            std::to_string(expected_size));
+  }
+  if (file_size > expected_size) {
+    return load_failure(TableFileError::corrupt, path,
+                        "corrupt: " + std::to_string(file_size) + " bytes, its header says " +
+                            std::to_string(expected_size) + " (" +
+                            std::to_string(file_size - expected_size) + " trailing bytes)");
+  }
+
+  // File checksum, before any count is trusted.
+  const std::uint64_t checksum_offset = expected_size - checksum_size;
+  std::uint32_t crc = static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0));
+  {
+    ChunkReader reader(fd.get(), 0, checksum_offset);
+    const int error = reader.for_each_chunk(
+        [&crc](const std::uint8_t* data, std::size_t size) { crc = crc_update(crc, data, size); });
+    if (error != 0) return read_failure(path, error);
+  }
+  std::uint32_t stored_crc = 0;
+  {
+    ChunkReader reader(fd.get(), checksum_offset, expected_size);
+    if (const int error = reader.read_u32(stored_crc); error != 0) {
+      return read_failure(path, error);
+    }
+  }
+  if (crc != stored_crc) {
+    return load_failure(TableFileError::corrupt, path, "checksum mismatch: the file is corrupt");
+  }
+
+  // Counts. Both checksums matched, so a problem here comes from the writer, not the disk.
+  StoredTable stored{TransitionTable(grid, storage), header.metadata};
+  std::uint64_t sum = 0;
+  ChunkReader reader(fd.get(), header_size, checksum_offset);
+  const BodyProblem problem = header.encoding == encoding_dense
+                                  ? read_dense_body(reader, stored.table, sum)
+                                  : read_sparse_body(reader, header, stored.table, sum);
+  if (problem.read_error != 0) return read_failure(path, problem.read_error);
+  if (problem.content)
+    return load_failure(TableFileError::corrupt, path, "corrupt: " + *problem.content);
+  if (sum != header.transitions) {
+    return load_failure(TableFileError::corrupt, path,
+                        "corrupt: the counts sum to " + std::to_string(sum) +
+                            " transitions, the header says " + std::to_string(header.transitions));
+  }
+
+  TableLoadResult result;
+  result.stored.emplace(std::move(stored));
+  return result;
+}
+
+TableSaveResult save_table(const std::filesystem::path& path, const TransitionTable& table,
+                           const TableMetadata& metadata, const SaveHooks& hooks) {
+  // Never write a file that load_table would reject.
+  if (!metadata.field.valid()) return save_failure(path, "invalid field size");
+  if (!valid_step(metadata.step_s)) return save_failure(path, "invalid step");
+
+  const bool dense = table.is_dense();
+  const std::uint64_t states = table.codec().state_count();
+  Header header;
+  header.version = table_file_version;
+  header.length = static_cast<std::uint32_t>(table.grid().length());
+  header.width = static_cast<std::uint32_t>(table.grid().width());
+  header.encoding = dense ? encoding_dense : encoding_sparse;
+  header.metadata = metadata;
+  // Totals counted from the very entries that are written, so header and body always agree.
+  std::uint64_t sparse_rows = 0;
+  std::uint64_t nonzero = 0;
+  std::optional<StateIndex> last_from;
+  table.for_each_nonzero([&](StateIndex from, StateIndex, TransitionTable::Count count) {
+    if (!last_from || *last_from != from) ++sparse_rows;
+    last_from = from;
+    ++nonzero;
+    header.transitions += count;
+  });
+  header.rows = dense ? states : sparse_rows;
+  header.entries = dense ? states * states : nonzero;
+
+  TemporaryFile temp(temporary_path_for(path));
+  int fd_value = -1;
+  do {
+    fd_value =
+        ::open(temp.path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOCTTY, 0644);
+  } while (fd_value < 0 && errno == EINTR);
+  if (fd_value < 0) {
+    return save_failure(
+        path, "cannot create temporary file " + temp.path().string() + ": " + errno_text(errno));
+  }
+  temp.fd.reset(fd_value);
+
+  BufferedWriter writer(temp.fd.get());
+  const auto header_bytes = encode_header(header);
+  writer.write(header_bytes.data(), header_bytes.size());
+  if (dense) {
+    // Fill the zeros between the nonzero counts that for_each_nonzero visits in order. Were
+    // that order ever broken, `index - next` would wrap and fill the disk, so it is checked.
+    std::uint64_t next = 0;
+    bool in_order = true;
+    table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count count) {
+      const std::uint64_t index = std::uint64_t{from} * states + to;
+      if (!in_order || index < next) {
+        in_order = false;
+        return;
+      }
+      writer.write_zero_u32s(index - next);
+      writer.write_u32(count);
+      next = index + 1;
+    });
+    writer.write_zero_u32s(states * states - next);
+    if (!in_order) return save_failure(path, "the table listed its counts out of order");
+  } else {
+    // One row is buffered because its record starts with its entry count.
+    std::vector<std::pair<StateIndex, TransitionTable::Count>> row;
+    std::optional<StateIndex> row_from;
+    const auto write_row = [&] {
+      if (!row_from) return;
+      writer.write_u32(*row_from);
+      writer.write_u32(static_cast<std::uint32_t>(row.size()));
+      for (const auto& [to, count] : row) {
+        writer.write_u32(to);
+        writer.write_u32(count);
+      }
+      row.clear();
+    };
+    table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count count) {
+      if (row_from != from) {
+        write_row();
+        row_from = from;
+      }
+      row.emplace_back(to, count);
+    });
+    write_row();
+  }
+  writer.write_u32(writer.crc());
+  writer.flush();
+  if (writer.error() != 0) {
+    return save_failure(path,
+                        "cannot write " + temp.path().string() + ": " + errno_text(writer.error()));
+  }
+  if (::fsync(temp.fd.get()) != 0) {
+    return save_failure(path, "cannot sync " + temp.path().string() + ": " + errno_text(errno));
+  }
+  if (const int error = temp.fd.close(); error != 0) {
+    return save_failure(path, "cannot close " + temp.path().string() + ": " + errno_text(error));
+  }
+
+  if (hooks.before_rename && !hooks.before_rename()) {
+    return save_failure(path, "aborted before the rename; the old file is unchanged");
+  }
+  if (::rename(temp.path().c_str(), path.c_str()) != 0) {
+    return save_failure(path,
+                        "cannot rename " + temp.path().string() + " over it: " + errno_text(errno));
+  }
+  temp.mark_renamed();
+
+  // The rename lives in the folder; until the folder is synced a crash may bring the old
+  // file back.
+  std::filesystem::path folder = path.parent_path();
+  if (folder.empty()) folder = ".";
+  const FileDescriptor folder_fd(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (!folder_fd.valid() || ::fsync(folder_fd.get()) != 0) {
+    return save_failure(path, "written, but cannot sync its folder " + folder.string() + ": " +
+                                  errno_text(errno) + "; a crash now may restore the old file");
+  }
+  return TableSaveResult{true, {}};
+}
+
+}  // namespace ssl_formation
