@@ -80,10 +80,8 @@ class PredictorDaemon {
     receiver_.start([this](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
       sampler_.add(packet);
     });
-    spdlog::info("listening on {} (interface {}); predictions to {} (interface {}); horizon {}; "
-                 "opponent {} attacking {}; grid {}, step {} s",
-                 options_.network.vision_address, options_.network.interface,
-                 options_.prediction_address, prediction_interface(options_), options_.horizon, sf::to_string(config_.opponent_color),
+    spdlog::info("predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s",
+                 options_.horizon, sf::to_string(config_.opponent_color),
                  sf::to_string(config_.opponent_attacks), config_.grid.to_string(), config_.step_s);
     check_table();
     if (!watcher_.table()) {

@@ -59,11 +59,9 @@ int run_live(const TrainerOptions& options) {
   receiver.start([&](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
     training->add(packet);
   });
-  spdlog::info("listening on {} (interface {}, receive buffer {} bytes); opponent {} attacking {}; "
-               "grid {}, step {} s; table {}",
-               group.to_string(), interface.to_string(), receiver.granted_receive_buffer(),
+  spdlog::info("training: opponent {} attacking {}; grid {}, step {} s; table {} saved every {} s",
                sf::to_string(config.opponent_color), sf::to_string(config.opponent_attacks),
-               config.grid.to_string(), config.step_s, table_path.string());
+               config.grid.to_string(), config.step_s, table_path.string(), options.flush_interval_s);
 
   sf::app::RepeatingTimer flush(io, flush_period, [&] {
     if (training->changed_since_save()) sf::trainer::save_training(table_path, *training);
