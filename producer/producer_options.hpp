@@ -1,0 +1,53 @@
+#pragma once
+// ssl-producer's options: the simulated opponent, the network it sends on, and the log files it
+// writes (--write-log) or replays (--replay). Parsed in main.cpp, used by the three modes.
+
+#include <cstdint>
+#include <string>
+
+#include "simulated_vision.hpp"
+#include "ssl_formation/app/options.hpp"
+#include "ssl_formation/net/multicast.hpp"
+
+namespace ssl_formation::producer {
+
+struct ProducerOptions {
+  // Network (live simulation and --replay).
+  std::string vision_address = app::default_vision_address;
+  std::string interface = app::default_interface;
+  int ttl = net::kDefaultMulticastTtl;
+  // Simulation (live and --write-log).
+  double period_s = 2.0;
+  double step_s = 2.0;
+  std::uint64_t count = 0;  // formations; with --replay: packets
+  std::uint64_t seed = 1;
+  int cameras = 1;
+  double camera_overlap_mm = 200.0;
+  double jitter_mm = 0.0;
+  double drop_rate = 0.0;
+  std::string opponent_color = "yellow";
+  std::string opponent_attacks = "+x";
+  double field_length_mm = 9000.0;
+  double field_width_mm = 6000.0;
+  double start_time_s = 0.0;
+  // Log files.
+  std::string write_log;  // --write-log FILE
+  std::string replay;     // --replay FILE
+  double speed = 1.0;
+  bool loop = false;
+  double replay_start_s = 0.0;
+  double replay_end_s = 0.0;  // 0 = to the end of the log
+  // Everyday.
+  double status_interval_s = 5.0;
+  bool verbose = false;
+};
+
+// The simulation the options describe; throws app::UsageError naming the bad option.
+sim::SimulationConfig simulation_config(const ProducerOptions& options);
+
+// The three modes; each returns the exit status.
+int run_simulation(const ProducerOptions& options);  // live_feed.cpp
+int run_write_log(const ProducerOptions& options);   // log_output.cpp
+int run_replay(const ProducerOptions& options);      // replay.cpp
+
+}  // namespace ssl_formation::producer
