@@ -1,6 +1,7 @@
 // ssl-trainer without the network: --from-log and merge, as processes on real files.
 
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include "child_process.hpp"
 #include "simulated_vision.hpp"
@@ -15,6 +16,7 @@ using namespace std::chrono_literals;
 using testing::TempDir;
 
 const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 
 // Writes the simulated stream of `seed` as an official log, as a recorder would.
 void write_simulated_log(const std::filesystem::path& path, std::uint64_t seed, int formations,
@@ -127,6 +129,39 @@ TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
   ASSERT_TRUE(loaded) << loaded.message;
   EXPECT_EQ(entries(loaded.stored->table), entries(library_table({dir / "a.log"})));
   EXPECT_GT(loaded.stored->table.transitions(), 300u);
+}
+
+// The live path and the offline path are the same code: a paced replay of a log into a live
+// trainer counts exactly what --from-log counts from the file.
+TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
+  TempDir dir;
+  write_simulated_log(dir / "match.log.gz", 17, 300, 4);
+  const auto offline = trainer(dir, {"--from-log", (dir / "match.log.gz").string(), "--table",
+                                     (dir / "offline.bin").string()}, "offline");
+  ASSERT_EQ(offline.exit_code, 0) << offline.err;
+
+  const std::string group = testing::unique_group(testing::free_udp_port());
+  testing::ChildProcess live(trainer_program,
+                             {"--vision-address", group, "--table", (dir / "live.bin").string(),
+                              "--status-interval", "0.1"},
+                             dir.path(), "live");
+  ASSERT_TRUE(live.wait_for_stderr("listening on", 5s)) << live.stderr_text();
+  // 300 formations of 2 s of data time at 300x: 2 s of wall time, with the recorded spacing.
+  const auto replay = testing::run_to_end(producer_program,
+                                          {"--replay", (dir / "match.log.gz").string(), "--speed", "300",
+                                           "--vision-address", group},
+                                          dir.path(), "replay", 60s);
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  ASSERT_TRUE(live.wait_for_stderr("formations=300 ", 10s)) << live.stderr_text();
+  live.signal(SIGTERM);
+  ASSERT_EQ(live.wait(5s), 0);
+
+  const auto a = load_table(dir / "offline.bin", Grid(3, 2));
+  const auto b = load_table(dir / "live.bin", Grid(3, 2));
+  ASSERT_TRUE(a && b);
+  EXPECT_GT(a.stored->table.transitions(), 1500u);
+  EXPECT_EQ(entries(a.stored->table), entries(b.stored->table));
+  EXPECT_EQ(a.stored->metadata.samples, b.stored->metadata.samples);
 }
 
 TEST(OfflineTraining, ResumesAnExistingTable) {
