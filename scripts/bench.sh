@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Runs every benchmark of the project and prints one table of figures:
+#   prediction latency and sampler cost            (Google Benchmark: core_benchmarks)
+#   offline training against the bare-parse floor  (Google Benchmark: log_benchmarks)
+#   table memory and prediction time per grid      (ssl-evaluate grid-sweep)
+#   end-to-end latency against the loopback floor  (scripts/bench-e2e.sh: real daemons)
+# Everything stays on 127.0.0.1. Takes about 3 minutes after the build.
+#   SSLF_BUILD_DIR   build folder (default: build)
+#   SSLF_BENCH_SKIP_E2E=1  skip the end-to-end part
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
+sslf_install_packages
+mkdir -p "$(dirname "$build_dir")"
+sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
+  tail -50 "$build_dir.build.log" >&2
+  exit 1
+}
+work="$(mktemp -d "${TMPDIR:-/tmp}/sslf-bench.XXXXXX")"
+trap 'rm -rf "$work"' EXIT
+
+echo "ssl-formation benchmarks, $(date -u '+%Y-%m-%d %H:%M UTC'), $(nproc) CPUs, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+echo
+
+# Google Benchmark medians over 5 repetitions, CPU time (less disturbed by other processes).
+"$build_dir/benchmarks/core_benchmarks" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+  --benchmark_format=csv 2>/dev/null >"$work/core.csv"
+"$build_dir/benchmarks/log_benchmarks" --benchmark_repetitions=3 --benchmark_report_aggregates_only=true \
+  --benchmark_format=csv 2>/dev/null >"$work/log.csv"
+
+# csv columns: name,iterations,real_time,cpu_time,time_unit,bytes_per_second,items_per_second,label,...
+median() { grep "^\"$1_median\"" "$2" | head -1; }
+cpu_ns() { median "$1" "$2" | awk -F, '{ t = $4; u = $5; if (u == "us") t *= 1000; if (u == "ms") t *= 1e6; printf "%.0f", t }'; }
+items() { median "$1" "$2" | awk -F, '{ printf "%.0f", $7 }'; }
+
+printf '%-58s %14s %s\n' "measure (median)" "figure" "target"
+printf '%s\n' "--------------------------------------------------------------------------------------------"
+row() { printf '%-58s %14s %s\n' "$1" "$2" "${3:-}"; }
+row "2-step prediction, 6 robots, 3x2 (dense)" "$(cpu_ns 'BM_Predict/grid12x9:0/robots:6/horizon:2' "$work/core.csv") ns" "<= 1000 ns"
+row "2-step prediction, 11 robots, 3x2 (dense)" "$(cpu_ns 'BM_Predict/grid12x9:0/robots:11/horizon:2' "$work/core.csv") ns"
+row "2-step prediction, 6 robots, 12x9 (sparse)" "$(cpu_ns 'BM_Predict/grid12x9:1/robots:6/horizon:2' "$work/core.csv") ns"
+row "2-step prediction, 11 robots, 12x9 (sparse)" "$(cpu_ns 'BM_Predict/grid12x9:1/robots:11/horizon:2' "$work/core.csv") ns" "<= 20000 ns"
+row "1-step prediction, 11 robots, 12x9 (sparse)" "$(cpu_ns 'BM_Predict/grid12x9:1/robots:11/horizon:1' "$work/core.csv") ns"
+row "table increment, 3x2 dense" "$(cpu_ns 'BM_TableIncrement/grid12x9:0' "$work/core.csv") ns"
+row "table increment, 12x9 sparse" "$(cpu_ns 'BM_TableIncrement/grid12x9:1' "$work/core.csv") ns"
+per_robot() { awk -v i="$(items "$1" "$work/core.csv")" 'BEGIN { printf "%.1f", 1e9 / i }'; }
+row "sampling + state encoding per robot, 1 camera" "$(per_robot 'BM_SamplerPerPacket/cameras:1') ns" "<= 1000 ns"
+row "sampling + state encoding per robot, 4 cameras" "$(per_robot 'BM_SamplerPerPacket/cameras:4') ns" "<= 1000 ns"
+for variant in 0 1; do
+  name=$([ $variant = 0 ] && echo ".log" || echo ".log.gz")
+  floor=$(items "BM_ReadAndParse/gzip:$variant" "$work/log.csv")
+  training=$(items "BM_OfflineTraining/gzip:$variant" "$work/log.csv")
+  row "read + parse only (the floor), $name, frames/s" "$floor"
+  row "offline training, $name, 6+6-robot frames/s" "$training" "$([ $variant = 0 ] && echo '>= 1000000')"
+  row "offline training / floor, $name" "$(awk -v a="$training" -v b="$floor" 'BEGIN { printf "%.2f", a / b }')" ">= 0.80"
+done
+
+"$build_dir/predictor/ssl-evaluate" grid-sweep --output-dir "$work" 2>/dev/null >/dev/null
+while IFS=, read -r grid states transitions memory prediction _; do
+  [ "$grid" = grid ] && continue
+  row "table memory, $grid ($states states, $transitions transitions)" "$(awk -v m="$memory" 'BEGIN { printf "%.1f KiB", m / 1024 }')"
+  row "  2-step prediction over the held-out formations, $grid" "$(awk -v p="$prediction" 'BEGIN { printf "%.2f us", p }')"
+done <"$work/grid-sweep.csv"
+
+if [ "${SSLF_BENCH_SKIP_E2E:-0}" != 1 ]; then
+  echo
+  SSLF_BUILD_DIR="$build_dir" "$SSLF_ROOT/scripts/bench-e2e.sh" | sed -n '/^ssl-formation end-to-end/,$p'
+fi
