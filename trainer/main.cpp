@@ -33,14 +33,19 @@ struct TrainerOptions {
 // Logs above this size get a progress bar.
 constexpr std::uint64_t progress_bar_bytes = 4 << 20;
 
-void log_status(const sf::Training& training, const sf::net::ReceiverCounters& net) {
+// One status line, then a warning for each kind of bad input that arrived since the last one.
+void log_status(const sf::Training& training, const sf::net::ReceiverCounters& net,
+                sf::SamplerCounters& reported) {
   const sf::SamplerCounters& c = training.sampler().counters();
   spdlog::info(
       "status: packets={} parse_errors={} kernel_drops={} formations={} transitions={} "
-      "table_transitions={} states_seen={} rejected_robots={} late_frames={}",
+      "table_transitions={} states_seen={} rejected_robots={} late_frames={} | {}",
       net.datagrams.load(), net.parse_errors.load(), net.kernel_drops.load(), c.samples,
       c.transitions, training.table().transitions(), training.table().rows_seen(),
-      c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id, c.frames_late);
+      c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id, c.frames_late,
+      sf::describe_rejections(c));
+  for (const std::string& line : sf::new_rejections(reported, c)) spdlog::warn("input: {}", line);
+  reported = c;
 }
 
 int run_live(const TrainerOptions& options) {
@@ -66,8 +71,9 @@ int run_live(const TrainerOptions& options) {
   sf::app::RepeatingTimer flush(io, flush_period, [&] {
     if (training->changed_since_save()) sf::trainer::save_training(table_path, *training);
   });
+  sf::SamplerCounters reported;
   sf::app::RepeatingTimer status(io, status_period,
-                                 [&] { log_status(*training, receiver.counters()); });
+                                 [&] { log_status(*training, receiver.counters(), reported); });
   bool saved_on_exit = true;
   sf::app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: saving and stopping", signal);
@@ -78,7 +84,7 @@ int run_live(const TrainerOptions& options) {
     io.stop();
   });
   io.run();
-  log_status(*training, receiver.counters());
+  log_status(*training, receiver.counters(), reported);
   return saved_on_exit ? 0 : 1;
 }
 

@@ -2,12 +2,43 @@
 
 #include <spdlog/spdlog.h>
 
+#include <signal.h>
+
+#include <cerrno>
+#include <charconv>
 #include <stdexcept>
+#include <string>
 
 namespace ssl_formation::trainer {
 
+namespace {
+// save_table writes "<table>.tmp-<pid>-<n>" and renames it; a trainer killed in between (power
+// cut, SIGKILL) leaves that file behind. Removes those of processes that no longer exist.
+void remove_stale_temporaries(const std::filesystem::path& table_path) {
+  std::error_code error;
+  const std::filesystem::path folder =
+      table_path.has_parent_path() ? table_path.parent_path() : std::filesystem::path(".");
+  const std::string prefix = table_path.filename().string() + ".tmp-";
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    long pid = 0;
+    const char* begin = name.data() + prefix.size();
+    const auto [end, parsed] = std::from_chars(begin, name.data() + name.size(), pid);
+    if (parsed != std::errc() || end == begin || *end != '-' || pid <= 0) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // still alive
+    std::error_code ignored;
+    if (std::filesystem::remove(entry.path(), ignored)) {
+      spdlog::info("removed {}, left by an earlier trainer (process {}) that stopped mid-save",
+                   entry.path().string(), pid);
+    }
+  }
+}
+}  // namespace
+
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset) {
+  remove_stale_temporaries(table_path);
   std::error_code ignored;
   if (reset || !std::filesystem::exists(table_path, ignored)) {
     if (reset) spdlog::info("--reset: starting an empty {} table; {} will be replaced at the first save",
@@ -46,7 +77,8 @@ bool save_training(const std::filesystem::path& table_path, Training& training) 
     return false;
   }
   training.mark_saved();
-  spdlog::debug("saved {} ({} transitions)", table_path.string(), training.table().transitions());
+  spdlog::debug("saved {} ({} transitions, {} formations)", table_path.string(),
+                training.table().transitions(), training.samples());
   return true;
 }
 

@@ -31,6 +31,7 @@ FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample
 
 void FormationSampler::add(const SSL_WrapperPacket& packet) {
   ++counters_.packets;
+  if (!packet.has_geometry() && !packet.has_detection()) ++counters_.packets_empty;
   if (packet.has_geometry()) add_geometry(packet.geometry());
   if (packet.has_detection()) add_detection(packet.detection());
 }
@@ -100,11 +101,31 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
   }
   counters_.robots_accepted += frame_scratch_.size();
   if (frame_scratch_.empty()) ++counters_.frames_without_opponent;
+  place_frame(frame.camera_id(), frame.frame_number(), t);
+}
 
+// Decides which clock the frame (its detections in frame_scratch_) belongs to, and uses it.
+void FormationSampler::place_frame(std::uint32_t camera_id, std::uint32_t frame_number, double t) {
   const double clock_reset_s = config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
-  if (anchored_ && t < newest_s_ - clock_reset_s) {
-    ++counters_.clock_resets;
-    restart();
+  if (anchored_ && std::abs(t - newest_s_) > clock_reset_s) {
+    set_aside(camera_id, frame_number, t);
+    return;
+  }
+  // A restarted clock passes through times near the old one: while its frames are being set
+  // aside, a frame that fits it and would be too old for the current clock is its too.
+  if (!pending_.empty() && std::abs(t - other_.newest_s) <= clock_reset_s && next_k_ > 0 &&
+      t < instant(next_k_ - 1) - time_epsilon_s) {
+    set_aside(camera_id, frame_number, t);
+    return;
+  }
+  if (!pending_.empty()) {
+    // The current clock goes on after frames of another one: two senders, unless the other
+    // clock never advanced (a stray old frame, a duplicate of one).
+    if (other_.advancing && !conflict_) {
+      conflict_ = true;
+      ++counters_.clock_conflicts;
+    }
+    pending_.clear();
   }
   if (!anchored_) {
     anchored_ = true;
@@ -112,6 +133,20 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
     newest_s_ = t;
     next_k_ = 0;
   }
+  const double hold_s = config_.clock_conflict_hold_s > 0.0 ? config_.clock_conflict_hold_s
+                                                            : 4.0 * config_.step_s;
+  if (other_.active && std::max(newest_s_, t) - other_.seen_at_s > hold_s) {
+    other_ = OtherClock{};
+    conflict_ = false;
+  }
+
+  auto camera = std::find_if(camera_last_.begin(), camera_last_.end(),
+                             [&](const CameraClock& c) { return c.camera_id == camera_id; });
+  if (camera != camera_last_.end() && camera->last_s == t && camera->last_frame_number == frame_number) {
+    ++counters_.frames_duplicate;
+    return;
+  }
+
   double instant_number = std::floor((t - anchor_s_) / config_.step_s + time_epsilon_s);
   if (std::abs(instant_number) > max_instant_number) {
     ++counters_.clock_resets;
@@ -136,19 +171,69 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
     if (!open_k_ || k > *open_k_) open_k_ = k;
   }
 
-  apply_detections(frame.camera_id(), t);
-  last_frame_number_ = frame.frame_number();
+  apply_detections(camera_id, t);
+  camera = std::find_if(camera_last_.begin(), camera_last_.end(),
+                        [&](const CameraClock& c) { return c.camera_id == camera_id; });
+  camera->last_s = t;
+  camera->last_frame_number = frame_number;
+  last_frame_number_ = frame_number;
   newest_s_ = std::max(newest_s_, t);
   if (open_k_ && instant_complete(*open_k_)) emit(*open_k_, false);
 }
 
+void FormationSampler::set_aside(std::uint32_t camera_id, std::uint32_t frame_number, double t) {
+  ++counters_.frames_other_clock;
+  const double clock_reset_s = config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
+  if (!other_.active || std::abs(t - other_.newest_s) > clock_reset_s) {
+    // Not the other clock seen before: a new one, and what was set aside is not its.
+    other_ = OtherClock{true, false, t, newest_s_};
+    pending_.clear();
+  } else {
+    if (t > other_.newest_s + time_epsilon_s) other_.advancing = true;
+    other_.newest_s = std::max(other_.newest_s, t);
+    other_.seen_at_s = newest_s_;
+  }
+  if (!pending_.empty() && std::abs(t - pending_.back().time_s) > clock_reset_s) pending_.clear();
+  pending_.push_back(PendingFrame{camera_id, frame_number, t, frame_scratch_});
+
+  int distinct_times = 0;
+  double last_s = std::nan("");
+  std::vector<double> times;
+  times.reserve(pending_.size());
+  for (const PendingFrame& f : pending_) times.push_back(f.time_s);
+  std::sort(times.begin(), times.end());
+  for (const double time_s : times) {
+    if (!(std::abs(time_s - last_s) <= time_epsilon_s)) ++distinct_times;
+    last_s = time_s;
+  }
+  if (distinct_times >= config_.clock_confirm_times || pending_.size() >= config_.max_pending_frames) {
+    switch_clock();
+  }
+}
+
+// The set-aside frames' clock takes over: a new stream, then those frames in their order.
+void FormationSampler::switch_clock() {
+  ++counters_.clock_resets;
+  std::vector<PendingFrame> frames = std::move(pending_);
+  // The clock left behind becomes the other clock: if it comes back, that is a conflict.
+  const OtherClock left{true, next_k_ > 1, newest_s_, frames.back().time_s};
+  const bool conflict = conflict_;
+  restart();
+  other_ = left;
+  conflict_ = conflict;
+  for (PendingFrame& f : frames) {
+    frame_scratch_ = std::move(f.detections);
+    place_frame(f.camera_id, f.frame_number, f.time_s);
+  }
+}
+
 void FormationSampler::apply_detections(std::uint32_t camera_id, double time_s) {
   auto camera = std::find_if(camera_last_.begin(), camera_last_.end(),
-                             [&](const auto& entry) { return entry.first == camera_id; });
+                             [&](const CameraClock& c) { return c.camera_id == camera_id; });
   if (camera == camera_last_.end()) {
-    camera_last_.emplace_back(camera_id, time_s);
+    camera_last_.push_back(CameraClock{camera_id, time_s, time_s, 0});
   } else {
-    camera->second = std::max(camera->second, time_s);
+    camera->newest_s = std::max(camera->newest_s, time_s);
   }
 
   for (const Detection& d : frame_scratch_) {
@@ -180,8 +265,10 @@ bool FormationSampler::instant_complete(std::int64_t k) const {
     return false;
   }
   const double live_window = std::max(config_.camera_timeout_s, 1.5 * config_.step_s);
-  for (const auto& [camera_id, last_s] : camera_last_) {
-    if (last_s >= newest_s_ - live_window && last_s < sample_s - time_epsilon_s) return false;
+  for (const CameraClock& camera : camera_last_) {
+    if (camera.newest_s >= newest_s_ - live_window && camera.newest_s < sample_s - time_epsilon_s) {
+      return false;
+    }
   }
   return true;
 }
@@ -241,8 +328,9 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
     return;
   }
 
-  const bool continues = previous_ && k - previous_k_ == 1;
+  const bool continues = previous_ && k - previous_k_ == 1 && !conflict_;
   if (previous_ && !continues) ++counters_.chain_breaks;
+  if (conflict_) ++counters_.samples_in_conflict;
   FormationSample& sample = sample_scratch_;
   sample.formation =
       build_formation(codec_, field_, std::move(robots), continues ? &*previous_ : nullptr);
@@ -271,8 +359,66 @@ void FormationSampler::restart() {
   open_k_.reset();
   next_k_ = 0;
   camera_last_.clear();
+  pending_.clear();
+  other_ = OtherClock{};
+  conflict_ = false;
   for (const std::uint32_t id : observed_ids_) observations_[id].seen = false;
   observed_ids_.clear();
+}
+
+namespace {
+struct RejectionKind {
+  const char* key;
+  std::uint64_t SamplerCounters::*counter;
+  const char* what;
+};
+// Every way the sampler refuses or sets aside input, in the order status lines print them.
+constexpr RejectionKind rejection_kinds[] = {
+    {"non_finite", &SamplerCounters::robots_non_finite, "robots with NaN or infinite coordinates"},
+    {"out_of_range", &SamplerCounters::robots_out_of_range, "robots with coordinates beyond 100 m"},
+    {"bad_id", &SamplerCounters::robots_bad_id, "robots without an id or with an id over the limit"},
+    {"duplicate_ids", &SamplerCounters::robots_duplicate_in_frame,
+     "robots reported twice in one frame (the more confident kept)"},
+    {"bad_time", &SamplerCounters::frames_bad_time, "frames with a NaN or infinite t_capture"},
+    {"bad_camera", &SamplerCounters::frames_bad_camera, "frames with a camera id over the limit"},
+    {"too_many_robots", &SamplerCounters::frames_too_many_robots,
+     "frames with more robots than a team can have"},
+    {"late", &SamplerCounters::frames_late, "frames older than the last sample (out of order)"},
+    {"duplicate_frames", &SamplerCounters::frames_duplicate, "frames received twice"},
+    {"other_clock", &SamplerCounters::frames_other_clock,
+     "frames set aside as another data clock's (restart, gap or second sender)"},
+    {"bad_geometry", &SamplerCounters::geometry_invalid,
+     "geometry packets with a zero, negative or non-finite field size"},
+    {"empty_packets", &SamplerCounters::packets_empty,
+     "packets with neither detection nor geometry (another message type?)"},
+    {"clock_conflicts", &SamplerCounters::clock_conflicts,
+     "clock conflicts (two senders interleaving): no transition counted meanwhile"},
+};
+}  // namespace
+
+std::string describe_rejections(const SamplerCounters& counters) {
+  std::string out;
+  for (const RejectionKind& kind : rejection_kinds) {
+    if (!out.empty()) out += ' ';
+    out += kind.key;
+    out += '=';
+    out += std::to_string(counters.*kind.counter);
+  }
+  out += " clock_resets=" + std::to_string(counters.clock_resets);
+  out += " field_changes=" + std::to_string(counters.field_changes);
+  return out;
+}
+
+std::vector<std::string> new_rejections(const SamplerCounters& before, const SamplerCounters& after) {
+  std::vector<std::string> out;
+  for (const RejectionKind& kind : rejection_kinds) {
+    const std::uint64_t now = after.*kind.counter;
+    const std::uint64_t then = before.*kind.counter;
+    if (now <= then) continue;
+    out.push_back(std::to_string(now - then) + " " + kind.what + " [" + kind.key + "] (" +
+                  std::to_string(now) + " in all)");
+  }
+  return out;
 }
 
 }  // namespace ssl_formation

@@ -5,6 +5,7 @@
 //
 // Pure: no sockets, clocks or threads. The daemons, log replay and tests all drive this class.
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -34,10 +35,21 @@ struct SamplerConfig {
   // max(camera_timeout_s, 1.5 * step_s): a camera of a 2 s simulated feed is live, a dead one
   // stops holding samples back after that.
   double camera_timeout_s = 1.0;
-  // Frames more than this far behind the newest frame mean the data clock restarted (a new log,
-  // a restarted simulator or producer): the sampler starts over instead of dropping everything
-  // as late. 0 means two steps; network reordering is milliseconds, never that much.
+  // A frame more than this far from the clock (behind or ahead) belongs to another clock: a
+  // restarted sender, a feed resuming after a gap, or a second sender on the same group. 0 means
+  // two steps; network reordering is milliseconds, never that much.
   double clock_reset_s = 0.0;
+  // Frames of another clock are set aside. When they show this many distinct t_capture values
+  // with no frame of the current clock between them, the sampler takes that clock over (a
+  // restart or a resumed feed): it starts over, then uses the set-aside frames, so nothing is
+  // lost but the transition across. One stray old or future frame never moves the clock.
+  int clock_confirm_times = 3;
+  std::size_t max_pending_frames = 256;  // the set-aside frames also take over at this many
+  // Frames of two advancing clocks interleaving (a second sender, e.g. a replay beside a live
+  // feed) are a clock conflict: samples are still handed on (from the current clock only) but
+  // count no transition until the other clock has been silent this long on the current clock.
+  // 0 means four steps.
+  double clock_conflict_hold_s = 0.0;
   std::uint32_t max_robot_id = 1000;
   std::uint32_t max_camera_id = 63;
   std::uint32_t max_robots_per_frame = 32;  // per team; more than this is not a real frame
@@ -63,13 +75,24 @@ struct SamplerCounters {
   std::uint64_t frames_late = 0;              // older than the last sample: out of order
   std::uint64_t geometry_invalid = 0;         // zero, negative or non-finite field size
   std::uint64_t field_changes = 0;
-  std::uint64_t clock_resets = 0;
+  std::uint64_t clock_resets = 0;              // switches to another clock (restart, resumed feed)
+  std::uint64_t frames_other_clock = 0;       // frames set aside as another clock's
+  std::uint64_t frames_duplicate = 0;         // same camera, frame number and t_capture again
+  std::uint64_t packets_empty = 0;            // neither detection nor geometry (another message?)
+  std::uint64_t clock_conflicts = 0;          // episodes of two clocks interleaving
+  std::uint64_t samples_in_conflict = 0;      // samples that counted no transition because of one
   std::uint64_t samples = 0;
   std::uint64_t samples_empty = 0;  // no opponent robot in the sample: not handed on
   std::uint64_t samples_forced = 0;  // handed on without every live camera (a dropped frame)
   std::uint64_t chain_breaks = 0;   // gaps, field changes and clock resets
   std::uint64_t transitions = 0;
 };
+
+// "non_finite=0 out_of_range=0 ..." : every refusal counter, for status lines.
+std::string describe_rejections(const SamplerCounters& counters);
+// One sentence per kind of refusal that grew from `before` to `after` ("2 frames with a camera id
+// over the limit (5 in all)"), for a daemon to log as warnings when new kinds of bad input arrive.
+std::vector<std::string> new_rejections(const SamplerCounters& before, const SamplerCounters& after);
 
 class FormationSampler {
  public:
@@ -111,9 +134,32 @@ class FormationSampler {
     double y;
     float confidence;
   };
+  struct CameraClock {
+    std::uint32_t camera_id = 0;
+    double newest_s = 0.0;
+    double last_s = 0.0;  // of its last frame, with:
+    std::uint32_t last_frame_number = 0;
+  };
+  // A frame of another clock, set aside until that clock takes over or the current one goes on.
+  struct PendingFrame {
+    std::uint32_t camera_id = 0;
+    std::uint32_t frame_number = 0;
+    double time_s = 0.0;
+    std::vector<Detection> detections;
+  };
+  // The most recent other clock seen: lets a second interleaving sender be told from a stray frame.
+  struct OtherClock {
+    bool active = false;
+    bool advancing = false;  // seen at two or more distinct times
+    double newest_s = 0.0;
+    double seen_at_s = 0.0;  // the current clock's newest time when last seen
+  };
 
   void add_geometry(const SSL_GeometryData& geometry);
   void add_detection(const SSL_DetectionFrame& frame);
+  void place_frame(std::uint32_t camera_id, std::uint32_t frame_number, double time_s);
+  void set_aside(std::uint32_t camera_id, std::uint32_t frame_number, double time_s);
+  void switch_clock();
   void apply_detections(std::uint32_t camera_id, double time_s);
   bool instant_complete(std::int64_t k) const;
   void emit(std::int64_t k, bool forced);
@@ -129,7 +175,10 @@ class FormationSampler {
   std::vector<Detection> frame_scratch_;
   std::vector<Observation> observations_;  // indexed by robot id
   std::vector<std::uint32_t> observed_ids_;  // ids with an observation, sorted
-  std::vector<std::pair<std::uint32_t, double>> camera_last_;  // camera id, newest t_capture
+  std::vector<CameraClock> camera_last_;
+  std::vector<PendingFrame> pending_;
+  OtherClock other_;
+  bool conflict_ = false;
 
   bool anchored_ = false;
   double anchor_s_ = 0.0;

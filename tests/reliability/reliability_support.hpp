@@ -1,0 +1,180 @@
+#pragma once
+// What the reliability tests share: the programs under test, a sender and a prediction listener
+// on loopback multicast, status-line parsing, and the library's view of a packet stream (the
+// reference every daemon result is compared with). Everything sends and joins on 127.0.0.1 with
+// TTL 1, on a group of its own per test.
+
+#include <gtest/gtest.h>
+
+#include <boost/asio/io_context.hpp>
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <regex>
+#include <span>
+#include <string>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "child_process.hpp"
+#include "simulated_vision.hpp"
+#include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/prediction_message.hpp"
+#include "ssl_formation/predictor.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/training.hpp"
+
+namespace ssl_formation::reliability {
+
+using namespace std::chrono_literals;
+
+inline const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
+inline const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+inline const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
+
+inline std::string new_group() { return testing::unique_group(testing::free_udp_port()); }
+
+inline net::MulticastEndpoint endpoint_of(const std::string& group) {
+  return *net::parse_multicast_endpoint(group);
+}
+
+using Entries = std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>>;
+inline Entries entries(const TransitionTable& table) {
+  Entries out;
+  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
+    out.emplace_back(from, to, c);
+  });
+  return out;
+}
+
+// The simulated producer's packets for `count` formations.
+inline std::vector<SSL_WrapperPacket> simulated_packets(sim::SimulationConfig config, int count) {
+  sim::SimulatedVision vision(config);
+  std::vector<SSL_WrapperPacket> packets;
+  for (int i = 0; i < count; ++i) {
+    for (auto& packet : vision.next().packets) packets.push_back(std::move(packet));
+  }
+  return packets;
+}
+
+// The library's training on a stream: the reference for a trainer's table.
+inline std::unique_ptr<Training> train(const std::vector<SSL_WrapperPacket>& packets,
+                                       const SamplerConfig& config = {}) {
+  auto training = std::make_unique<Training>(config, TransitionTable(config.grid));
+  for (const auto& packet : packets) training->add(packet);
+  return training;
+}
+
+// The library's predictions on a stream, encoded as ssl-predictor sends them.
+inline std::vector<std::string> library_predictions(const std::vector<SSL_WrapperPacket>& packets,
+                                                    const TransitionTable& table, int horizon = 2) {
+  std::vector<std::string> out;
+  SamplerConfig config;
+  FormationSampler* self = nullptr;
+  FormationSampler sampler(config, [&](const FormationSample& sample) {
+    const Prediction prediction = predict(table, sample.formation, horizon);
+    PredictionContext context;
+    context.codec = &table.codec();
+    context.field = self->field();
+    context.table_transitions = table.transitions();
+    proto::FormationPrediction message;
+    fill_prediction_message(sample.formation, prediction, context, message);
+    out.push_back(message.SerializeAsString());
+  });
+  self = &sampler;
+  for (const auto& packet : packets) sampler.add(packet);
+  return out;
+}
+
+// Sends datagrams to one group from 127.0.0.1, TTL 1.
+class Sender {
+ public:
+  explicit Sender(const std::string& group) : sender_(io_, endpoint_of(group)) { sender_.open(); }
+  bool send(const std::string& bytes) {
+    return sender_.send(std::as_bytes(std::span(bytes.data(), bytes.size())));
+  }
+  bool send(const google::protobuf::MessageLite& message) { return send(message.SerializeAsString()); }
+  std::uint64_t sent() const { return sender_.sent(); }
+
+ private:
+  boost::asio::io_context io_;
+  net::MulticastSender sender_;
+};
+
+// Collects FormationPrediction messages from a group, on a thread of its own.
+class PredictionListener {
+ public:
+  explicit PredictionListener(const std::string& group) {
+    receiver_ = std::make_unique<net::ProtoMulticastReceiver<proto::FormationPrediction>>(io_, endpoint_of(group));
+    receiver_->start([this](const proto::FormationPrediction& message, const net::udp::endpoint&) {
+      std::lock_guard lock(mutex_);
+      messages_.push_back(message.SerializeAsString());
+    });
+    thread_ = std::thread([this] { io_.run(); });
+  }
+  ~PredictionListener() {
+    io_.stop();
+    thread_.join();
+  }
+  std::vector<std::string> wait_for(std::size_t n, std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      {
+        std::lock_guard lock(mutex_);
+        if (messages_.size() >= n) return messages_;
+      }
+      std::this_thread::sleep_for(10ms);
+    }
+    std::lock_guard lock(mutex_);
+    return messages_;
+  }
+
+ private:
+  boost::asio::io_context io_;
+  std::unique_ptr<net::ProtoMulticastReceiver<proto::FormationPrediction>> receiver_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::vector<std::string> messages_;
+};
+
+// key=value pairs of the last line of `text` that contains `marker` ("status:").
+inline std::map<std::string, std::uint64_t> last_status(const std::string& text,
+                                                        const std::string& marker = "status:") {
+  std::map<std::string, std::uint64_t> out;
+  const std::size_t at = text.rfind(marker);
+  if (at == std::string::npos) return out;
+  const std::string line = text.substr(at, text.find('\n', at) - at);
+  static const std::regex pair(R"(([a-z_]+)=(\d+))");
+  for (std::sregex_iterator it(line.begin(), line.end(), pair), end; it != end; ++it) {
+    out[(*it)[1]] = std::stoull((*it)[2]);
+  }
+  return out;
+}
+
+// Resident memory of a process, KiB (VmRSS in /proc/PID/status); 0 if unreadable.
+inline std::uint64_t rss_kib(pid_t pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stoull(line.substr(6));
+  }
+  return 0;
+}
+
+// Waits until `process`'s stderr has a status line with key >= value.
+inline bool wait_for_status(testing::ChildProcess& process, const std::string& key, std::uint64_t value,
+                            std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    const auto status = last_status(process.stderr_text());
+    if (auto it = status.find(key); it != status.end() && it->second >= value) return true;
+    if (!process.running()) return false;
+    std::this_thread::sleep_for(20ms);
+  }
+  return false;
+}
+
+}  // namespace ssl_formation::reliability
