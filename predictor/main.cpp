@@ -1,12 +1,14 @@
 // ssl-predictor: samples the opponent's formations from the vision feed, predicts the next ones
 // from the trainer's table and multicasts them as FormationPrediction messages, with one
 // readable line per prediction on stdout. --list-states prints the state space (the paper's
-// statesList).
+// statesList). --http-port serves a live view of the field, the robots and the predictions.
 
 #include <spdlog/spdlog.h>
 
 #include <boost/asio/io_context.hpp>
+#include <chrono>
 #include <iostream>
+#include <optional>
 
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
@@ -16,9 +18,13 @@
 #include "ssl_formation/state.hpp"
 #include "ssl_vision_wrapper.pb.h"
 #include "table_watcher.hpp"
+#include "web/field_view_json.hpp"
+#include "web/field_view_server.hpp"
+#include "web/team_robots.hpp"
 
 namespace sf = ssl_formation;
 namespace po = boost::program_options;
+namespace web = ssl_formation::predictor::web;
 
 namespace {
 
@@ -36,6 +42,12 @@ struct PredictorOptions {
   bool quiet = false;
   bool list_states = false;
   bool verbose = false;
+  // The live field view: off unless a port is given.
+  int http_port = 0;
+  std::string http_address = "127.0.0.1";
+  int http_max_clients = 64;
+  double http_status_interval_s = 0.5;
+  int http_send_buffer_bytes = 0;
 };
 
 int list_states(const sf::Grid& grid) {
@@ -73,11 +85,31 @@ class PredictorDaemon {
                   options.receive_buffer_bytes),
         sender_(io, sf::app::parse_group_option("prediction-address", options.prediction_address),
                 sf::app::parse_interface_option(prediction_interface(options), false).address,
-                options.ttl) {}
+                options.ttl),
+        // Our robots are kept as long as the sampler keeps a camera live.
+        ours_(other_team(config.opponent_color),
+              std::max(config.camera_timeout_s, 1.5 * config.step_s),
+              config.clock_reset_s > 0.0 ? config.clock_reset_s : 2.0 * config.step_s) {
+    if (options.http_port != 0) {
+      web::FieldViewOptions web_options;
+      web_options.address = options.http_address;
+      web_options.port = static_cast<std::uint16_t>(options.http_port);
+      web_options.max_clients = static_cast<std::size_t>(options.http_max_clients);
+      web_options.send_buffer_bytes = options.http_send_buffer_bytes;
+      web_.emplace(io, web_options);
+    }
+  }
 
   void start() {
     sender_.open();
+    if (web_) {
+      web_->start();  // before the receiver, so a busy port fails before anything else runs
+      spdlog::info("field view: open {}", web_->url());
+    }
     receiver_.start([this](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
+      last_packet_ = std::chrono::steady_clock::now();
+      // Ours first, so that a prediction this packet completes shows them as of this packet.
+      if (web_ && packet.has_detection()) ours_.add(packet.detection());
       sampler_.add(packet);
     });
     spdlog::info("predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s",
@@ -90,7 +122,51 @@ class PredictorDaemon {
     }
   }
 
-  void stop() { receiver_.stop(); }
+  void stop() {
+    receiver_.stop();
+    if (web_) web_->stop();
+  }
+
+  bool serving_web() const { return web_.has_value(); }
+
+  // The field view's status message: stream rates, the table and the viewers.
+  void publish_status() {
+    if (!web_) return;
+    const auto now = std::chrono::steady_clock::now();
+    const auto& net = receiver_.counters();
+    const std::uint64_t packets = net.datagrams.load();
+    web::FieldViewStatus status;
+    status.setup = view_setup();
+    status.packets = packets;
+    if (last_rate_time_) {
+      const double elapsed = std::chrono::duration<double>(now - *last_rate_time_).count();
+      if (elapsed > 0.0)
+        status.packets_per_s = static_cast<double>(packets - last_rate_packets_) / elapsed;
+    }
+    last_rate_time_ = now;
+    last_rate_packets_ = packets;
+    if (last_packet_)
+      status.since_packet_s = std::chrono::duration<double>(now - *last_packet_).count();
+    status.parse_errors = net.parse_errors.load();
+    status.kernel_drops = net.kernel_drops.load();
+    status.formations = sampler_.counters().samples;
+    status.predictions = predictions_;
+    if (watcher_.table()) {
+      const sf::StoredTable& stored = *watcher_.table();
+      status.table_loaded = true;
+      status.table_transitions = stored.table.transitions();
+      status.table_formations = stored.metadata.samples;
+      status.table_states_seen = stored.table.rows_seen();
+    }
+    status.table_reloads = watcher_.reloads();
+    status.table_loaded_unix_ms = table_loaded_unix_ms_;
+    status.table_error = table_error_;
+    const web::FieldViewCounters counters = web_->counters();
+    status.clients = counters.live_clients;
+    status.dropped_frames = counters.dropped_frames;
+    status.ours = ours_.current();
+    web_->broadcast(web::MessageKind::status, web::status_json(status));
+  }
 
   void check_table() {
     switch (watcher_.poll()) {
@@ -99,6 +175,10 @@ class PredictorDaemon {
         spdlog::info("loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
                      options_.table, watcher_.reloads(), stored.table.transitions(),
                      stored.metadata.samples, stored.table.rows_seen());
+        table_loaded_unix_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                    std::chrono::system_clock::now().time_since_epoch())
+                                    .count();
+        table_error_.clear();
         if (stored.metadata.step_s != config_.step_s) {
           spdlog::warn("the table was trained with --step {} but this predictor samples every {} s",
                        stored.metadata.step_s, config_.step_s);
@@ -106,6 +186,7 @@ class PredictorDaemon {
         break;
       }
       case sf::predictor::TableWatcher::Change::failed:
+        table_error_ = watcher_.last_error();
         spdlog::error("{}; {}", watcher_.last_error(),
                       watcher_.table() ? "keeping the table loaded before" : "still waiting for a valid table");
         break;
@@ -114,13 +195,24 @@ class PredictorDaemon {
     }
   }
 
-  void log_status() const {
+  void log_status() {
     const auto& net = receiver_.counters();
     const auto& c = sampler_.counters();
     spdlog::info("status: packets={} parse_errors={} kernel_drops={} formations={} predictions={} "
-                 "sent={} table_reloads={}",
+                 "sent={} table_reloads={} | {}",
                  net.datagrams.load(), net.parse_errors.load(), net.kernel_drops.load(), c.samples,
-                 predictions_, sender_.sent(), watcher_.reloads());
+                 predictions_, sender_.sent(), watcher_.reloads(), sf::describe_rejections(c));
+    // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
+    for (const std::string& line : sf::new_rejections(reported_, c)) spdlog::warn("input: {}", line);
+    reported_ = c;
+    if (web_) {
+      const web::FieldViewCounters w = web_->counters();
+      spdlog::info(
+          "field view: viewers={} connections={} refused={} dropped_frames={} stalled={} "
+          "bad_requests={}",
+          w.live_clients, w.connections, w.refused, w.dropped_frames, w.stalled_clients,
+          w.bad_requests);
+    }
   }
 
  private:
@@ -142,6 +234,19 @@ class PredictorDaemon {
     sender_.send(message_);
     ++predictions_;
     if (!options_.quiet) std::cout << sf::describe_prediction(sample.formation, prediction_) << '\n' << std::flush;
+    // After the multicast: the view never delays the predictions.
+    if (web_)
+      web_->broadcast(web::MessageKind::prediction,
+                      web::prediction_json(message_, view_setup(), ours_.current()));
+  }
+
+  static sf::TeamColor other_team(sf::TeamColor color) {
+    return color == sf::TeamColor::yellow ? sf::TeamColor::blue : sf::TeamColor::yellow;
+  }
+
+  web::FieldViewSetup view_setup() const {
+    return web::FieldViewSetup{sampler_.field(), config_.grid, config_.opponent_attacks,
+                               config_.opponent_color};
   }
 
   const PredictorOptions& options_;
@@ -153,7 +258,16 @@ class PredictorDaemon {
   sf::Prediction prediction_;
   sf::proto::FormationPrediction message_;
   std::uint64_t predictions_ = 0;
+  sf::SamplerCounters reported_;  // counters at the last status line
   std::uint64_t samples_without_table_ = 0;
+  // The field view (--http-port), and what only it needs.
+  web::TeamRobots ours_;
+  std::optional<web::FieldViewServer> web_;
+  std::optional<std::chrono::steady_clock::time_point> last_packet_;
+  std::optional<std::chrono::steady_clock::time_point> last_rate_time_;
+  std::uint64_t last_rate_packets_ = 0;
+  std::optional<std::int64_t> table_loaded_unix_ms_;
+  std::string table_error_;
 };
 
 int run_daemon(const PredictorOptions& options) {
@@ -162,19 +276,36 @@ int run_daemon(const PredictorOptions& options) {
   if (options.ttl < 0 || options.ttl > 255) throw sf::app::UsageError("--ttl must be 0 to 255");
   const auto reload_period = sf::app::seconds_option("reload-interval", options.reload_interval_s);
   const auto status_period = sf::app::seconds_option("status-interval", options.status_interval_s);
+  if (options.http_port < 0 || options.http_port > 65535)
+    throw sf::app::UsageError("--http-port must be 0 to 65535");
+  if (options.http_max_clients < 1 || options.http_max_clients > 10000) {
+    throw sf::app::UsageError("--http-max-clients must be 1 to 10000");
+  }
+  if (options.http_send_buffer_bytes < 0)
+    throw sf::app::UsageError("--http-send-buffer must be 0 or more");
+  const auto web_status_period =
+      sf::app::seconds_option("http-status-interval", options.http_status_interval_s);
 
   boost::asio::io_context io;
   PredictorDaemon daemon(io, options, config);
-  daemon.start();
-  sf::app::RepeatingTimer reload(io, reload_period, [&] { daemon.check_table(); });
-  sf::app::RepeatingTimer status(io, status_period, [&] { daemon.log_status(); });
+  // Signals are caught from before the first log line on, so a SIGTERM right after start-up
+  // stops the daemon cleanly; the handler runs inside io.run(), after everything below exists.
+  std::optional<sf::app::RepeatingTimer> reload;
+  std::optional<sf::app::RepeatingTimer> status;
+  std::optional<sf::app::RepeatingTimer> web_status;
   sf::app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: stopping", signal);
     daemon.stop();
-    reload.cancel();
-    status.cancel();
+    reload->cancel();
+    status->cancel();
+    if (web_status) web_status->cancel();
     io.stop();
   });
+  daemon.start();
+  reload.emplace(io, reload_period, [&] { daemon.check_table(); });
+  status.emplace(io, status_period, [&] { daemon.log_status(); });
+  if (daemon.serving_web())
+    web_status.emplace(io, web_status_period, [&] { daemon.publish_status(); });
   io.run();
   daemon.log_status();
   return 0;
@@ -204,6 +335,16 @@ int main(int argc, char** argv) {
         ("receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
          "socket receive buffer (SO_RCVBUF) to request, bytes")
         ("quiet", po::bool_switch(&o.quiet), "no prediction lines on stdout")
+        ("http-port", po::value(&o.http_port)->default_value(o.http_port),
+         "TCP port of the live field view (http://ADDRESS:PORT/); 0 = off")
+        ("http-address", po::value(&o.http_address)->default_value(o.http_address),
+         "address the field view listens on (keep 127.0.0.1 unless others must see it)")
+        ("http-max-clients", po::value(&o.http_max_clients)->default_value(o.http_max_clients),
+         "connections the field view serves at once (page loads and live views); more are refused")
+        ("http-status-interval", po::value(&o.http_status_interval_s)->default_value(o.http_status_interval_s),
+         "seconds between status messages to the field view")
+        ("http-send-buffer", po::value(&o.http_send_buffer_bytes)->default_value(o.http_send_buffer_bytes),
+         "socket send buffer (SO_SNDBUF) per field view connection, bytes; 0 = the system's")
         ("verbose", po::bool_switch(&o.verbose), "more log lines");
     sf::app::add_vision_options(general, o.network);
     sf::app::add_model_options(general, o.model);

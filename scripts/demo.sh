@@ -4,7 +4,7 @@
 # one line per prediction. Stops all three on Ctrl-C or after --duration seconds.
 #
 #   scripts/demo.sh [--duration SECONDS] [--period SECONDS] [--grid LxW] [--horizon N]
-#                   [--cameras N] [--keep-table]
+#                   [--cameras N] [--keep-table] [--http-port PORT]
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -14,6 +14,7 @@ grid=3x2
 horizon=2
 cameras=4
 keep_table=0
+http_port=8080
 usage() { sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -23,6 +24,7 @@ while [ $# -gt 0 ]; do
     --horizon) horizon="$2"; shift 2 ;;
     --cameras) cameras="$2"; shift 2 ;;
     --keep-table) keep_table=1; shift ;;
+    --http-port) http_port="$2"; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "demo.sh: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
@@ -60,13 +62,14 @@ trap 'exit 0' INT TERM
 pids+=($!)
 "$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
   --table "$table" --grid "$grid" --horizon "$horizon" --reload-interval 0.5 \
-  2>"$run_dir/predictor.log" &
+  --http-port "$http_port" --http-address 127.0.0.1 2>"$run_dir/predictor.log" &
 pids+=($!)
 sleep 0.5
 "$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
   --cameras "$cameras" 2>"$run_dir/producer.log" &
 pids+=($!)
 
+echo "Live field view: open http://127.0.0.1:$http_port/"
 cat <<EOT
 ssl-producer -> $vision -> ssl-trainer + ssl-predictor -> predictions on $predictions
 One formation every $period s (2 s of data time each), grid $grid, $cameras cameras.

@@ -8,7 +8,20 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
+# The field view's browser test drives Debian's Chromium with playwright-core from npm (it
+# downloads no browser). It needs node 20 or newer; where there is none, that test is skipped
+# and says why.
+SSLF_PACKAGES+=(chromium fonts-dejavu-core)
 sslf_install_packages
+if command -v node >/dev/null && command -v npm >/dev/null &&
+  [ "$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)" -ge 20 ]; then
+  if [ ! -d "$SSLF_ROOT/tests/web/node_modules/playwright-core" ]; then
+    npm ci --prefix "$SSLF_ROOT/tests/web" --no-audit --no-fund --loglevel=error ||
+      echo "warning: npm ci failed: the browser test will be skipped" >&2
+  fi
+else
+  echo "note: node 20+ not found: the browser test of the field view will be skipped" >&2
+fi
 mkdir -p "$(dirname "$build_dir")"
 sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600

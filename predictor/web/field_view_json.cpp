@@ -1,0 +1,217 @@
+#include "field_view_json.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <string_view>
+
+namespace ssl_formation::predictor::web {
+
+namespace {
+
+// A minimal JSON writer: the messages are flat and small, and their strings are our own.
+class Json {
+ public:
+  explicit Json(std::size_t reserve) { out_.reserve(reserve); }
+
+  Json& open(char bracket) {
+    comma();
+    out_ += bracket;
+    first_ = true;
+    return *this;
+  }
+  Json& close(char bracket) {
+    out_ += bracket;
+    first_ = false;
+    return *this;
+  }
+  Json& key(std::string_view name) {
+    comma();
+    string_value(name);
+    out_ += ':';
+    first_ = true;  // the value follows without a comma
+    return *this;
+  }
+  Json& number(double value) {
+    comma();
+    if (!std::isfinite(value)) {
+      out_ += "null";
+      return *this;
+    }
+    if (value == 0.0) value = 0.0;  // no "-0" from the rotation of a centre cell
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    out_ += text;
+    return *this;
+  }
+  Json& integer(std::uint64_t value) {
+    comma();
+    out_ += std::to_string(value);
+    return *this;
+  }
+  Json& boolean(bool value) {
+    comma();
+    out_ += value ? "true" : "false";
+    return *this;
+  }
+  Json& null() {
+    comma();
+    out_ += "null";
+    return *this;
+  }
+  Json& string(std::string_view value) {
+    comma();
+    string_value(value);
+    return *this;
+  }
+  Json& pair(double x, double y) {
+    open('[').number(x).number(y);
+    return close(']');
+  }
+  std::string take() { return std::move(out_); }
+
+ private:
+  void comma() {
+    if (!first_) out_ += ',';
+    first_ = false;
+  }
+  void string_value(std::string_view value) {
+    out_ += '"';
+    for (const char c : value) {
+      if (c == '"' || c == '\\') {
+        out_ += '\\';
+        out_ += c;
+      } else if (static_cast<unsigned char>(c) < 0x20) {
+        char escaped[8];
+        std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
+        out_ += escaped;
+      } else {
+        out_ += c;
+      }
+    }
+    out_ += '"';
+  }
+
+  std::string out_;
+  bool first_ = true;
+};
+
+TeamColor other(TeamColor color) {
+  return color == TeamColor::yellow ? TeamColor::blue : TeamColor::yellow;
+}
+
+void write_setup(Json& json, const FieldViewSetup& setup) {
+  json.key("field").open('{').key("length").number(setup.field.length_mm);
+  json.key("width").number(setup.field.width_mm).close('}');
+  json.key("grid").open('{').key("length").integer(static_cast<std::uint64_t>(setup.grid.length()));
+  json.key("width").integer(static_cast<std::uint64_t>(setup.grid.width())).close('}');
+  json.key("opponent_color").string(to_string(setup.opponent_color));
+  json.key("our_color").string(to_string(other(setup.opponent_color)));
+  json.key("opponent_attacks").string(to_string(setup.opponent_attacks));
+}
+
+void write_ours(Json& json, std::span<const TeamRobot> ours) {
+  json.key("ours").open('[');
+  for (const TeamRobot& robot : ours) {
+    json.open('{')
+        .key("id")
+        .integer(robot.robot_id)
+        .key("x")
+        .number(robot.x)
+        .key("y")
+        .number(robot.y);
+    json.close('}');
+  }
+  json.close(']');
+}
+
+// A grid cell as [x, y] and its centre in the feed's coordinates.
+void write_cell(Json& json, const proto::GridCell& cell, const FieldViewSetup& setup) {
+  const Cell c{static_cast<int>(cell.x()), static_cast<int>(cell.y())};
+  json.open('{').key("cell").pair(c.x, c.y);
+  if (setup.grid.contains(c)) {
+    const Point centre = normalise(setup.grid.centre_of(c, setup.field), setup.opponent_attacks);
+    json.key("centre").pair(centre.x, centre.y);
+  } else {
+    json.key("centre").null();
+  }
+  json.close('}');
+}
+
+}  // namespace
+
+std::string prediction_json(const proto::FormationPrediction& message, const FieldViewSetup& setup,
+                            std::span<const TeamRobot> ours) {
+  Json json(1024 + 160 * static_cast<std::size_t>(message.robots_size()) *
+                       (1 + static_cast<std::size_t>(message.steps_size())));
+  json.open('{').key("type").string("prediction");
+  json.key("frame").integer(message.frame_number()).key("t").number(message.t_capture());
+  write_setup(json, setup);
+  json.key("table_transitions").integer(message.table_transitions());
+  json.key("step_seconds").number(message.step_seconds());
+  json.key("centroid");
+  write_cell(json, message.centroid_cell(), setup);
+  json.key("opponent").open('[');
+  for (const proto::CurrentRobot& robot : message.robots()) {
+    json.open('{').key("id").integer(robot.robot_id());
+    json.key("x").number(robot.position().x()).key("y").number(robot.position().y());
+    json.key("cell").pair(robot.position_cell().x(), robot.position_cell().y()).close('}');
+  }
+  json.close(']');
+  write_ours(json, ours);
+  json.key("steps").open('[');
+  for (const proto::PredictedStep& step : message.steps()) {
+    json.open('{').key("step").integer(step.step());
+    json.key("centroid");
+    write_cell(json, step.centroid_cell(), setup);
+    json.key("centroid_p").number(step.centroid_probability());
+    json.key("centroid_unseen").boolean(step.centroid_unseen());
+    json.key("formation_p").number(step.formation_probability());
+    json.key("confidence").number(step.confidence());
+    json.key("robots").open('[');
+    for (const proto::PredictedRobot& robot : step.robots()) {
+      json.open('{').key("id").integer(robot.robot_id());
+      json.key("cell").pair(robot.position_cell().x(), robot.position_cell().y());
+      json.key("centre").pair(robot.cell_centre().x(), robot.cell_centre().y());
+      json.key("p").number(robot.probability()).key("unseen").boolean(robot.unseen()).close('}');
+    }
+    json.close(']').close('}');
+  }
+  json.close(']').close('}');
+  return json.take();
+}
+
+std::string status_json(const FieldViewStatus& status) {
+  Json json(512 + 64 * status.ours.size());
+  json.open('{').key("type").string("status");
+  write_setup(json, status.setup);
+  json.key("packets").integer(status.packets).key("packets_per_s").number(status.packets_per_s);
+  json.key("since_packet_s");
+  if (status.since_packet_s) {
+    json.number(*status.since_packet_s);
+  } else {
+    json.null();
+  }
+  json.key("parse_errors")
+      .integer(status.parse_errors)
+      .key("kernel_drops")
+      .integer(status.kernel_drops);
+  json.key("formations").integer(status.formations).key("predictions").integer(status.predictions);
+  json.key("table").open('{').key("loaded").boolean(status.table_loaded);
+  json.key("transitions").integer(status.table_transitions);
+  json.key("formations").integer(status.table_formations);
+  json.key("states_seen").integer(status.table_states_seen);
+  json.key("reloads").integer(status.table_reloads);
+  json.key("loaded_unix_ms");
+  if (status.table_loaded_unix_ms) {
+    json.integer(static_cast<std::uint64_t>(*status.table_loaded_unix_ms));
+  } else {
+    json.null();
+  }
+  json.key("error").string(status.table_error).close('}');
+  json.key("clients").integer(status.clients).key("dropped_frames").integer(status.dropped_frames);
+  write_ours(json, status.ours);
+  json.close('}');
+  return json.take();
+}
+
+}  // namespace ssl_formation::predictor::web

@@ -1,0 +1,185 @@
+// Bad field view clients against the real ssl-predictor process: one that never reads, ones that
+// vanish mid-frame or mid-request, and 50 live views at once. None of them may hold up the
+// predictions on the multicast group: they keep arriving at the producer's rate.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <memory>
+#include <regex>
+#include <thread>
+
+#include "child_process.hpp"
+#include "raw_client.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "web_test_support.hpp"
+
+namespace ssl_formation {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ChildProcess;
+using testing::TempDir;
+using web_testing::RawClient;
+
+const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
+const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
+
+// Counts the bytes a live view receives, reading on a thread of its own.
+class ReadingView {
+ public:
+  explicit ReadingView(std::uint16_t port) : client_(port) {
+    upgraded_ = client_.upgrade();
+    thread_ = std::thread([this] {
+      while (!stop_) {
+        const std::string chunk =
+            client_.read_until("\x01", 100ms);  // never found: read what comes
+        bytes_ += chunk.size();
+        if (client_.peer_closed()) break;
+      }
+    });
+  }
+  ~ReadingView() {
+    stop_ = true;
+    thread_.join();
+  }
+  bool upgraded() const { return upgraded_; }
+  std::size_t bytes() const { return bytes_; }
+
+ private:
+  RawClient client_;
+  bool upgraded_ = false;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::size_t> bytes_{0};
+  std::thread thread_;
+};
+
+TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
+  TempDir dir;
+  const auto table_path = dir / "table.bin";
+  ASSERT_TRUE(save_table(table_path, web_testing::reference_table(3, 2000), TableMetadata{}));
+  const std::string vision = testing::unique_group(testing::free_udp_port());
+  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::uint16_t port = web_testing::free_tcp_port();
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--prediction-address", predictions,
+                          "--table", table_path.string(), "--http-port", std::to_string(port),
+                          "--quiet", "--status-interval", "0.5", "--http-send-buffer", "8192"},
+                         dir.path(), "predictor");
+  ASSERT_TRUE(predictor.wait_for_stderr("field view: open", 5s)) << predictor.stderr_text();
+  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
+  web_testing::PredictionArrivals arrivals(predictions, vision);
+
+  // The bad clients, all connected before the feed starts.
+  std::vector<std::unique_ptr<RawClient>> never_read;
+  for (int i = 0; i < 3; ++i) {
+    never_read.push_back(std::make_unique<RawClient>(port, 4096));
+    ASSERT_TRUE(never_read.back()->upgrade_without_reading());
+  }
+  std::vector<std::unique_ptr<ReadingView>> views;
+  for (int i = 0; i < 50; ++i) {
+    views.push_back(std::make_unique<ReadingView>(port));
+    ASSERT_TRUE(views.back()->upgraded()) << "view " << i;
+  }
+
+  // 1000 formations, one every 3 ms: 333 predictions a second for 3 s.
+  constexpr int formations = 1000;
+  ChildProcess producer(
+      producer_program,
+      {"--vision-address", vision, "--seed", "9", "--count", std::to_string(formations), "--period",
+       "0.003", "--status-interval", "100"},
+      dir.path(), "producer");
+  // Meanwhile, clients that vanish mid-frame, mid-request and mid-write, again and again.
+  std::thread vandal([&] {
+    for (int i = 0; i < 40; ++i) {
+      {
+        RawClient half_frame(port);
+        if (half_frame.upgrade()) half_frame.send(std::string("\x81\xfe\x10", 3));
+      }
+      {
+        RawClient half_request(port);
+        half_request.send("GET /field.js HTTP/1.1\r\nHost: 12");
+      }
+      {
+        RawClient reset(port, 4096);
+        if (reset.upgrade()) std::this_thread::sleep_for(20ms);
+        reset.reset();
+      }
+      std::this_thread::sleep_for(30ms);
+    }
+  });
+  const auto code = producer.wait(30s);
+  vandal.join();
+  ASSERT_EQ(code, 0) << producer.stderr_text();
+  std::this_thread::sleep_for(300ms);
+
+  const auto times = arrivals.arrivals();
+  // Loopback multicast loses nothing at this rate: every formation was predicted and sent.
+  EXPECT_GE(times.size(), static_cast<std::size_t>(formations - 2)) << predictor.stderr_text();
+  ASSERT_GT(times.size(), 100u);
+  // At the producer's rate: 1000 in about 3 s, each soon after the vision frame that completed
+  // it. A predictor blocked by a client would stop or lag; a busy machine (ctest -j, Chromium
+  // next door) only delays a few, hence the median and a generous worst case.
+  const double span_s = std::chrono::duration<double>(times.back() - times.front()).count();
+  EXPECT_LT(span_s, 6.0);
+  auto latencies = arrivals.latencies();
+  ASSERT_GE(latencies.size(), static_cast<std::size_t>(formations - 10));
+  std::sort(latencies.begin(), latencies.end());
+  const auto ms = [](std::chrono::steady_clock::duration d) {
+    return std::chrono::duration<double, std::milli>(d).count();
+  };
+  const double median_ms = ms(latencies[latencies.size() / 2]);
+  const double p99_ms = ms(latencies[latencies.size() * 99 / 100]);
+  const double worst_ms = ms(latencies.back());
+  std::cout << "vision to prediction: median " << median_ms << " ms, 99% " << p99_ms
+            << " ms, worst " << worst_ms << " ms over " << latencies.size() << " predictions in "
+            << span_s << " s\n";
+  EXPECT_LT(median_ms, 20.0);
+  EXPECT_LT(p99_ms, 250.0);
+  EXPECT_LT(worst_ms, 1000.0);
+
+  // The good views were served all along (a prediction is 2 to 3 kB of JSON).
+  for (std::size_t i = 0; i < views.size(); ++i)
+    EXPECT_GT(views[i]->bytes(), 100'000u) << "view " << i;
+
+  // The predictor still serves the page and exits cleanly.
+  EXPECT_TRUE(web_testing::http_request(port, "GET", "/").starts_with("HTTP/1.1 200 OK"));
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
+  const std::string log = predictor.stderr_text();
+  // The clients that never read filled their small buffers: frames were dropped for them.
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(log, match, std::regex(R"(dropped_frames=(\d+))"))) << log;
+  const std::string last_line = log.substr(log.rfind("field view: viewers="));
+  ASSERT_TRUE(std::regex_search(last_line, match, std::regex(R"(dropped_frames=(\d+))"))) << log;
+  EXPECT_GT(std::stoull(match[1]), 1000u) << last_line;
+  std::cout << log.substr(log.rfind("status:")) << "\n";
+}
+
+TEST(FieldViewBadClients, OffByDefaultAndBadOptionsAreRefused) {
+  TempDir dir;
+  const std::string vision = testing::unique_group(testing::free_udp_port());
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--table", (dir / "t.bin").string()},
+                         dir.path(), "predictor");
+  ASSERT_TRUE(predictor.wait_for_stderr("waiting for the table", 5s)) << predictor.stderr_text();
+  EXPECT_EQ(predictor.stderr_text().find("field view"), std::string::npos);
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(predictor.wait(5s), 0);
+
+  const auto bad_port =
+      testing::run_to_end(predictor_program, {"--http-port", "70000"}, dir.path(), "bad-port", 10s);
+  EXPECT_EQ(bad_port.exit_code, 2) << bad_port.err;
+  EXPECT_NE(bad_port.err.find("--http-port"), std::string::npos) << bad_port.err;
+  const auto bad_address = testing::run_to_end(
+      predictor_program,
+      {"--vision-address", vision, "--http-port", "18099", "--http-address", "not-an-address"},
+      dir.path(), "bad-address", 10s);
+  EXPECT_NE(bad_address.exit_code, 0);
+  EXPECT_NE(bad_address.err.find("not-an-address"), std::string::npos) << bad_address.err;
+}
+
+}  // namespace
+}  // namespace ssl_formation

@@ -1,0 +1,143 @@
+// End-to-end test of the field view in a real browser: ssl-producer -> ssl-predictor (a table
+// the library computed) on loopback, and headless Chromium (Debian's /usr/bin/chromium, driven by
+// playwright-core from tests/web/node_modules) loading the page. field_view_check.mjs checks
+// what is drawn through the DOM and saves screenshots in the build folder; this side stops and
+// restarts the feed and the predictor when the page says it is ready.
+//
+// Skipped, with the reason, where Chromium, node or playwright-core is missing: scripts/test.sh
+// installs them (apt-get install chromium; npm ci --prefix tests/web).
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <thread>
+
+#include "child_process.hpp"
+#include "simulated_vision.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/training.hpp"
+#include "web_test_support.hpp"
+
+namespace ssl_formation {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ChildProcess;
+using testing::TempDir;
+
+const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
+const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
+const std::filesystem::path web_test_dir = SSLF_WEB_TEST_DIR;
+const std::filesystem::path screenshot_dir = SSLF_WEB_SCREENSHOT_DIR;
+
+std::optional<std::filesystem::path> find_program(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/bin:/bin";
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+    const std::filesystem::path candidate =
+        std::filesystem::path(dirs.substr(start, end - start)) / name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+    start = end + 1;
+  }
+  return std::nullopt;
+}
+
+// Why the browser test cannot run here, or nothing.
+std::optional<std::string> missing_browser_tools(std::filesystem::path& chromium,
+                                                 std::filesystem::path& node) {
+  chromium = std::getenv("SSLF_CHROMIUM") ? std::getenv("SSLF_CHROMIUM") : "/usr/bin/chromium";
+  if (::access(chromium.c_str(), X_OK) != 0) {
+    return chromium.string() +
+           " is missing: apt-get install chromium (Debian) to run the browser test";
+  }
+  const auto found = find_program("node");
+  if (!found) return "node is missing: apt-get install nodejs (node 18 or newer)";
+  node = *found;
+  if (!std::filesystem::exists(web_test_dir / "node_modules" / "playwright-core" /
+                               "package.json")) {
+    return "playwright-core is missing: run npm ci --prefix " + web_test_dir.string();
+  }
+  return std::nullopt;
+}
+
+void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const std::string& group,
+                    const std::string& name) {
+  out.reset();
+  out.emplace(producer_program,
+              std::vector<std::string>{"--vision-address", group, "--seed", "5", "--period", "0.1",
+                                       "--cameras", "4", "--status-interval", "100"},
+              dir.path(), name);
+}
+
+void start_predictor(std::optional<ChildProcess>& out, const TempDir& dir,
+                     const std::string& vision, const std::string& predictions,
+                     const std::filesystem::path& table, std::uint16_t port,
+                     const std::string& name) {
+  out.reset();
+  out.emplace(predictor_program,
+              std::vector<std::string>{"--vision-address", vision, "--prediction-address",
+                                       predictions, "--table", table.string(), "--http-port",
+                                       std::to_string(port), "--quiet"},
+              dir.path(), name);
+}
+
+TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
+  std::filesystem::path chromium;
+  std::filesystem::path node;
+  if (const auto reason = missing_browser_tools(chromium, node)) GTEST_SKIP() << *reason;
+
+  TempDir dir;
+  const auto table_path = dir / "table.bin";
+  ASSERT_TRUE(save_table(table_path, web_testing::reference_table(3, 2000), TableMetadata{}));
+  const std::string vision = testing::unique_group(testing::free_udp_port());
+  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::uint16_t port = web_testing::free_tcp_port();
+  const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
+
+  std::optional<ChildProcess> predictor;
+  start_predictor(predictor, dir, vision, predictions, table_path, port, "predictor1");
+  ASSERT_TRUE(predictor->wait_for_stderr("field view: open " + url, 5s))
+      << predictor->stderr_text();
+  ASSERT_TRUE(predictor->wait_for_stderr("loaded table", 5s)) << predictor->stderr_text();
+  std::optional<ChildProcess> producer;
+  start_producer(producer, dir, vision, "producer1");
+
+  std::filesystem::create_directories(screenshot_dir);
+  ChildProcess browser(node,
+                       {(web_test_dir / "field_view_check.mjs").string(), "--url", url, "--out",
+                        screenshot_dir.string(), "--user-data-dir",
+                        (dir / "chromium-profile").string(), "--chromium", chromium.string()},
+                       dir.path(), "browser");
+  const auto report = [&] { return "browser:\n" + browser.stdout_text() + browser.stderr_text(); };
+
+  ASSERT_TRUE(browser.wait_for_stdout("PHASE live ok", 40s)) << report();
+  // The feed stops.
+  producer->signal(SIGTERM);
+  ASSERT_TRUE(producer->wait(5s).has_value());
+  ASSERT_TRUE(browser.wait_for_stdout("PHASE no-vision ok", 20s)) << report();
+  // It comes back, its data clock from the start.
+  start_producer(producer, dir, vision, "producer2");
+  ASSERT_TRUE(browser.wait_for_stdout("PHASE vision-back ok", 25s)) << report();
+  // The predictor restarts on the same port.
+  predictor->signal(SIGTERM);
+  ASSERT_EQ(predictor->wait(5s), 0) << predictor->stderr_text();
+  std::this_thread::sleep_for(1s);
+  start_predictor(predictor, dir, vision, predictions, table_path, port, "predictor2");
+  ASSERT_TRUE(predictor->wait_for_stderr("field view: open", 5s)) << predictor->stderr_text();
+  ASSERT_TRUE(browser.wait_for_stdout("PHASE reconnected ok", 30s)) << report();
+  const auto code = browser.wait(30s);
+  ASSERT_EQ(code, 0) << report();
+  EXPECT_NE(browser.stdout_text().find("PASS"), std::string::npos) << report();
+  EXPECT_TRUE(std::filesystem::exists(screenshot_dir / "field-view.png"));
+  std::cout << browser.stdout_text() << "screenshots in " << screenshot_dir.string() << "\n";
+}
+
+}  // namespace
+}  // namespace ssl_formation

@@ -1,0 +1,147 @@
+// Drives Debian's headless Chromium through the field view while browser_test.cpp runs the
+// pipeline on loopback. Each phase prints "PHASE <name> ok" on stdout, which the C++ test waits
+// for before it changes the world (stops the feed, restarts the predictor); a failure prints
+// "FAIL: ..." and exits 1.
+//
+//   node field_view_check.mjs --url http://127.0.0.1:PORT/ --out DIR --user-data-dir DIR
+//                             [--chromium /usr/bin/chromium]
+import { chromium } from 'playwright-core';
+
+const argv = process.argv.slice(2);
+const option = (name, fallback) => {
+  const at = argv.indexOf(`--${name}`);
+  return at >= 0 && at + 1 < argv.length ? argv[at + 1] : fallback;
+};
+const url = option('url');
+const out = option('out', '.');
+const userDataDir = option('user-data-dir');
+const executablePath = option('chromium', '/usr/bin/chromium');
+if (!url || !userDataDir) {
+  console.log('FAIL: usage: field_view_check.mjs --url URL --out DIR --user-data-dir DIR');
+  process.exit(2);
+}
+
+// Never outlive the test, whatever happens.
+const overall = setTimeout(() => {
+  console.log('FAIL: overall time-out');
+  process.exit(1);
+}, 100_000);
+
+const phase = (name) => console.log(`PHASE ${name} ok`);
+const fail = (message) => {
+  throw new Error(message);
+};
+
+const context = await chromium.launchPersistentContext(userDataDir, {
+  executablePath,
+  headless: true,
+  viewport: { width: 1400, height: 820 },
+  args: [
+    '--headless', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync',
+    '--no-first-run', '--disable-quic', '--disable-extensions', '--disable-default-apps',
+    '--no-default-browser-check', '--metrics-recording-only', '--disable-domain-reliability',
+  ],
+});
+let status = 0;
+try {
+  const page = context.pages()[0] ?? (await context.newPage());
+  const pageErrors = [];
+  page.on('pageerror', (error) => pageErrors.push(String(error)));
+  // Nothing may leave loopback: fail on any request to another host.
+  const foreign = [];
+  page.on('request', (request) => {
+    const host = new URL(request.url()).hostname;
+    if (host !== '127.0.0.1' && !request.url().startsWith('data:')) foreign.push(request.url());
+  });
+
+  await page.goto(url, { waitUntil: 'load', timeout: 15_000 });
+
+  // 1. Live: the field, robots of both teams and predictions with arrows.
+  await page.waitForFunction(() => Number(document.body.dataset.predictions) >= 5 &&
+    document.querySelectorAll('#opponent-robots .robot').length >= 1 &&
+    document.querySelectorAll('#our-robots .robot').length >= 1 &&
+    document.querySelectorAll('#predictions .step').length >= 1 &&
+    document.querySelectorAll('#predictions .arrow').length >= 1, null, { timeout: 20_000 });
+  const live = await page.evaluate(() => {
+    const field = document.getElementById('field');
+    const steps = [...document.querySelectorAll('#predictions .step')];
+    return {
+      fieldLength: Number(field.dataset.fieldLength),
+      fieldWidth: Number(field.dataset.fieldWidth),
+      grid: field.dataset.grid,
+      gridLines: document.querySelectorAll('#grid .grid-line').length,
+      opponent: document.querySelectorAll('#opponent-robots .robot').length,
+      ours: document.querySelectorAll('#our-robots .robot').length,
+      steps: steps.map((s) => ({ step: Number(s.dataset.step), confidence: Number(s.dataset.confidence),
+        opacity: Number(s.getAttribute('opacity')) })),
+      stepItems: [...document.querySelectorAll('#steps li')].map((li) => li.textContent),
+      arrows: document.querySelectorAll('#predictions .arrow').length,
+      centroid: document.getElementById('centroid-cell').dataset.cell,
+      centroidVisible: document.getElementById('centroid-cell').getAttribute('visibility'),
+      predictedCentroids: document.querySelectorAll('#predictions .predicted-centroid').length,
+      latencies: window.fieldView.latenciesMs,
+      received: window.fieldView.received,
+      drawn: window.fieldView.drawn,
+      packets: document.getElementById('status-packets').textContent,
+      table: document.getElementById('status-table').textContent,
+      reload: document.getElementById('status-reload').textContent,
+      banner: document.getElementById('banner').hidden ? '' : document.getElementById('banner').textContent,
+    };
+  });
+  console.log('live:', JSON.stringify({ ...live, latencies: undefined }));
+  if (live.fieldLength !== 9000 || live.fieldWidth !== 6000) fail(`field ${live.fieldLength}x${live.fieldWidth}`);
+  if (live.grid !== '3x2' || live.gridLines !== 3) fail(`grid ${live.grid} with ${live.gridLines} lines`);
+  if (live.opponent !== 6 || live.ours !== 6) fail(`robots: ${live.opponent} opponent, ${live.ours} ours`);
+  if (live.steps.length !== 2 || live.stepItems.length !== 2) fail(`steps ${JSON.stringify(live.steps)}`);
+  if (!live.stepItems[0].includes('conf')) fail(`no confidence number: ${live.stepItems[0]}`);
+  for (const s of live.steps) {
+    if (!(s.opacity >= 0.3 && s.opacity <= 1)) fail(`opacity ${s.opacity} for confidence ${s.confidence}`);
+  }
+  if (live.centroidVisible !== 'visible' || !/^\d,\d$/.test(live.centroid)) fail(`centroid ${live.centroid}`);
+  if (live.predictedCentroids !== 2) fail(`predicted centroids ${live.predictedCentroids}`);
+  if (!/packets\/s/.test(live.packets) || /^0\.0 /.test(live.packets)) fail(`packets: ${live.packets}`);
+  if (!/transitions \/ \d+ formations/.test(live.table)) fail(`table: ${live.table}`);
+  if (live.banner) fail(`unexpected banner: ${live.banner}`);
+  // Each prediction drawn within 100 ms of its arrival.
+  const worst = Math.max(...live.latencies);
+  console.log(`drawn ${live.drawn} of ${live.received} received; arrival-to-draw worst ${worst.toFixed(1)} ms`);
+  if (!(worst < 100)) fail(`a prediction took ${worst} ms to draw`);
+  await page.screenshot({ path: `${out}/field-view.png` });
+  phase('live');
+
+  // 2. The feed stops: the page says so.
+  await page.waitForFunction(() => /no vision for \d+\.\d s/.test(document.getElementById('banner').textContent) &&
+    !document.getElementById('banner').hidden, null, { timeout: 15_000 });
+  await page.waitForTimeout(1200);
+  await page.screenshot({ path: `${out}/field-view-no-vision.png` });
+  console.log('banner:', await page.textContent('#banner'));
+  phase('no-vision');
+
+  // 3. The feed restarts (its clock from the start): predictions come back, the banner goes.
+  const before = await page.evaluate(() => Number(document.body.dataset.predictions));
+  await page.waitForFunction((n) => Number(document.body.dataset.predictions) >= n + 3 &&
+    document.getElementById('banner').hidden, before, { timeout: 20_000 });
+  phase('vision-back');
+
+  // 4. The predictor restarts: the page loses it, reconnects and draws again.
+  await page.waitForFunction(() => document.body.dataset.connected === 'false', null, { timeout: 15_000 });
+  console.log('banner:', await page.textContent('#banner'));
+  const lost = await page.evaluate(() => Number(document.body.dataset.predictions));
+  await page.waitForFunction((n) => document.body.dataset.connected === 'true' &&
+    Number(document.body.dataset.predictions) >= n + 3 && window.fieldView.connections >= 2, lost,
+    { timeout: 20_000 });
+  await page.screenshot({ path: `${out}/field-view-reconnected.png` });
+  phase('reconnected');
+
+  if (pageErrors.length) fail(`page errors: ${pageErrors.join('; ')}`);
+  if (foreign.length) fail(`requests off loopback: ${foreign.join(', ')}`);
+  console.log('PASS');
+} catch (error) {
+  console.log(`FAIL: ${error.message}`);
+  status = 1;
+} finally {
+  await context.close().catch(() => {});
+  clearTimeout(overall);
+}
+process.exit(status);
