@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "child_process.hpp"
+#include "pipeline_support.hpp"
 #include "simulated_vision.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/prediction_message.hpp"
@@ -27,7 +28,8 @@ const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
 const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
-std::string new_group() { return testing::unique_group(testing::free_udp_port()); }
+using testing::new_group;
+using testing::PredictionListener;
 
 // The table the library computes from the producer's stream for `seed`.
 TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
@@ -44,13 +46,7 @@ TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
   return training.table();
 }
 
-std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> entries(const TransitionTable& table) {
-  std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> out;
-  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
-    out.emplace_back(from, to, c);
-  });
-  return out;
-}
+const auto entries = testing::table_entries;
 
 std::vector<std::string> trainer_args(const std::string& group, const std::filesystem::path& table) {
   return {"--vision-address", group, "--table", table.string(), "--status-interval", "0.1",
@@ -78,43 +74,6 @@ void stop_trainer_after(ChildProcess& trainer, int formations) {
   EXPECT_EQ(*code, 0) << trainer.stderr_text();
 }
 
-// Collects FormationPrediction messages from a group, on a thread of its own.
-class PredictionListener {
- public:
-  explicit PredictionListener(const std::string& group) {
-    std::string error;
-    const auto endpoint = net::parse_multicast_endpoint(group, &error);
-    receiver_ = std::make_unique<net::ProtoMulticastReceiver<proto::FormationPrediction>>(io_, *endpoint);
-    receiver_->start([this](const proto::FormationPrediction& message, const net::udp::endpoint&) {
-      std::lock_guard lock(mutex_);
-      messages_.push_back(message);
-    });
-    thread_ = std::thread([this] { io_.run(); });
-  }
-  ~PredictionListener() {
-    io_.stop();
-    thread_.join();
-  }
-  std::vector<proto::FormationPrediction> wait_for(std::size_t n, std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      {
-        std::lock_guard lock(mutex_);
-        if (messages_.size() >= n) return messages_;
-      }
-      std::this_thread::sleep_for(10ms);
-    }
-    std::lock_guard lock(mutex_);
-    return messages_;
-  }
-
- private:
-  boost::asio::io_context io_;
-  std::unique_ptr<net::ProtoMulticastReceiver<proto::FormationPrediction>> receiver_;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::vector<proto::FormationPrediction> messages_;
-};
 
 TEST(Daemons, TrainerTableHoldsExactlyTheLibrarysTransitions) {
   TempDir dir;

@@ -4,6 +4,7 @@
 #include <signal.h>
 
 #include "child_process.hpp"
+#include "pipeline_support.hpp"
 #include "simulated_vision.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/table_file.hpp"
@@ -51,13 +52,7 @@ TransitionTable library_table(const std::vector<std::filesystem::path>& logs, st
   return training.table();
 }
 
-std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> entries(const TransitionTable& table) {
-  std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>> out;
-  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
-    out.emplace_back(from, to, c);
-  });
-  return out;
-}
+const auto entries = testing::table_entries;
 
 testing::RunResult trainer(const TempDir& dir, std::vector<std::string> args, const std::string& name) {
   return testing::run_to_end(trainer_program, std::move(args), dir.path(), name, 60s);

@@ -213,7 +213,7 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
       std::this_thread::sleep_for(150us);  // well within what the daemons keep up with
     }
   }
-  const auto received = listener.wait_for(expected_predictions.size(), 15s);
+  const auto received = listener.wait_for_bytes(expected_predictions.size(), 15s);
   ASSERT_TRUE(wait_for_status(trainer, "formations", expected.samples, 10s)) << trainer.stderr_text();
   ASSERT_TRUE(wait_for_status(predictor, "packets", dirty.datagrams.size(), 10s)) << predictor.stderr_text();
   trainer.signal(SIGTERM);

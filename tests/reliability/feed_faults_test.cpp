@@ -198,7 +198,7 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
       std::this_thread::sleep_for(150us);
     }
   }
-  const auto received = listener.wait_for(expected_predictions.size(), 10s);
+  const auto received = listener.wait_for_bytes(expected_predictions.size(), 10s);
   ASSERT_TRUE(wait_for_status(trainer, "formations", c.samples, 10s)) << trainer.stderr_text();
   trainer.signal(SIGTERM);
   predictor.signal(SIGTERM);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "pipeline_support.hpp"
 #include "simulated_vision.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
@@ -35,20 +36,15 @@ inline const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 inline const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
 inline const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
-inline std::string new_group() { return testing::unique_group(testing::free_udp_port()); }
+using testing::new_group;
+using testing::PredictionListener;
 
 inline net::MulticastEndpoint endpoint_of(const std::string& group) {
   return *net::parse_multicast_endpoint(group);
 }
 
-using Entries = std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>>;
-inline Entries entries(const TransitionTable& table) {
-  Entries out;
-  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
-    out.emplace_back(from, to, c);
-  });
-  return out;
-}
+using Entries = testing::TableEntries;
+const auto entries = testing::table_entries;
 
 // The simulated producer's packets for `count` formations.
 inline std::vector<SSL_WrapperPacket> simulated_packets(sim::SimulationConfig config, int count) {
@@ -102,42 +98,6 @@ class Sender {
  private:
   boost::asio::io_context io_;
   net::MulticastSender sender_;
-};
-
-// Collects FormationPrediction messages from a group, on a thread of its own.
-class PredictionListener {
- public:
-  explicit PredictionListener(const std::string& group) {
-    receiver_ = std::make_unique<net::ProtoMulticastReceiver<proto::FormationPrediction>>(io_, endpoint_of(group));
-    receiver_->start([this](const proto::FormationPrediction& message, const net::udp::endpoint&) {
-      std::lock_guard lock(mutex_);
-      messages_.push_back(message.SerializeAsString());
-    });
-    thread_ = std::thread([this] { io_.run(); });
-  }
-  ~PredictionListener() {
-    io_.stop();
-    thread_.join();
-  }
-  std::vector<std::string> wait_for(std::size_t n, std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      {
-        std::lock_guard lock(mutex_);
-        if (messages_.size() >= n) return messages_;
-      }
-      std::this_thread::sleep_for(10ms);
-    }
-    std::lock_guard lock(mutex_);
-    return messages_;
-  }
-
- private:
-  boost::asio::io_context io_;
-  std::unique_ptr<net::ProtoMulticastReceiver<proto::FormationPrediction>> receiver_;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::vector<std::string> messages_;
 };
 
 // key=value pairs of the last line of `text` that contains `marker` ("status:").
