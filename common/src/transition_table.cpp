@@ -33,7 +33,7 @@ TransitionTable::TransitionTable(Grid grid, TableStorage storage)
   const std::uint64_t states = codec_.state_count();
   const std::uint64_t cells = codec_.cell_count();
   storage_->states = states;
-  storage_->dense = storage == TableStorage::dense ||
+  storage_->dense = (storage == TableStorage::dense && states * states <= dense_entry_hard_limit) ||
                     (storage == TableStorage::automatic && states * states <= dense_entry_limit);
   if (storage_->dense) {
     storage_->counts.assign(states * states, 0);

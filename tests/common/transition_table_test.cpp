@@ -73,6 +73,12 @@ TEST(TransitionTable, ChoosesDenseForSmallAndSparseForLargeGrids) {
   EXPECT_LT(large.memory_bytes(), 1u << 20);
 }
 
+TEST(TransitionTable, ADenseRequestForAHugeGridGetsSparseStorage) {
+  const TransitionTable huge(Grid(16, 16), TableStorage::dense);  // S^2 = 2.8e14 entries
+  EXPECT_FALSE(huge.is_dense());
+  EXPECT_TRUE(TransitionTable(Grid(4, 3), TableStorage::dense).is_dense());
+}
+
 TEST(TransitionTable, SparseMemoryGrowsWithTransitionsSeen) {
   TransitionTable table(Grid(12, 9));
   const std::size_t empty = table.memory_bytes();

@@ -27,6 +27,9 @@ class TransitionTable {
   static constexpr Count max_count = std::numeric_limits<Count>::max();
   // Above this many entries (16 MiB of counts) `automatic` storage chooses sparse.
   static constexpr std::uint64_t dense_entry_limit = std::uint64_t{1} << 22;
+  // Above this (1 GiB of counts) even an explicit `dense` request gets sparse storage: a 16x16
+  // grid would need a petabyte. Both layouts answer every query identically.
+  static constexpr std::uint64_t dense_entry_hard_limit = std::uint64_t{1} << 28;
 
   explicit TransitionTable(Grid grid, TableStorage storage = TableStorage::automatic);
   ~TransitionTable();
