@@ -222,7 +222,13 @@ class PredictorDaemon {
       return;
     }
     const sf::StoredTable& stored = *watcher_.table();
-    sf::predict(stored.table, sf::robot_states(sample.formation), options_.horizon, prediction_);
+    // The hot path, from the sample to the datagram: no allocation once warmed up, and the wire
+    // format written directly (see encode_prediction).
+    robot_states_.clear();
+    for (const sf::FormationRobot& robot : sample.formation.robots) {
+      robot_states_.push_back({robot.robot_id, robot.state});
+    }
+    sf::predict(stored.table, robot_states_, options_.horizon, prediction_);
     sf::PredictionContext context;
     context.codec = &stored.table.codec();
     context.field = sampler_.field();
@@ -230,14 +236,16 @@ class PredictorDaemon {
     context.opponent_color = config_.opponent_color;
     context.step_s = config_.step_s;
     context.table_transitions = stored.table.transitions();
-    sf::fill_prediction_message(sample.formation, prediction_, context, message_);
-    sender_.send(message_);
+    sf::encode_prediction(sample.formation, prediction_, context, datagram_);
+    sender_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
     ++predictions_;
     if (!options_.quiet) std::cout << sf::describe_prediction(sample.formation, prediction_) << '\n' << std::flush;
     // After the multicast: the view never delays the predictions.
-    if (web_)
+    if (web_) {
+      sf::fill_prediction_message(sample.formation, prediction_, context, message_);
       web_->broadcast(web::MessageKind::prediction,
                       web::prediction_json(message_, view_setup(), ours_.current()));
+    }
   }
 
   static sf::TeamColor other_team(sf::TeamColor color) {
@@ -254,9 +262,11 @@ class PredictorDaemon {
   sf::predictor::TableWatcher watcher_;
   sf::FormationSampler sampler_;
   sf::net::ProtoMulticastReceiver<SSL_WrapperPacket> receiver_;
-  sf::net::ProtoMulticastSender<sf::proto::FormationPrediction> sender_;
+  sf::net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction
   sf::Prediction prediction_;
-  sf::proto::FormationPrediction message_;
+  std::vector<sf::RobotStateById> robot_states_;
+  std::string datagram_;
+  sf::proto::FormationPrediction message_;  // for the field view only
   std::uint64_t predictions_ = 0;
   sf::SamplerCounters reported_;  // counters at the last status line
   std::uint64_t samples_without_table_ = 0;

@@ -1,5 +1,6 @@
 #include "ssl_formation/prediction_message.hpp"
 
+#include <bit>
 #include <cstdio>
 
 namespace ssl_formation {
@@ -19,7 +20,125 @@ void append_cell(std::string& out, Cell cell) {
   out += ')';
 }
 
+// The protobuf wire format (proto2, fields in number order, as protoc's generated code writes
+// them) for the few types FormationPrediction uses.
+namespace wire {
+
+std::size_t varint_size(std::uint64_t value) {
+  std::size_t size = 1;
+  while (value >= 0x80) {
+    value >>= 7;
+    ++size;
+  }
+  return size;
+}
+void varint(std::string& out, std::uint64_t value) {
+  while (value >= 0x80) {
+    out.push_back(static_cast<char>((value & 0x7F) | 0x80));
+    value >>= 7;
+  }
+  out.push_back(static_cast<char>(value));
+}
+void tag(std::string& out, int field, int type) { varint(out, static_cast<std::uint64_t>(field << 3 | type)); }
+void uint(std::string& out, int field, std::uint64_t value) {
+  tag(out, field, 0);
+  varint(out, value);
+}
+void fixed(std::string& out, std::uint64_t bits, int bytes) {
+  for (int i = 0; i < bytes; ++i) out.push_back(static_cast<char>((bits >> (8 * i)) & 0xFF));
+}
+void float64(std::string& out, int field, double value) {
+  tag(out, field, 1);
+  fixed(out, std::bit_cast<std::uint64_t>(value), 8);
+}
+void float32(std::string& out, int field, float value) {
+  tag(out, field, 5);
+  fixed(out, std::bit_cast<std::uint32_t>(value), 4);
+}
+void length(std::string& out, int field, std::size_t size) {
+  tag(out, field, 2);
+  varint(out, size);
+}
+
+// Sizes of the nested messages (every tag here is one byte).
+std::size_t cell_size(Cell c) {
+  return 2 + varint_size(static_cast<std::uint32_t>(c.x)) + varint_size(static_cast<std::uint32_t>(c.y));
+}
+constexpr std::size_t point_size = 10;
+void cell(std::string& out, int field, Cell c) {
+  length(out, field, cell_size(c));
+  uint(out, 1, static_cast<std::uint32_t>(c.x));
+  uint(out, 2, static_cast<std::uint32_t>(c.y));
+}
+void point(std::string& out, int field, Point p) {
+  length(out, field, point_size);
+  float32(out, 1, static_cast<float>(p.x));
+  float32(out, 2, static_cast<float>(p.y));
+}
+std::size_t current_robot_size(const FormationRobot& r) {
+  return 1 + varint_size(r.robot_id) + 1 + varint_size(r.state) + 2 + cell_size(r.cell) + 2 +
+         cell_size(r.previous_cell) + 2 + point_size;
+}
+std::size_t predicted_robot_size(const RobotPrediction& r) {
+  return 1 + varint_size(r.robot_id) + 1 + varint_size(r.state) + 2 + cell_size(r.position) + 2 +
+         cell_size(r.previous) + 2 + point_size + 9 + 2;
+}
+std::size_t step_size(std::size_t k, const PredictedStep& step) {
+  std::size_t size = 1 + varint_size(k + 1) + 2 + cell_size(step.centroid) + 9 + 2 + 9 + 9;
+  for (const RobotPrediction& r : step.robots) {
+    const std::size_t robot = predicted_robot_size(r);
+    size += 1 + varint_size(robot) + robot;
+  }
+  return size;
+}
+
+}  // namespace wire
+
 }  // namespace
+
+void encode_prediction(const Formation& current, const Prediction& prediction,
+                       const PredictionContext& context, std::string& out) {
+  out.clear();
+  wire::uint(out, 1, current.frame_number);
+  wire::float64(out, 2, current.time_s);
+  wire::cell(out, 3, current.centroid_cell);
+  for (const FormationRobot& robot : current.robots) {
+    wire::length(out, 4, wire::current_robot_size(robot));
+    wire::uint(out, 1, robot.robot_id);
+    wire::uint(out, 2, robot.state);
+    wire::cell(out, 3, robot.cell);
+    wire::cell(out, 4, robot.previous_cell);
+    wire::point(out, 5, robot.feed_position);
+  }
+  const Grid& grid = context.codec->grid();
+  for (std::size_t k = 0; k < prediction.steps.size(); ++k) {
+    const PredictedStep& step = prediction.steps[k];
+    wire::length(out, 5, wire::step_size(k, step));
+    wire::uint(out, 1, k + 1);
+    wire::cell(out, 2, step.centroid);
+    wire::float64(out, 3, step.centroid_probability);
+    wire::uint(out, 4, step.centroid_unseen ? 1 : 0);
+    for (const RobotPrediction& robot : step.robots) {
+      wire::length(out, 5, wire::predicted_robot_size(robot));
+      wire::uint(out, 1, robot.robot_id);
+      wire::uint(out, 2, robot.state);
+      wire::cell(out, 3, robot.position);
+      wire::cell(out, 4, robot.previous);
+      wire::point(out, 5, normalise(grid.centre_of(robot.position, context.field), context.opponent_attacks));
+      wire::float64(out, 6, robot.probability);
+      wire::uint(out, 7, robot.unseen ? 1 : 0);
+    }
+    wire::float64(out, 6, step.formation_probability);
+    wire::float64(out, 7, step.confidence);
+  }
+  wire::uint(out, 6, static_cast<std::uint32_t>(grid.length()));
+  wire::uint(out, 7, static_cast<std::uint32_t>(grid.width()));
+  wire::uint(out, 8, context.table_transitions);
+  wire::float64(out, 9, context.step_s);
+  const std::string_view color = to_string(context.opponent_color);
+  wire::length(out, 10, color.size());
+  out.append(color);
+}
 
 void fill_prediction_message(const Formation& current, const Prediction& prediction,
                              const PredictionContext& context, proto::FormationPrediction& out) {

@@ -53,10 +53,53 @@ TEST(PredictionMessage, CarriesTheFormationAndEveryStepWithCellCentresInFeedCoor
   EXPECT_EQ(decoded.table_transitions(), 3u);
   EXPECT_EQ(decoded.grid_length(), 3u);
 
+  // The predictor's direct encoder writes the very same bytes.
+  std::string direct;
+  encode_prediction(formation, prediction, context, direct);
+  EXPECT_EQ(direct, message.SerializeAsString());
+
   const std::string line = describe_prediction(formation, prediction);
   EXPECT_NE(line.find("t=12.00 frame=6 now C(0,0) [4:(0,0)] | +1 C(1,0) p=1.000 [4:(1,0)] conf=1"),
             std::string::npos)
       << line;
+}
+
+TEST(PredictionMessage, DirectEncodingEqualsTheGeneratedSerialiserOnRandomPredictions) {
+  // Large ids, states and counts exercise multi-byte varints; unseen flags and both attack sides.
+  for (const Grid grid : {Grid(3, 2), Grid(12, 9), Grid(16, 12)}) {
+    TransitionTable table(grid);
+    const StateCodec& codec = table.codec();
+    const FieldSize field{12000, 9000};
+    std::vector<FormationRobot> robots;
+    for (std::uint32_t id : {0u, 7u, 200u, 999u}) {
+      FormationRobot robot;
+      robot.robot_id = id;
+      robot.feed_position = Point{-5000.0 + 3.3 * id * id, 4000.0 - 7.7 * id};
+      robot.position = robot.feed_position;
+      robots.push_back(robot);
+    }
+    Formation formation = FormationSampler::build_formation(codec, field, robots, nullptr);
+    formation.time_s = 1700000000.123;
+    formation.frame_number = 4000000000u;
+    for (const auto& r : formation.robots) {
+      table.add(r.state, codec.compose(codec.cell_count() - 1, codec.position_id(r.state), codec.position_id(r.state)), 300);
+    }
+    const Prediction prediction = predict(table, formation, 3);
+    for (const AttackDirection side : {AttackDirection::positive_x, AttackDirection::negative_x}) {
+      PredictionContext context;
+      context.codec = &codec;
+      context.field = field;
+      context.opponent_attacks = side;
+      context.opponent_color = TeamColor::blue;
+      context.step_s = 0.25;
+      context.table_transitions = 1ull << 40;
+      proto::FormationPrediction message;
+      fill_prediction_message(formation, prediction, context, message);
+      std::string direct = "left over from before";
+      encode_prediction(formation, prediction, context, direct);
+      ASSERT_EQ(direct, message.SerializeAsString()) << grid.to_string();
+    }
+  }
 }
 
 }  // namespace
