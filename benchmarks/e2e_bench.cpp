@@ -397,11 +397,10 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   config.grid = stored.table.grid();
   config.step_s = step_s;
   sf::Prediction prediction;
-  sf::proto::FormationPrediction message;
   std::string encoded;
   std::uint64_t predictions = 0;
   // Stage times of the current packet: decode, sample, predict, fill, encode.
-  std::array<std::int64_t, 6> marks{};
+  std::array<std::int64_t, 5> marks{};
   sf::FormationSampler sampler(config, [&](const sf::FormationSample& sample) {
     marks[2] = now_ns();
     sf::predict(stored.table, sf::robot_states(sample.formation), 2, prediction);
@@ -413,14 +412,13 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
     context.opponent_color = config.opponent_color;
     context.step_s = config.step_s;
     context.table_transitions = stored.table.transitions();
-    sf::fill_prediction_message(sample.formation, prediction, context, message);
+    // As the daemon does: the wire format written directly.
+    sf::encode_prediction(sample.formation, prediction, context, encoded);
     marks[4] = now_ns();
-    message.SerializeToString(&encoded);
-    marks[5] = now_ns();
     ++predictions;
   });
   SSL_WrapperPacket packet;
-  std::array<std::vector<double>, 5> cold_stages;
+  std::array<std::vector<double>, 4> cold_stages;
   const auto one = [&](const std::string& bytes) {
     marks = {};
     marks[0] = now_ns();
@@ -439,7 +437,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
     for (std::size_t b = 0; b < flush.size(); b += 64) flush[b] = static_cast<unsigned char>(flush[b] + i);
     sink += flush[i % flush.size()];
     cold.push_back(one(packets[i]));
-    if (marks[5] != 0) {
+    if (marks[4] != 0) {
       for (std::size_t k = 0; k < cold_stages.size(); ++k) {
         cold_stages[k].push_back(static_cast<double>(marks[k + 1] - marks[k]) / 1000.0);
       }
@@ -452,7 +450,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
               "cold_p50_us=%.2f cold_p99_us=%.2f flush_bytes=%zu (%u)\n",
               count, static_cast<unsigned long long>(predictions), encoded.size(), percentile(warm, 50),
               percentile(warm, 99), percentile(cold, 50), percentile(cold, 99), flush_bytes, sink % 2);
-  const char* names[] = {"decode", "sample", "predict", "fill", "encode"};
+  const char* names[] = {"decode", "sample", "predict", "encode"};
   std::printf("pipeline cold stage medians (us):");
   for (std::size_t k = 0; k < cold_stages.size(); ++k) {
     std::sort(cold_stages[k].begin(), cold_stages[k].end());
