@@ -77,8 +77,14 @@ void BM_Predict(benchmark::State& state) {
 // Args: grid (0 = 3x2, 1 = 12x9), robots, horizon.
 BENCHMARK(BM_Predict)
     ->ArgNames({"grid12x9", "robots", "horizon"})
-    ->Args({0, 6, 1})->Args({0, 6, 2})->Args({0, 11, 1})->Args({0, 11, 2})
-    ->Args({1, 6, 1})->Args({1, 6, 2})->Args({1, 11, 1})->Args({1, 11, 2});
+    ->Args({0, 6, 1})
+    ->Args({0, 6, 2})
+    ->Args({0, 11, 1})
+    ->Args({0, 11, 2})
+    ->Args({1, 6, 1})
+    ->Args({1, 6, 2})
+    ->Args({1, 11, 1})
+    ->Args({1, 11, 2});
 
 void BM_TableIncrement(benchmark::State& state) {
   const sf::Grid grid = state.range(0) == 0 ? sf::Grid(3, 2) : sf::Grid(12, 9);

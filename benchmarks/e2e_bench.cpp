@@ -149,9 +149,8 @@ int run_echo(const std::string& in, const std::string& out, const std::string& i
   sf::net::MulticastSender sender(io, out_group, interface.address, sf::net::kDefaultMulticastTtl);
   sender.open();
   sf::net::MulticastReceiver receiver(io, in_group, interface, receive_buffer);
-  receiver.start([&](std::span<const std::byte> data, const sf::net::udp::endpoint&) {
-    sender.send(data);
-  });
+  receiver.start(
+      [&](std::span<const std::byte> data, const sf::net::udp::endpoint&) { sender.send(data); });
   boost::asio::steady_timer deadline(io, sf::app::seconds_option("seconds", seconds));
   deadline.async_wait([&](const boost::system::error_code& error) {
     if (error) return;
@@ -210,7 +209,8 @@ struct Summary {
 // Nearest-rank percentile of a sorted sample.
 double percentile(const std::vector<double>& sorted, double p) {
   if (sorted.empty()) return std::nan("");
-  const auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size())));
+  const auto rank =
+      static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(sorted.size())));
   return sorted[std::clamp<std::size_t>(rank, 1, sorted.size()) - 1];
 }
 
@@ -300,9 +300,9 @@ int run_latency(const LatencyOptions& o) {
   PathTimes echo_times(count);
 
   boost::asio::io_context receive_io;  // run by the receiving thread
-  boost::asio::io_context send_io;      // never run: the senders send synchronously
-  sf::net::MulticastReceiver predictions(receive_io, group_option("prediction-address", o.prediction_address),
-                                         interface);
+  boost::asio::io_context send_io;     // never run: the senders send synchronously
+  sf::net::MulticastReceiver predictions(
+      receive_io, group_option("prediction-address", o.prediction_address), interface);
   sf::net::MulticastReceiver echoes(receive_io, group_option("echo-out", o.echo_out), interface);
   sf::net::MulticastSender to_predictor(send_io, group_option("vision-address", o.vision_address),
                                         interface.address);
@@ -326,7 +326,8 @@ int run_latency(const LatencyOptions& o) {
     to_echo.open();
     echoes.start([&](std::span<const std::byte> data, const sf::net::udp::endpoint&) {
       const std::int64_t at = now_ns();
-      if (echoed.ParseFromArray(data.data(), static_cast<int>(data.size())) && echoed.has_detection()) {
+      if (echoed.ParseFromArray(data.data(), static_cast<int>(data.size())) &&
+          echoed.has_detection()) {
         echo_times.record(echoed.detection().frame_number(), at);
       } else {
         echo_times.unmatched.fetch_add(1, std::memory_order_relaxed);
@@ -362,11 +363,12 @@ int run_latency(const LatencyOptions& o) {
   receive_io.stop();
   receiving.join();
 
-  std::printf("latency run rate=%g seconds=%.2f packets_per_path=%zu warmup=%zu latest_send_us=%.1f "
-              "predictor_kernel_drops=%llu echo_kernel_drops=%llu\n",
-              o.rate, achieved_s, count, o.warmup, static_cast<double>(latest_start_ns) / 1000.0,
-              static_cast<unsigned long long>(predictions.counters().kernel_drops.load()),
-              static_cast<unsigned long long>(echoes.counters().kernel_drops.load()));
+  std::printf(
+      "latency run rate=%g seconds=%.2f packets_per_path=%zu warmup=%zu latest_send_us=%.1f "
+      "predictor_kernel_drops=%llu echo_kernel_drops=%llu\n",
+      o.rate, achieved_s, count, o.warmup, static_cast<double>(latest_start_ns) / 1000.0,
+      static_cast<unsigned long long>(predictions.counters().kernel_drops.load()),
+      static_cast<unsigned long long>(echoes.counters().kernel_drops.load()));
   if (!o.no_echo) print_summary("floor", o.rate, summarise(echo_times, o.warmup), echo_times);
   if (!o.no_predictor) {
     print_summary("predictor", o.rate, summarise(predictor_times, o.warmup), predictor_times);
@@ -378,8 +380,8 @@ int run_latency(const LatencyOptions& o) {
 // ---------------------------------------------------------------------------------------------
 // pipeline
 
-int run_pipeline(const std::string& table_path, std::size_t count, double step_s, std::uint64_t seed,
-                 std::size_t flush_bytes) {
+int run_pipeline(const std::string& table_path, std::size_t count, double step_s,
+                 std::uint64_t seed, std::size_t flush_bytes) {
   sf::TableLoadResult loaded = sf::load_table(table_path);
   if (!loaded) {
     std::cerr << "e2e_bench pipeline: " << loaded.message << '\n';
@@ -434,7 +436,8 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   unsigned sink = 0;
   for (std::size_t i = 0; i < count; ++i) {
     // Evict: touch a buffer larger than the last-level cache.
-    for (std::size_t b = 0; b < flush.size(); b += 64) flush[b] = static_cast<unsigned char>(flush[b] + i);
+    for (std::size_t b = 0; b < flush.size(); b += 64)
+      flush[b] = static_cast<unsigned char>(flush[b] + i);
     sink += flush[i % flush.size()];
     cold.push_back(one(packets[i]));
     if (marks[4] != 0) {
@@ -446,10 +449,11 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   for (std::size_t i = count; i < 2 * count; ++i) warm.push_back(one(packets[i]));
   std::sort(warm.begin(), warm.end());
   std::sort(cold.begin(), cold.end());
-  std::printf("pipeline packets=%zu predictions=%llu message_bytes=%zu warm_p50_us=%.2f warm_p99_us=%.2f "
-              "cold_p50_us=%.2f cold_p99_us=%.2f flush_bytes=%zu (%u)\n",
-              count, static_cast<unsigned long long>(predictions), encoded.size(), percentile(warm, 50),
-              percentile(warm, 99), percentile(cold, 50), percentile(cold, 99), flush_bytes, sink % 2);
+  std::printf(
+      "pipeline packets=%zu predictions=%llu message_bytes=%zu warm_p50_us=%.2f warm_p99_us=%.2f "
+      "cold_p50_us=%.2f cold_p99_us=%.2f flush_bytes=%zu (%u)\n",
+      count, static_cast<unsigned long long>(predictions), encoded.size(), percentile(warm, 50),
+      percentile(warm, 99), percentile(cold, 50), percentile(cold, 99), flush_bytes, sink % 2);
   const char* names[] = {"decode", "sample", "predict", "encode"};
   std::printf("pipeline cold stage medians (us):");
   for (std::size_t k = 0; k < cold_stages.size(); ++k) {
@@ -524,18 +528,20 @@ int run_load(const LoadOptions& o) {
   const std::int64_t start = now_ns() + 50'000'000;
   std::int64_t worst_lag_ns = 0;
   for (std::size_t f = 0; f < frames.size(); ++f) {
-    const std::int64_t due = start + static_cast<std::int64_t>(static_cast<double>(f) * frame_period_ns);
+    const std::int64_t due =
+        start + static_cast<std::int64_t>(static_cast<double>(f) * frame_period_ns);
     wait_until(due, 0);
     worst_lag_ns = std::max(worst_lag_ns, now_ns() - due);
     for (const std::string& packet : frames[f]) sender.send(bytes_of(packet));
   }
   const double elapsed_s = static_cast<double>(now_ns() - start) / 1e9;
-  std::printf("load sent=%llu send_errors=%llu detection_packets=%zu frames=%zu complete_frames=%zu "
-              "cameras=%d seconds=%.3f achieved_pps=%.0f worst_lag_us=%.1f\n",
-              static_cast<unsigned long long>(sender.sent()),
-              static_cast<unsigned long long>(sender.send_errors()), detection_packets,
-              frames.size(), complete_frames, o.cameras, elapsed_s, static_cast<double>(sender.sent()) / elapsed_s,
-              static_cast<double>(worst_lag_ns) / 1000.0);
+  std::printf(
+      "load sent=%llu send_errors=%llu detection_packets=%zu frames=%zu complete_frames=%zu "
+      "cameras=%d seconds=%.3f achieved_pps=%.0f worst_lag_us=%.1f\n",
+      static_cast<unsigned long long>(sender.sent()),
+      static_cast<unsigned long long>(sender.send_errors()), detection_packets, frames.size(),
+      complete_frames, o.cameras, elapsed_s, static_cast<double>(sender.sent()) / elapsed_s,
+      static_cast<double>(worst_lag_ns) / 1000.0);
   std::fflush(stdout);
   return sender.send_errors() == 0 ? 0 : 1;
 }
@@ -561,38 +567,43 @@ int main(int argc, char** argv) {
     bool verbose = false;
 
     po::options_description general("Options (each mode uses the ones that concern it)");
-    general.add_options()
-        ("mode", po::value(&mode)->required(), "make-table, echo, latency or load")
-        ("interface", po::value(&interface)->default_value(interface),
-         "IPv4 address to send from and join on")
-        ("vision-address", po::value(&vision_address)->default_value(vision_address),
-         "latency, load: group:port the daemons read vision from")
-        ("prediction-address", po::value(&latency.prediction_address)->default_value(latency.prediction_address),
-         "latency: group:port the predictor sends to")
-        ("echo-in", po::value(&echo_in)->default_value(echo_in), "echo, latency: group:port the echo reads")
-        ("echo-out", po::value(&echo_out)->default_value(echo_out), "echo, latency: group:port the echo sends to")
-        ("rate", po::value(&rate), "latency: packets/s per path (default 60); load: packets/s (default 20000)")
-        ("seconds", po::value(&seconds),
-         "latency: sending time (default 10); load: sending time (default 5); echo: lifetime (default 300)")
-        ("warmup", po::value(&latency.warmup)->default_value(latency.warmup),
-         "latency: first packets of each path left out of the figures")
-        ("step", po::value(&step_s)->default_value(step_s),
-         "make-table, latency: data-clock seconds per formation (the predictor's --step)")
-        ("spin-us", po::value(&latency.spin_us)->default_value(latency.spin_us),
-         "latency: microseconds spun before each send instead of slept")
-        ("drain", po::value(&latency.drain_s)->default_value(latency.drain_s),
-         "latency: seconds to wait for the last replies")
-        ("no-echo", po::bool_switch(&latency.no_echo), "latency: time the predictor alone")
-        ("no-predictor", po::bool_switch(&latency.no_predictor), "latency: time the echo alone")
-        ("cameras", po::value(&load.cameras)->default_value(load.cameras), "load: cameras")
-        ("frame-dt", po::value(&load.frame_dt_s)->default_value(load.frame_dt_s),
-         "load: data-clock seconds per camera frame (2 = the predictor's step: every frame completes a formation)")
-        ("table", po::value(&table)->default_value(table), "make-table: file to write")
-        ("formations", po::value(&formations)->default_value(formations), "make-table: formations to train on")
-        ("seed", po::value(&seed), "simulated vision seed")
-        ("receive-buffer", po::value(&receive_buffer)->default_value(receive_buffer),
-         "echo: SO_RCVBUF to request, bytes")
-        ("verbose", po::bool_switch(&verbose), "more log lines");
+    general.add_options()("mode", po::value(&mode)->required(),
+                          "make-table, echo, latency or load")(
+        "interface", po::value(&interface)->default_value(interface),
+        "IPv4 address to send from and join on")(
+        "vision-address", po::value(&vision_address)->default_value(vision_address),
+        "latency, load: group:port the daemons read vision from")(
+        "prediction-address",
+        po::value(&latency.prediction_address)->default_value(latency.prediction_address),
+        "latency: group:port the predictor sends to")("echo-in",
+                                                      po::value(&echo_in)->default_value(echo_in),
+                                                      "echo, latency: group:port the echo reads")(
+        "echo-out", po::value(&echo_out)->default_value(echo_out),
+        "echo, latency: group:port the echo sends to")(
+        "rate", po::value(&rate),
+        "latency: packets/s per path (default 60); load: packets/s (default 20000)")(
+        "seconds", po::value(&seconds),
+        "latency: sending time (default 10); load: sending time (default 5); echo: lifetime "
+        "(default 300)")("warmup", po::value(&latency.warmup)->default_value(latency.warmup),
+                         "latency: first packets of each path left out of the figures")(
+        "step", po::value(&step_s)->default_value(step_s),
+        "make-table, latency: data-clock seconds per formation (the predictor's --step)")(
+        "spin-us", po::value(&latency.spin_us)->default_value(latency.spin_us),
+        "latency: microseconds spun before each send instead of slept")(
+        "drain", po::value(&latency.drain_s)->default_value(latency.drain_s),
+        "latency: seconds to wait for the last replies")(
+        "no-echo", po::bool_switch(&latency.no_echo), "latency: time the predictor alone")(
+        "no-predictor", po::bool_switch(&latency.no_predictor), "latency: time the echo alone")(
+        "cameras", po::value(&load.cameras)->default_value(load.cameras), "load: cameras")(
+        "frame-dt", po::value(&load.frame_dt_s)->default_value(load.frame_dt_s),
+        "load: data-clock seconds per camera frame (2 = the predictor's step: every frame "
+        "completes a formation)")("table", po::value(&table)->default_value(table),
+                                  "make-table: file to write")(
+        "formations", po::value(&formations)->default_value(formations),
+        "make-table: formations to train on")("seed", po::value(&seed), "simulated vision seed")(
+        "receive-buffer", po::value(&receive_buffer)->default_value(receive_buffer),
+        "echo: SO_RCVBUF to request, bytes")("verbose", po::bool_switch(&verbose),
+                                             "more log lines");
     po::positional_options_description positional;
     positional.add("mode", 1);
     if (!sf::app::parse_command_line(argc, argv, general, "e2e_bench MODE [options]",
@@ -629,7 +640,8 @@ int main(int argc, char** argv) {
       if (rate > 0) load.rate = rate;
       if (seconds > 0) load.seconds = seconds;
       if (seed) load.seed = seed;
-      if (load.cameras < 1 || load.cameras > 8) throw sf::app::UsageError("--cameras must be 1 to 8");
+      if (load.cameras < 1 || load.cameras > 8)
+        throw sf::app::UsageError("--cameras must be 1 to 8");
       return run_load(load);
     }
     throw sf::app::UsageError("unknown mode '" + mode + "': make-table, echo, latency or load");

@@ -20,8 +20,8 @@ constexpr int frames_in_log = 200000;
 
 // Writes the benchmark log once per process (plain and gzip), in the temp folder.
 const std::filesystem::path& log_path(bool gzip) {
-  static const auto base = std::filesystem::temp_directory_path() /
-                           ("sslf-bench-" + std::to_string(::getpid()));
+  static const auto base =
+      std::filesystem::temp_directory_path() / ("sslf-bench-" + std::to_string(::getpid()));
   static const std::filesystem::path plain = base.string() + ".log";
   static const std::filesystem::path compressed = base.string() + ".log.gz";
   static const bool written = [] {
@@ -45,8 +45,10 @@ const std::filesystem::path& log_path(bool gzip) {
         for (std::uint32_t id = 0; id < 6; ++id) {
           auto& y = yellow[id];
           auto& b = blue[id];
-          y = {std::clamp(y.x + step(frame_random), -4500.0, 4500.0), std::clamp(y.y + step(frame_random), -3000.0, 3000.0)};
-          b = {std::clamp(b.x + step(frame_random), -4500.0, 4500.0), std::clamp(b.y + step(frame_random), -3000.0, 3000.0)};
+          y = {std::clamp(y.x + step(frame_random), -4500.0, 4500.0),
+               std::clamp(y.y + step(frame_random), -3000.0, 3000.0)};
+          b = {std::clamp(b.x + step(frame_random), -4500.0, 4500.0),
+               std::clamp(b.y + step(frame_random), -3000.0, 3000.0)};
           spec.yellow.push_back({id, y});
           spec.blue.push_back({id, b});
         }
@@ -56,7 +58,8 @@ const std::filesystem::path& log_path(bool gzip) {
           sf::fill_geometry(*packet.mutable_geometry(), sf::FieldSize{9000, 6000});
           writer->write_vision(packet, static_cast<std::int64_t>(spec.t_capture * 1e9));
         } else {
-          writer->write_vision(sf::make_detection_packet(spec), static_cast<std::int64_t>(spec.t_capture * 1e9));
+          writer->write_vision(sf::make_detection_packet(spec),
+                               static_cast<std::int64_t>(spec.t_capture * 1e9));
         }
       }
       if (!writer->close()) throw std::runtime_error(writer->error());
@@ -88,7 +91,11 @@ void BM_ReadAndParse(benchmark::State& state) {
   state.SetItemsProcessed(frames);
   state.SetLabel(state.range(0) ? ".log.gz" : ".log");
 }
-BENCHMARK(BM_ReadAndParse)->ArgName("gzip")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);  // CPU time: one core
+BENCHMARK(BM_ReadAndParse)
+    ->ArgName("gzip")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);  // CPU time: one core
 
 // Offline training: the same loop feeding the Training the live trainer uses.
 void BM_OfflineTraining(benchmark::State& state) {
@@ -112,7 +119,11 @@ void BM_OfflineTraining(benchmark::State& state) {
   benchmark::DoNotOptimize(transitions);
   state.SetLabel(state.range(0) ? ".log.gz" : ".log");
 }
-BENCHMARK(BM_OfflineTraining)->ArgName("gzip")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);  // CPU time: one core
+BENCHMARK(BM_OfflineTraining)
+    ->ArgName("gzip")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);  // CPU time: one core
 
 }  // namespace
 

@@ -92,7 +92,8 @@ sf::TransitionTable train(const sf::SamplerConfig& config, const PacketSource& s
 std::vector<sf::Formation> sample(const sf::SamplerConfig& config, const PacketSource& source,
                                   sf::FieldSize* field) {
   std::vector<sf::Formation> formations;
-  sf::FormationSampler sampler(config, [&](const sf::FormationSample& s) { formations.push_back(s.formation); });
+  sf::FormationSampler sampler(
+      config, [&](const sf::FormationSample& s) { formations.push_back(s.formation); });
   for (const auto& packet : source.packets()) sampler.add(packet);
   *field = sampler.field();
   return formations;
@@ -107,15 +108,16 @@ std::ofstream open_csv(const EvaluateOptions& options, const std::string& name) 
   return out;
 }
 
-// ---- paper ---------------------------------------------------------------------------------------
+// ---- paper
+// ---------------------------------------------------------------------------------------
 
 int run_paper(const EvaluateOptions& options) {
   sf::SamplerConfig config = options.model.sampler_config();
   const auto started = std::chrono::steady_clock::now();
   const PacketSource training_data =
-      options.train_log.empty()
-          ? PacketSource::simulated(options.seed, options.train_formations, options.jitter_mm, options.cameras)
-          : PacketSource::from_log(options.train_log);
+      options.train_log.empty() ? PacketSource::simulated(options.seed, options.train_formations,
+                                                          options.jitter_mm, options.cameras)
+                                : PacketSource::from_log(options.train_log);
   sf::FieldSize field = config.field;
   std::uint64_t training_samples = 0;
   const sf::TransitionTable table = train(config, training_data, &field, &training_samples);
@@ -144,19 +146,22 @@ int run_paper(const EvaluateOptions& options) {
       robots[id].robot_id = static_cast<std::uint32_t>(id);
       robots[id].position = sf::Point{x(random), y(random)};
     }
-    const sf::Formation formation = sf::FormationSampler::build_formation(table.codec(), field, robots, nullptr);
+    const sf::Formation formation =
+        sf::FormationSampler::build_formation(table.codec(), field, robots, nullptr);
     ev::accumulate(summary, ev::run_paper_test(table, sf::robot_states(formation), plays));
     csv << summary.tests << ',' << summary.count_per_play << ',' << summary.distance_per_play << ','
         << summary.count_per_formation << ',' << summary.distance_per_formation << ','
         << summary.mean_confidence[0] << ',' << summary.mean_confidence[1] << '\n';
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 
-  std::printf("Paper protocol (§6.1): trained on %llu formations (%zu packets, %llu transitions), "
-              "%d tests, grid %s\n",
-              static_cast<unsigned long long>(training_samples), training_data.packets().size(),
-              static_cast<unsigned long long>(table.transitions()), summary.tests,
-              config.grid.to_string().c_str());
+  std::printf(
+      "Paper protocol (§6.1): trained on %llu formations (%zu packets, %llu transitions), "
+      "%d tests, grid %s\n",
+      static_cast<unsigned long long>(training_samples), training_data.packets().size(),
+      static_cast<unsigned long long>(table.transitions()), summary.tests,
+      config.grid.to_string().c_str());
   std::printf("%-28s %14s %14s %14s %14s\n", "", "per play", "paper", "per formation", "paper");
   std::printf("%-28s %14.4f %14.4f %14.4f %14.4f\n", "count similarity measure",
               summary.count_per_play, 16.6826, summary.count_per_formation, 5.5608);
@@ -168,7 +173,8 @@ int run_paper(const EvaluateOptions& options) {
   return 0;
 }
 
-// ---- holdout ---------------------------------------------------------------------------------------
+// ---- holdout
+// ---------------------------------------------------------------------------------------
 
 std::pair<PacketSource, PacketSource> holdout_data(const EvaluateOptions& options) {
   if (options.split > 0.0) {
@@ -218,7 +224,8 @@ GridReport holdout_for_grid(const sf::SamplerConfig& config, const PacketSource&
       ++runs;
     }
   }
-  const double elapsed = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+  const double elapsed =
+      std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   report.prediction_us = runs ? elapsed / static_cast<double>(runs) : 0.0;
   return report;
 }
@@ -232,50 +239,58 @@ void print_holdout(const GridReport& report) {
   for (int h = 0; h < ev::HoldoutResult::max_horizon; ++h) {
     for (std::size_t m = 0; m < ev::all_methods.size(); ++m) {
       const ev::Accuracy& a = report.result.accuracy[static_cast<std::size_t>(h)][m];
-      std::printf("%-8d %-18s %11.2f%% %11.2f%% %14.3f %10llu\n", h + 1, ev::to_string(ev::all_methods[m]),
-                  100.0 * a.state_accuracy(), 100.0 * a.cell_accuracy(), a.mean_distance(),
+      std::printf("%-8d %-18s %11.2f%% %11.2f%% %14.3f %10llu\n", h + 1,
+                  ev::to_string(ev::all_methods[m]), 100.0 * a.state_accuracy(),
+                  100.0 * a.cell_accuracy(), a.mean_distance(),
                   static_cast<unsigned long long>(a.robots));
     }
   }
   for (int h = 0; h < ev::HoldoutResult::max_horizon; ++h) {
     const ev::Calibration& c = report.result.calibration[static_cast<std::size_t>(h)];
-    std::printf("confidence that the whole formation is right, horizon %d: Brier %.4f over %llu formations\n",
-                h + 1, c.brier(), static_cast<unsigned long long>(c.n));
-    std::printf("  %-12s %10s %16s %14s\n", "confidence", "formations", "mean confidence", "observed");
+    std::printf(
+        "confidence that the whole formation is right, horizon %d: Brier %.4f over %llu "
+        "formations\n",
+        h + 1, c.brier(), static_cast<unsigned long long>(c.n));
+    std::printf("  %-12s %10s %16s %14s\n", "confidence", "formations", "mean confidence",
+                "observed");
     for (int b = 0; b < ev::Calibration::bins; ++b) {
       const auto i = static_cast<std::size_t>(b);
       if (c.bin_count[i] == 0) continue;
-      std::printf("  [%.1f, %.1f%c %10llu %16.4f %13.2f%%\n", b / 10.0, (b + 1) / 10.0, b == 9 ? ']' : ')',
-                  static_cast<unsigned long long>(c.bin_count[i]), c.bin_confidence[i] / double(c.bin_count[i]),
+      std::printf("  [%.1f, %.1f%c %10llu %16.4f %13.2f%%\n", b / 10.0, (b + 1) / 10.0,
+                  b == 9 ? ']' : ')', static_cast<unsigned long long>(c.bin_count[i]),
+                  c.bin_confidence[i] / double(c.bin_count[i]),
                   100.0 * double(c.bin_hits[i]) / double(c.bin_count[i]));
     }
   }
 }
 
-void write_holdout_csv(std::ofstream& accuracy, std::ofstream& reliability, const GridReport& report) {
+void write_holdout_csv(std::ofstream& accuracy, std::ofstream& reliability,
+                       const GridReport& report) {
   for (int h = 0; h < ev::HoldoutResult::max_horizon; ++h) {
     for (std::size_t m = 0; m < ev::all_methods.size(); ++m) {
       const ev::Accuracy& a = report.result.accuracy[static_cast<std::size_t>(h)][m];
-      accuracy << report.grid.to_string() << ',' << h + 1 << ',' << ev::to_string(ev::all_methods[m]) << ','
-               << a.state_accuracy() << ',' << a.cell_accuracy() << ',' << a.mean_distance() << ','
-               << a.robots << '\n';
+      accuracy << report.grid.to_string() << ',' << h + 1 << ','
+               << ev::to_string(ev::all_methods[m]) << ',' << a.state_accuracy() << ','
+               << a.cell_accuracy() << ',' << a.mean_distance() << ',' << a.robots << '\n';
     }
     const ev::Calibration& c = report.result.calibration[static_cast<std::size_t>(h)];
     for (int b = 0; b < ev::Calibration::bins; ++b) {
       const auto i = static_cast<std::size_t>(b);
-      reliability << report.grid.to_string() << ',' << h + 1 << ',' << b << ',' << c.bin_count[i] << ','
-                  << (c.bin_count[i] ? c.bin_confidence[i] / double(c.bin_count[i]) : 0.0) << ','
-                  << (c.bin_count[i] ? double(c.bin_hits[i]) / double(c.bin_count[i]) : 0.0) << ','
-                  << c.brier() << '\n';
+      reliability << report.grid.to_string() << ',' << h + 1 << ',' << b << ',' << c.bin_count[i]
+                  << ',' << (c.bin_count[i] ? c.bin_confidence[i] / double(c.bin_count[i]) : 0.0)
+                  << ',' << (c.bin_count[i] ? double(c.bin_hits[i]) / double(c.bin_count[i]) : 0.0)
+                  << ',' << c.brier() << '\n';
     }
   }
 }
 
 int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& grids) {
   const auto [train_data, test_data] = holdout_data(options);
-  std::ofstream accuracy = open_csv(options, grids.size() > 1 ? "grid-sweep-accuracy.csv" : "holdout-accuracy.csv");
+  std::ofstream accuracy =
+      open_csv(options, grids.size() > 1 ? "grid-sweep-accuracy.csv" : "holdout-accuracy.csv");
   accuracy << "grid,horizon,method,state_accuracy,cell_accuracy,mean_cell_distance,robots\n";
-  std::ofstream reliability = open_csv(options, grids.size() > 1 ? "grid-sweep-reliability.csv" : "holdout-reliability.csv");
+  std::ofstream reliability = open_csv(
+      options, grids.size() > 1 ? "grid-sweep-reliability.csv" : "holdout-reliability.csv");
   reliability << "grid,horizon,bin,formations,mean_confidence,observed_frequency,brier\n";
   std::vector<GridReport> reports;
   for (const std::string& grid : grids) {
@@ -289,19 +304,23 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   if (grids.size() > 1) {
     std::ofstream sweep = open_csv(options, "grid-sweep.csv");
     sweep << "grid,states,transitions,table_memory_bytes,prediction_us,model_cell_accuracy_h1,"
-             "persistence_cell_accuracy_h1,constant_velocity_cell_accuracy_h1,model_mean_distance_h1\n";
-    std::printf("Grid sweep (horizon 1)\n%-6s %12s %12s %14s %14s %12s %12s %12s\n", "grid", "states",
-                "transitions", "table memory", "predict 2 (us)", "model cell", "persist cell", "const-v cell");
+             "persistence_cell_accuracy_h1,constant_velocity_cell_accuracy_h1,model_mean_distance_"
+             "h1\n";
+    std::printf("Grid sweep (horizon 1)\n%-6s %12s %12s %14s %14s %12s %12s %12s\n", "grid",
+                "states", "transitions", "table memory", "predict 2 (us)", "model cell",
+                "persist cell", "const-v cell");
     for (const GridReport& r : reports) {
       const auto& h1 = r.result.accuracy[0];
       const sf::StateCodec codec(r.grid);
-      std::printf("%-6s %12u %12llu %11.1f KiB %14.3f %11.2f%% %11.2f%% %11.2f%%\n", r.grid.to_string().c_str(),
-                  codec.state_count(), static_cast<unsigned long long>(r.transitions), r.memory_bytes / 1024.0,
+      std::printf("%-6s %12u %12llu %11.1f KiB %14.3f %11.2f%% %11.2f%% %11.2f%%\n",
+                  r.grid.to_string().c_str(), codec.state_count(),
+                  static_cast<unsigned long long>(r.transitions), r.memory_bytes / 1024.0,
                   r.prediction_us, 100 * h1[0].cell_accuracy(), 100 * h1[1].cell_accuracy(),
                   100 * h1[2].cell_accuracy());
-      sweep << r.grid.to_string() << ',' << codec.state_count() << ',' << r.transitions << ',' << r.memory_bytes
-            << ',' << r.prediction_us << ',' << h1[0].cell_accuracy() << ',' << h1[1].cell_accuracy() << ','
-            << h1[2].cell_accuracy() << ',' << h1[0].mean_distance() << '\n';
+      sweep << r.grid.to_string() << ',' << codec.state_count() << ',' << r.transitions << ','
+            << r.memory_bytes << ',' << r.prediction_us << ',' << h1[0].cell_accuracy() << ','
+            << h1[1].cell_accuracy() << ',' << h1[2].cell_accuracy() << ',' << h1[0].mean_distance()
+            << '\n';
     }
   }
   return 0;
@@ -313,36 +332,41 @@ int main(int argc, char** argv) {
   return sf::app::run_main("ssl-evaluate", [&] {
     EvaluateOptions o;
     po::options_description general("Options");
-    general.add_options()
-        ("mode", po::value(&o.mode)->required(), "paper, holdout or grid-sweep")
-        ("seed", po::value(&o.seed)->default_value(o.seed), "seed of the simulated training stream")
-        ("test-seed", po::value(&o.test_seed)->default_value(o.test_seed),
-         "seed of the simulated test stream (holdout) or of the random test formations (paper)")
-        ("train-formations", po::value(&o.train_formations)->default_value(o.train_formations),
-         "simulated training formations (one packet each with one camera; the paper used 15,000)")
-        ("test-formations", po::value(&o.test_formations)->default_value(o.test_formations),
-         "simulated test formations (holdout, grid-sweep)")
-        ("tests", po::value(&o.tests)->default_value(o.tests), "paper mode: number of tests")
-        ("train-log", po::value(&o.train_log), "train on this official log instead of the simulation")
-        ("test-log", po::value(&o.test_log), "test on this official log instead of the simulation")
-        ("split", po::value(&o.split)->default_value(o.split),
-         "holdout on one log: train on this first fraction of --train-log, test on the rest")
-        ("jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm), "noise of the simulated vision, mm")
-        ("cameras", po::value(&o.cameras)->default_value(o.cameras), "cameras of the simulated vision")
-        ("grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
-         "grid-sweep: the grids to compare")
-        ("output-dir", po::value(&o.output_dir)->default_value(o.output_dir), "where the CSV files go");
+    general.add_options()("mode", po::value(&o.mode)->required(), "paper, holdout or grid-sweep")(
+        "seed", po::value(&o.seed)->default_value(o.seed), "seed of the simulated training stream")(
+        "test-seed", po::value(&o.test_seed)->default_value(o.test_seed),
+        "seed of the simulated test stream (holdout) or of the random test formations (paper)")(
+        "train-formations", po::value(&o.train_formations)->default_value(o.train_formations),
+        "simulated training formations (one packet each with one camera; the paper used 15,000)")(
+        "test-formations", po::value(&o.test_formations)->default_value(o.test_formations),
+        "simulated test formations (holdout, grid-sweep)")(
+        "tests", po::value(&o.tests)->default_value(o.tests), "paper mode: number of tests")(
+        "train-log", po::value(&o.train_log),
+        "train on this official log instead of the simulation")(
+        "test-log", po::value(&o.test_log), "test on this official log instead of the simulation")(
+        "split", po::value(&o.split)->default_value(o.split),
+        "holdout on one log: train on this first fraction of --train-log, test on the rest")(
+        "jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm),
+        "noise of the simulated vision, mm")("cameras",
+                                             po::value(&o.cameras)->default_value(o.cameras),
+                                             "cameras of the simulated vision")(
+        "grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
+        "grid-sweep: the grids to compare")("output-dir",
+                                            po::value(&o.output_dir)->default_value(o.output_dir),
+                                            "where the CSV files go");
     sf::app::add_model_options(general, o.model);
     po::positional_options_description positional;
     positional.add("mode", 1);
-    if (!sf::app::parse_command_line(argc, argv, general, "ssl-evaluate paper|holdout|grid-sweep [options]",
+    if (!sf::app::parse_command_line(argc, argv, general,
+                                     "ssl-evaluate paper|holdout|grid-sweep [options]",
                                      "Evaluates the predictions: the paper's protocol, held-out "
                                      "accuracy against baselines, and a grid sweep.",
                                      &positional)) {
       return 0;
     }
     if (o.tests < 1 || o.train_formations < 1 || o.test_formations < 1) {
-      throw sf::app::UsageError("--tests, --train-formations and --test-formations must be positive");
+      throw sf::app::UsageError(
+          "--tests, --train-formations and --test-formations must be positive");
     }
     if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
     sf::app::init_logging("ssl-evaluate");

@@ -172,9 +172,10 @@ class PredictorDaemon {
     switch (watcher_.poll()) {
       case sf::predictor::TableWatcher::Change::loaded: {
         const sf::StoredTable& stored = *watcher_.table();
-        spdlog::info("loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
-                     options_.table, watcher_.reloads(), stored.table.transitions(),
-                     stored.metadata.samples, stored.table.rows_seen());
+        spdlog::info(
+            "loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
+            options_.table, watcher_.reloads(), stored.table.transitions(), stored.metadata.samples,
+            stored.table.rows_seen());
         table_loaded_unix_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
                                     std::chrono::system_clock::now().time_since_epoch())
                                     .count();
@@ -188,7 +189,8 @@ class PredictorDaemon {
       case sf::predictor::TableWatcher::Change::failed:
         table_error_ = watcher_.last_error();
         spdlog::error("{}; {}", watcher_.last_error(),
-                      watcher_.table() ? "keeping the table loaded before" : "still waiting for a valid table");
+                      watcher_.table() ? "keeping the table loaded before"
+                                       : "still waiting for a valid table");
         break;
       case sf::predictor::TableWatcher::Change::none:
         break;
@@ -198,12 +200,14 @@ class PredictorDaemon {
   void log_status() {
     const auto& net = receiver_.counters();
     const auto& c = sampler_.counters();
-    spdlog::info("status: packets={} parse_errors={} kernel_drops={} formations={} predictions={} "
-                 "sent={} table_reloads={} | {}",
-                 net.datagrams.load(), net.parse_errors.load(), net.kernel_drops.load(), c.samples,
-                 predictions_, sender_.sent(), watcher_.reloads(), sf::describe_rejections(c));
+    spdlog::info(
+        "status: packets={} parse_errors={} kernel_drops={} formations={} predictions={} "
+        "sent={} table_reloads={} | {}",
+        net.datagrams.load(), net.parse_errors.load(), net.kernel_drops.load(), c.samples,
+        predictions_, sender_.sent(), watcher_.reloads(), sf::describe_rejections(c));
     // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
-    for (const std::string& line : sf::new_rejections(reported_, c)) spdlog::warn("input: {}", line);
+    for (const std::string& line : sf::new_rejections(reported_, c))
+      spdlog::warn("input: {}", line);
     reported_ = c;
     if (web_) {
       const web::FieldViewCounters w = web_->counters();
@@ -239,7 +243,8 @@ class PredictorDaemon {
     sf::encode_prediction(sample.formation, prediction_, context, datagram_);
     sender_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
     ++predictions_;
-    if (!options_.quiet) std::cout << sf::describe_prediction(sample.formation, prediction_) << '\n' << std::flush;
+    if (!options_.quiet)
+      std::cout << sf::describe_prediction(sample.formation, prediction_) << '\n' << std::flush;
     // After the multicast: the view never delays the predictions.
     if (web_) {
       sf::fill_prediction_message(sample.formation, prediction_, context, message_);
@@ -282,7 +287,8 @@ class PredictorDaemon {
 
 int run_daemon(const PredictorOptions& options) {
   const sf::SamplerConfig config = options.model.sampler_config();
-  if (options.horizon < 1 || options.horizon > 100) throw sf::app::UsageError("--horizon must be 1 to 100");
+  if (options.horizon < 1 || options.horizon > 100)
+    throw sf::app::UsageError("--horizon must be 1 to 100");
   if (options.ttl < 0 || options.ttl > 255) throw sf::app::UsageError("--ttl must be 0 to 255");
   const auto reload_period = sf::app::seconds_option("reload-interval", options.reload_interval_s);
   const auto status_period = sf::app::seconds_option("status-interval", options.status_interval_s);
@@ -327,35 +333,37 @@ int main(int argc, char** argv) {
   return sf::app::run_main("ssl-predictor", [&] {
     PredictorOptions o;
     po::options_description general("Options");
-    general.add_options()
-        ("list-states", po::bool_switch(&o.list_states),
-         "print every state of --grid, one per line, and exit")
-        ("table", po::value(&o.table)->default_value(o.table),
-         "table file written by ssl-trainer; reloaded whenever it is replaced")
-        ("prediction-address", po::value(&o.prediction_address)->default_value(o.prediction_address),
-         "multicast group:port the FormationPrediction messages go to")
-        ("prediction-interface", po::value(&o.prediction_interface)->default_value("", "as --interface"),
-         "IPv4 address of the interface to send predictions from (127.0.0.1 when --interface all)")
-        ("ttl", po::value(&o.ttl)->default_value(o.ttl), "multicast TTL of the predictions")
-        ("horizon", po::value(&o.horizon)->default_value(o.horizon), "formations to predict ahead")
-        ("reload-interval", po::value(&o.reload_interval_s)->default_value(o.reload_interval_s),
-         "seconds between checks of the table file")
-        ("status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
-         "seconds between status lines on stderr")
-        ("receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
-         "socket receive buffer (SO_RCVBUF) to request, bytes")
-        ("quiet", po::bool_switch(&o.quiet), "no prediction lines on stdout")
-        ("http-port", po::value(&o.http_port)->default_value(o.http_port),
-         "TCP port of the live field view (http://ADDRESS:PORT/); 0 = off")
-        ("http-address", po::value(&o.http_address)->default_value(o.http_address),
-         "address the field view listens on (keep 127.0.0.1 unless others must see it)")
-        ("http-max-clients", po::value(&o.http_max_clients)->default_value(o.http_max_clients),
-         "connections the field view serves at once (page loads and live views); more are refused")
-        ("http-status-interval", po::value(&o.http_status_interval_s)->default_value(o.http_status_interval_s),
-         "seconds between status messages to the field view")
-        ("http-send-buffer", po::value(&o.http_send_buffer_bytes)->default_value(o.http_send_buffer_bytes),
-         "socket send buffer (SO_SNDBUF) per field view connection, bytes; 0 = the system's")
-        ("verbose", po::bool_switch(&o.verbose), "more log lines");
+    general.add_options()("list-states", po::bool_switch(&o.list_states),
+                          "print every state of --grid, one per line, and exit")(
+        "table", po::value(&o.table)->default_value(o.table),
+        "table file written by ssl-trainer; reloaded whenever it is replaced")(
+        "prediction-address", po::value(&o.prediction_address)->default_value(o.prediction_address),
+        "multicast group:port the FormationPrediction messages go to")(
+        "prediction-interface",
+        po::value(&o.prediction_interface)->default_value("", "as --interface"),
+        "IPv4 address of the interface to send predictions from (127.0.0.1 when --interface all)")(
+        "ttl", po::value(&o.ttl)->default_value(o.ttl), "multicast TTL of the predictions")(
+        "horizon", po::value(&o.horizon)->default_value(o.horizon), "formations to predict ahead")(
+        "reload-interval", po::value(&o.reload_interval_s)->default_value(o.reload_interval_s),
+        "seconds between checks of the table file")(
+        "status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
+        "seconds between status lines on stderr")(
+        "receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
+        "socket receive buffer (SO_RCVBUF) to request, bytes")("quiet", po::bool_switch(&o.quiet),
+                                                               "no prediction lines on stdout")(
+        "http-port", po::value(&o.http_port)->default_value(o.http_port),
+        "TCP port of the live field view (http://ADDRESS:PORT/); 0 = off")(
+        "http-address", po::value(&o.http_address)->default_value(o.http_address),
+        "address the field view listens on (keep 127.0.0.1 unless others must see it)")(
+        "http-max-clients", po::value(&o.http_max_clients)->default_value(o.http_max_clients),
+        "connections the field view serves at once (page loads and live views); more are refused")(
+        "http-status-interval",
+        po::value(&o.http_status_interval_s)->default_value(o.http_status_interval_s),
+        "seconds between status messages to the field view")(
+        "http-send-buffer",
+        po::value(&o.http_send_buffer_bytes)->default_value(o.http_send_buffer_bytes),
+        "socket send buffer (SO_SNDBUF) per field view connection, bytes; 0 = the system's")(
+        "verbose", po::bool_switch(&o.verbose), "more log lines");
     sf::app::add_vision_options(general, o.network);
     sf::app::add_model_options(general, o.model);
     if (!sf::app::parse_command_line(argc, argv, general, "ssl-predictor [options]",

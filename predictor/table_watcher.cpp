@@ -10,9 +10,10 @@ TableWatcher::TableWatcher(std::filesystem::path path, Grid expected_grid)
 std::optional<TableWatcher::Identity> TableWatcher::identify() const {
   struct stat info {};
   if (::stat(path_.c_str(), &info) != 0) return std::nullopt;
-  return Identity{static_cast<std::uintmax_t>(info.st_ino),
-                  static_cast<std::int64_t>(info.st_mtim.tv_sec) * 1000000000 + info.st_mtim.tv_nsec,
-                  static_cast<std::uintmax_t>(info.st_size)};
+  return Identity{
+      static_cast<std::uintmax_t>(info.st_ino),
+      static_cast<std::int64_t>(info.st_mtim.tv_sec) * 1000000000 + info.st_mtim.tv_nsec,
+      static_cast<std::uintmax_t>(info.st_size)};
 }
 
 TableWatcher::Change TableWatcher::poll() {

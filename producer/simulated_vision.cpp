@@ -33,13 +33,12 @@ const std::array<std::array<TeamPositions, formations_per_play>, play_count> pla
     }},
 }};
 
-const std::array<const char*, play_count> play_names{"pass and shot through the centre",
-                                                     "corner from the left",
-                                                     "corner from the right"};
+const std::array<const char*, play_count> play_names{
+    "pass and shot through the centre", "corner from the left", "corner from the right"};
 
 // Our own team (the other colour): a compact defence in front of our goal at +x.
-const TeamPositions our_team{{{4200, 0}, {3000, -1000}, {3000, 1000}, {1800, -1800},
-                              {1800, 1800}, {1000, 0}}};
+const TeamPositions our_team{
+    {{4200, 0}, {3000, -1000}, {3000, 1000}, {1800, -1800}, {1800, 1800}, {1000, 0}}};
 
 }  // namespace
 
@@ -90,7 +89,8 @@ SimulatedVision::Area SimulatedVision::camera_area(int camera, int cameras, cons
 }
 
 TeamPositions SimulatedVision::random_formation() {
-  std::uniform_real_distribution<double> x(-config_.field.length_mm / 2, config_.field.length_mm / 2);
+  std::uniform_real_distribution<double> x(-config_.field.length_mm / 2,
+                                           config_.field.length_mm / 2);
   std::uniform_real_distribution<double> y(-config_.field.width_mm / 2, config_.field.width_mm / 2);
   TeamPositions team;
   for (Point& p : team) p = Point{x(random_), y(random_)};
@@ -150,10 +150,11 @@ void SimulatedVision::build_packets(SimulatedFormation& formation) {
   std::array<Point, robots_per_team> opponent_feed;
   std::array<Point, robots_per_team> ours_feed;
   for (int id = 0; id < robots_per_team; ++id) {
-    opponent_feed[static_cast<std::size_t>(id)] = observe(formation.opponent[static_cast<std::size_t>(id)]);
+    opponent_feed[static_cast<std::size_t>(id)] =
+        observe(formation.opponent[static_cast<std::size_t>(id)]);
     const Point ours = our_team[static_cast<std::size_t>(id)];
-    ours_feed[static_cast<std::size_t>(id)] =
-        observe(Point{ours.x * config_.field.length_mm / 9000.0, ours.y * config_.field.width_mm / 6000.0});
+    ours_feed[static_cast<std::size_t>(id)] = observe(
+        Point{ours.x * config_.field.length_mm / 9000.0, ours.y * config_.field.width_mm / 6000.0});
   }
   // The ball is at the feet of the opponent's most advanced robot.
   const auto leader = std::max_element(formation.opponent.begin(), formation.opponent.end(),
@@ -162,16 +163,20 @@ void SimulatedVision::build_packets(SimulatedFormation& formation) {
 
   std::bernoulli_distribution dropped(config_.drop_rate);
   for (int camera = 0; camera < config_.cameras; ++camera) {
-    const Area area = camera_area(camera, config_.cameras, config_.field, config_.camera_overlap_mm);
+    const Area area =
+        camera_area(camera, config_.cameras, config_.field, config_.camera_overlap_mm);
     DetectionFrameSpec spec;
     spec.camera_id = static_cast<std::uint32_t>(camera);
     spec.frame_number = formation.frame_number;
     spec.t_capture = formation.t_capture;
     spec.t_sent = formation.t_capture + 0.004;  // processing latency, as SSL-Vision reports
-    std::vector<RobotDetection>& opponent = config_.opponent_color == TeamColor::yellow ? spec.yellow : spec.blue;
-    std::vector<RobotDetection>& ours = config_.opponent_color == TeamColor::yellow ? spec.blue : spec.yellow;
+    std::vector<RobotDetection>& opponent =
+        config_.opponent_color == TeamColor::yellow ? spec.yellow : spec.blue;
+    std::vector<RobotDetection>& ours =
+        config_.opponent_color == TeamColor::yellow ? spec.blue : spec.yellow;
     for (std::uint32_t id = 0; id < robots_per_team; ++id) {
-      if (area.contains(opponent_feed[id])) opponent.push_back({id, opponent_feed[id], 0.0F, 0.92F});
+      if (area.contains(opponent_feed[id]))
+        opponent.push_back({id, opponent_feed[id], 0.0F, 0.92F});
       if (area.contains(ours_feed[id])) ours.push_back({id, ours_feed[id], 3.14F, 0.92F});
     }
     if (area.contains(ball)) spec.balls.push_back(ball);

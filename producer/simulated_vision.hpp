@@ -33,8 +33,8 @@ struct SimulationConfig {
   double start_time_s = 0.0;  // t_capture of the first formation
   int cameras = 1;
   double camera_overlap_mm = 200.0;
-  double jitter_mm = 0.0;   // Gaussian noise on every detected position
-  double drop_rate = 0.0;   // probability that a camera's packet is lost
+  double jitter_mm = 0.0;  // Gaussian noise on every detected position
+  double drop_rate = 0.0;  // probability that a camera's packet is lost
   TeamColor opponent_color = TeamColor::yellow;
   AttackDirection opponent_attacks = AttackDirection::positive_x;
   FieldSize field{9000.0, 6000.0};
@@ -46,11 +46,11 @@ enum class FormationSource { random, play };
 struct SimulatedFormation {
   std::uint64_t index = 0;  // 0, 1, 2, ... in order
   FormationSource source = FormationSource::random;
-  int play = -1;            // 0-2 when source == play
-  int play_step = -1;       // 0-2 when source == play
+  int play = -1;       // 0-2 when source == play
+  int play_step = -1;  // 0-2 when source == play
   double t_capture = 0.0;
   std::uint32_t frame_number = 0;
-  TeamPositions opponent;   // normalised, before jitter
+  TeamPositions opponent;  // normalised, before jitter
   // What goes on the wire for this formation, in order: a geometry packet when one is due, then
   // one detection packet per camera (minus the dropped ones).
   std::vector<SSL_WrapperPacket> packets;
@@ -68,7 +68,9 @@ class SimulatedVision {
   // The area camera `camera` of `cameras` covers, overlap included (feed coordinates).
   struct Area {
     double min_x, max_x, min_y, max_y;
-    bool contains(Point p) const { return p.x >= min_x && p.x <= max_x && p.y >= min_y && p.y <= max_y; }
+    bool contains(Point p) const {
+      return p.x >= min_x && p.x <= max_x && p.y >= min_y && p.y <= max_y;
+    }
   };
   static Area camera_area(int camera, int cameras, const FieldSize& field, double overlap_mm);
 

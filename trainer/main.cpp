@@ -56,17 +56,19 @@ int run_live(const TrainerOptions& options) {
   const auto status_period = sf::app::seconds_option("status-interval", options.status_interval_s);
 
   const std::filesystem::path table_path = options.table;
-  std::unique_ptr<sf::Training> training = sf::trainer::open_training(table_path, config, options.reset);
+  std::unique_ptr<sf::Training> training =
+      sf::trainer::open_training(table_path, config, options.reset);
 
   boost::asio::io_context io;
   sf::net::ProtoMulticastReceiver<SSL_WrapperPacket> receiver(io, group, interface,
-                                                             options.receive_buffer_bytes);
+                                                              options.receive_buffer_bytes);
   receiver.start([&](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
     training->add(packet);
   });
   spdlog::info("training: opponent {} attacking {}; grid {}, step {} s; table {} saved every {} s",
                sf::to_string(config.opponent_color), sf::to_string(config.opponent_attacks),
-               config.grid.to_string(), config.step_s, table_path.string(), options.flush_interval_s);
+               config.grid.to_string(), config.step_s, table_path.string(),
+               options.flush_interval_s);
 
   sf::app::RepeatingTimer flush(io, flush_period, [&] {
     if (training->changed_since_save()) sf::trainer::save_training(table_path, *training);
@@ -93,7 +95,8 @@ int run_live(const TrainerOptions& options) {
 int run_offline(const TrainerOptions& options) {
   const sf::SamplerConfig config = options.model.sampler_config();
   const std::filesystem::path table_path = options.table;
-  std::unique_ptr<sf::Training> training = sf::trainer::open_training(table_path, config, options.reset);
+  std::unique_ptr<sf::Training> training =
+      sf::trainer::open_training(table_path, config, options.reset);
   bool every_file_whole = true;
   SSL_WrapperPacket packet;
   for (const std::string& file : options.from_logs) {
@@ -108,7 +111,8 @@ int run_offline(const TrainerOptions& options) {
     const std::uint64_t transitions_before = training->table().transitions();
     const std::uint64_t samples_before = training->samples();
     std::optional<sf::app::ProgressBar> bar;
-    if (reader->compressed_size() > progress_bar_bytes) bar.emplace("training from " + file, reader->compressed_size());
+    if (reader->compressed_size() > progress_bar_bytes)
+      bar.emplace("training from " + file, reader->compressed_size());
     std::uint64_t frames = 0;
     while (reader->next_vision(packet)) {
       training->add(packet);
@@ -116,11 +120,11 @@ int run_offline(const TrainerOptions& options) {
     }
     if (bar) bar->finish(frames);
     const sf::LogReadCounters& c = reader->counters();
-    spdlog::info("{}: {} vision packets ({} parse errors), skipped {} referee, {} tracker, {} other; "
-                 "{} formations, {} transitions",
-                 file, frames, c.parse_errors, c.referee, c.tracker, c.unknown + c.blank + c.legacy_unusable,
-                 training->samples() - samples_before,
-                 training->table().transitions() - transitions_before);
+    spdlog::info(
+        "{}: {} vision packets ({} parse errors), skipped {} referee, {} tracker, {} other; "
+        "{} formations, {} transitions",
+        file, frames, c.parse_errors, c.referee, c.tracker, c.unknown + c.blank + c.legacy_unusable,
+        training->samples() - samples_before, training->table().transitions() - transitions_before);
     if (!reader->error().empty()) {
       spdlog::error("{}; the {} vision packets before it were used", reader->error(), frames);
       every_file_whole = false;
@@ -137,9 +141,9 @@ int run_merge(int argc, const char* const argv[]) {
   std::vector<std::string> inputs;
   std::string output;
   po::options_description options("Options");
-  options.add_options()
-      ("output,o", po::value(&output)->required(), "the merged table file to write (atomically)")
-      ("input", po::value(&inputs)->multitoken(), "table files to add up");
+  options.add_options()("output,o", po::value(&output)->required(),
+                        "the merged table file to write (atomically)")(
+      "input", po::value(&inputs)->multitoken(), "table files to add up");
   po::positional_options_description positional;
   positional.add("input", -1);
   if (!sf::app::parse_command_line(argc, argv, options, "ssl-trainer merge TABLE... -o OUT",
@@ -154,10 +158,11 @@ int run_merge(int argc, const char* const argv[]) {
   for (std::size_t i = 1; i < inputs.size(); ++i) {
     sf::TableLoadResult next = sf::load_table(inputs[i], merged.table.grid());
     if (!next) {
-      throw std::runtime_error(next.message + (next.error == sf::TableFileError::wrong_grid
-                                                   ? " (the grid of " + inputs.front() +
-                                                         "): tables of different grids cannot be merged"
-                                                   : std::string()));
+      throw std::runtime_error(
+          next.message +
+          (next.error == sf::TableFileError::wrong_grid
+               ? " (the grid of " + inputs.front() + "): tables of different grids cannot be merged"
+               : std::string()));
     }
     if (next.stored->metadata.step_s != merged.metadata.step_s) {
       throw std::runtime_error(fmt::format(
@@ -169,8 +174,9 @@ int run_merge(int argc, const char* const argv[]) {
   }
   const sf::TableSaveResult saved = sf::save_table(output, merged.table, merged.metadata);
   if (!saved) throw std::runtime_error(saved.message);
-  spdlog::info("merged {} tables into {}: grid {}, {} transitions from {} formations", inputs.size(),
-               output, merged.table.grid().to_string(), merged.table.transitions(), merged.metadata.samples);
+  spdlog::info("merged {} tables into {}: grid {}, {} transitions from {} formations",
+               inputs.size(), output, merged.table.grid().to_string(), merged.table.transitions(),
+               merged.metadata.samples);
   return 0;
 }
 
@@ -184,21 +190,23 @@ int main(int argc, char** argv) {
     }
     TrainerOptions options;
     po::options_description general("Options");
-    general.add_options()
-        ("table", po::value(&options.table)->default_value(options.table),
-         "table file to resume and save (written atomically)")
-        ("reset", po::bool_switch(&options.reset),
-         "start an empty table even if --table holds one of another grid or step")
-        ("flush-interval", po::value(&options.flush_interval_s)->default_value(options.flush_interval_s),
-         "seconds between saves of the table (it is also saved on SIGINT/SIGTERM)")
-        ("status-interval", po::value(&options.status_interval_s)->default_value(options.status_interval_s),
-         "seconds between status lines on stderr")
-        ("receive-buffer", po::value(&options.receive_buffer_bytes)->default_value(options.receive_buffer_bytes),
-         "socket receive buffer (SO_RCVBUF) to request, bytes")
-        ("verbose", po::bool_switch(&options.verbose), "log every save")
-        ("from-log", po::value(&options.from_logs)->multitoken(),
-         "train from these official SSL log files (.log or .log.gz) instead of the network, "
-         "save the table and exit");
+    general.add_options()("table", po::value(&options.table)->default_value(options.table),
+                          "table file to resume and save (written atomically)")(
+        "reset", po::bool_switch(&options.reset),
+        "start an empty table even if --table holds one of another grid or step")(
+        "flush-interval",
+        po::value(&options.flush_interval_s)->default_value(options.flush_interval_s),
+        "seconds between saves of the table (it is also saved on SIGINT/SIGTERM)")(
+        "status-interval",
+        po::value(&options.status_interval_s)->default_value(options.status_interval_s),
+        "seconds between status lines on stderr")(
+        "receive-buffer",
+        po::value(&options.receive_buffer_bytes)->default_value(options.receive_buffer_bytes),
+        "socket receive buffer (SO_RCVBUF) to request, bytes")(
+        "verbose", po::bool_switch(&options.verbose), "log every save")(
+        "from-log", po::value(&options.from_logs)->multitoken(),
+        "train from these official SSL log files (.log or .log.gz) instead of the network, "
+        "save the table and exit");
     sf::app::add_vision_options(general, options.network);
     sf::app::add_model_options(general, options.model);
     if (!sf::app::parse_command_line(

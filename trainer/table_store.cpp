@@ -1,8 +1,7 @@
 #include "table_store.hpp"
 
-#include <spdlog/spdlog.h>
-
 #include <signal.h>
+#include <spdlog/spdlog.h>
 
 #include <cerrno>
 #include <charconv>
@@ -41,10 +40,12 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
   remove_stale_temporaries(table_path);
   std::error_code ignored;
   if (reset || !std::filesystem::exists(table_path, ignored)) {
-    if (reset) spdlog::info("--reset: starting an empty {} table; {} will be replaced at the first save",
-                            config.grid.to_string(), table_path.string());
-    else spdlog::info("no table at {} yet: starting an empty {} table", table_path.string(),
-                      config.grid.to_string());
+    if (reset)
+      spdlog::info("--reset: starting an empty {} table; {} will be replaced at the first save",
+                   config.grid.to_string(), table_path.string());
+    else
+      spdlog::info("no table at {} yet: starting an empty {} table", table_path.string(),
+                   config.grid.to_string());
     return std::make_unique<Training>(config, TransitionTable(config.grid));
   }
   TableLoadResult loaded = load_table(table_path, config.grid);

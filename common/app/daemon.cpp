@@ -35,10 +35,10 @@ net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_
 
 StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> on_stop)
     : signals_(io, SIGINT, SIGTERM) {
-  signals_.async_wait([on_stop = std::move(on_stop)](const boost::system::error_code& error,
-                                                     int signal) {
-    if (!error) on_stop(signal);
-  });
+  signals_.async_wait(
+      [on_stop = std::move(on_stop)](const boost::system::error_code& error, int signal) {
+        if (!error) on_stop(signal);
+      });
 }
 
 RepeatingTimer::RepeatingTimer(boost::asio::io_context& io,

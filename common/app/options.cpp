@@ -23,10 +23,12 @@ SamplerConfig ModelOptions::sampler_config() const {
   }
   config.step_s = step_s;
   const auto color = parse_team_color(opponent_color);
-  if (!color) throw UsageError("--opponent-color must be yellow or blue, not '" + opponent_color + "'");
+  if (!color)
+    throw UsageError("--opponent-color must be yellow or blue, not '" + opponent_color + "'");
   config.opponent_color = *color;
   const auto attacks = parse_attack_direction(opponent_attacks);
-  if (!attacks) throw UsageError("--opponent-attacks must be +x or -x, not '" + opponent_attacks + "'");
+  if (!attacks)
+    throw UsageError("--opponent-attacks must be +x or -x, not '" + opponent_attacks + "'");
   config.opponent_attacks = *attacks;
   config.field = FieldSize{field_length_mm, field_width_mm};
   if (!config.field.valid()) {
@@ -37,29 +39,28 @@ SamplerConfig ModelOptions::sampler_config() const {
 }
 
 void add_model_options(po::options_description& options, ModelOptions& model) {
-  options.add_options()
-      ("grid", po::value(&model.grid)->default_value(model.grid),
-       "grid LxW: L cells along the field length, W along its width")
-      ("step", po::value(&model.step_s)->default_value(model.step_s),
-       "seconds of data time (t_capture) between two formations")
-      ("opponent-color", po::value(&model.opponent_color)->default_value(model.opponent_color),
-       "the opponent's colour: yellow or blue")
-      ("opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),
-       "the direction the opponent attacks in the feed's coordinates: +x or -x")
-      ("field-length", po::value(&model.field_length_mm)->default_value(model.field_length_mm),
-       "field length in mm until a geometry packet says otherwise")
-      ("field-width", po::value(&model.field_width_mm)->default_value(model.field_width_mm),
-       "field width in mm until a geometry packet says otherwise")
-      ("ignore-geometry", po::bool_switch(&model.ignore_geometry),
-       "keep --field-length/--field-width even when geometry packets arrive");
+  options.add_options()("grid", po::value(&model.grid)->default_value(model.grid),
+                        "grid LxW: L cells along the field length, W along its width")(
+      "step", po::value(&model.step_s)->default_value(model.step_s),
+      "seconds of data time (t_capture) between two formations")(
+      "opponent-color", po::value(&model.opponent_color)->default_value(model.opponent_color),
+      "the opponent's colour: yellow or blue")(
+      "opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),
+      "the direction the opponent attacks in the feed's coordinates: +x or -x")(
+      "field-length", po::value(&model.field_length_mm)->default_value(model.field_length_mm),
+      "field length in mm until a geometry packet says otherwise")(
+      "field-width", po::value(&model.field_width_mm)->default_value(model.field_width_mm),
+      "field width in mm until a geometry packet says otherwise")(
+      "ignore-geometry", po::bool_switch(&model.ignore_geometry),
+      "keep --field-length/--field-width even when geometry packets arrive");
 }
 
 void add_vision_options(po::options_description& options, NetworkOptions& network) {
-  options.add_options()
-      ("vision-address", po::value(&network.vision_address)->default_value(network.vision_address),
-       "SSL-Vision multicast group:port to listen on (grSim: 224.5.23.2:10020)")
-      ("interface", po::value(&network.interface)->default_value(network.interface),
-       "IPv4 address of the interface to join on, or 'all' for every interface");
+  options.add_options()("vision-address",
+                        po::value(&network.vision_address)->default_value(network.vision_address),
+                        "SSL-Vision multicast group:port to listen on (grSim: 224.5.23.2:10020)")(
+      "interface", po::value(&network.interface)->default_value(network.interface),
+      "IPv4 address of the interface to join on, or 'all' for every interface");
 }
 
 bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,

@@ -30,7 +30,8 @@ void ProgressBar::update(std::uint64_t done_bytes, std::uint64_t items) {
 void ProgressBar::finish(std::uint64_t items) { draw(total_, items, true); }
 
 void ProgressBar::draw(std::uint64_t done_bytes, std::uint64_t items, bool final) {
-  const double fraction = std::min(1.0, static_cast<double>(done_bytes) / static_cast<double>(total_));
+  const double fraction =
+      std::min(1.0, static_cast<double>(done_bytes) / static_cast<double>(total_));
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double rate = elapsed > 0 ? static_cast<double>(items) / elapsed : 0.0;

@@ -82,9 +82,12 @@ void accumulate(PaperSummary& summary, const PaperTest& test) {
 
 const char* to_string(Method method) {
   switch (method) {
-    case Method::model: return "model";
-    case Method::persistence: return "persistence";
-    case Method::constant_velocity: return "constant velocity";
+    case Method::model:
+      return "model";
+    case Method::persistence:
+      return "persistence";
+    case Method::constant_velocity:
+      return "constant velocity";
   }
   return "?";
 }
@@ -119,8 +122,8 @@ std::vector<RobotStateById> constant_velocity(const StateCodec& codec, const Fie
   std::vector<RobotStateById> out;
   out.reserve(current.robots.size());
   for (const FormationRobot& robot : current.robots) {
-    out.push_back({robot.robot_id, codec.encode({centroid, moved(robot, horizon),
-                                                 moved(robot, horizon - 1)})});
+    out.push_back({robot.robot_id,
+                   codec.encode({centroid, moved(robot, horizon), moved(robot, horizon - 1)})});
   }
   return out;
 }
@@ -144,14 +147,16 @@ std::vector<RobotStateById> predict_with(Method method, const TransitionTable& t
   return robot_states(last);
 }
 
-void score(Accuracy& accuracy, const StateCodec& codec, const std::vector<RobotStateById>& predicted,
+void score(Accuracy& accuracy, const StateCodec& codec,
+           const std::vector<RobotStateById>& predicted,
            const std::vector<RobotStateById>& actual) {
   ++accuracy.formations;
   const Grid& grid = codec.grid();
   for (const RobotStateById& truth : actual) {
     ++accuracy.robots;
-    const auto guess = std::find_if(predicted.begin(), predicted.end(),
-                                    [&](const RobotStateById& r) { return r.robot_id == truth.robot_id; });
+    const auto guess =
+        std::find_if(predicted.begin(), predicted.end(),
+                     [&](const RobotStateById& r) { return r.robot_id == truth.robot_id; });
     if (guess == predicted.end()) continue;  // a robot the method could not know of: wrong
     if (guess->state == truth.state) ++accuracy.exact_states;
     const Cell a = grid.cell_from_id(static_cast<int>(codec.position_id(guess->state)));
@@ -187,7 +192,8 @@ HoldoutResult evaluate_holdout(const TransitionTable& table, const std::vector<F
       const std::vector<RobotStateById> actual = robot_states(test[target]);
       for (std::size_t m = 0; m < all_methods.size(); ++m) {
         double confidence = 0.0;
-        const auto predicted = predict_with(all_methods[m], table, test[i], horizon, field, &confidence);
+        const auto predicted =
+            predict_with(all_methods[m], table, test[i], horizon, field, &confidence);
         Accuracy& accuracy = result.accuracy[static_cast<std::size_t>(horizon - 1)][m];
         const std::uint64_t exact_before = accuracy.exact_states;
         score(accuracy, codec, predicted, actual);

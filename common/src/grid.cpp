@@ -26,8 +26,8 @@ Point normalise(Point feed_point, AttackDirection opponent_attacks) {
 }
 
 Grid::Grid(int length_cells, int width_cells) : length_(length_cells), width_(width_cells) {
-  if (length_cells < 1 || width_cells < 1 || length_cells > max_cells ||
-      width_cells > max_cells || length_cells * width_cells > max_cells) {
+  if (length_cells < 1 || width_cells < 1 || length_cells > max_cells || width_cells > max_cells ||
+      length_cells * width_cells > max_cells) {
     throw std::invalid_argument("grid " + std::to_string(length_cells) + "x" +
                                 std::to_string(width_cells) +
                                 " is out of range: each side at least 1 and at most " +

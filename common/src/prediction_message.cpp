@@ -39,7 +39,9 @@ void varint(std::string& out, std::uint64_t value) {
   }
   out.push_back(static_cast<char>(value));
 }
-void tag(std::string& out, int field, int type) { varint(out, static_cast<std::uint64_t>(field << 3 | type)); }
+void tag(std::string& out, int field, int type) {
+  varint(out, static_cast<std::uint64_t>(field << 3 | type));
+}
 void uint(std::string& out, int field, std::uint64_t value) {
   tag(out, field, 0);
   varint(out, value);
@@ -62,7 +64,8 @@ void length(std::string& out, int field, std::size_t size) {
 
 // Sizes of the nested messages (every tag here is one byte).
 std::size_t cell_size(Cell c) {
-  return 2 + varint_size(static_cast<std::uint32_t>(c.x)) + varint_size(static_cast<std::uint32_t>(c.y));
+  return 2 + varint_size(static_cast<std::uint32_t>(c.x)) +
+         varint_size(static_cast<std::uint32_t>(c.y));
 }
 constexpr std::size_t point_size = 10;
 void cell(std::string& out, int field, Cell c) {
@@ -124,7 +127,9 @@ void encode_prediction(const Formation& current, const Prediction& prediction,
       wire::uint(out, 2, robot.state);
       wire::cell(out, 3, robot.position);
       wire::cell(out, 4, robot.previous);
-      wire::point(out, 5, normalise(grid.centre_of(robot.position, context.field), context.opponent_attacks));
+      wire::point(
+          out, 5,
+          normalise(grid.centre_of(robot.position, context.field), context.opponent_attacks));
       wire::float64(out, 6, robot.probability);
       wire::uint(out, 7, robot.unseen ? 1 : 0);
     }
@@ -170,7 +175,8 @@ void fill_prediction_message(const Formation& current, const Prediction& predict
       set_cell(*r.mutable_position_cell(), robot.position);
       set_cell(*r.mutable_previous_cell(), robot.previous);
       // Back to the feed's own coordinates: the rotation is its own inverse.
-      const Point centre = normalise(grid.centre_of(robot.position, context.field), context.opponent_attacks);
+      const Point centre =
+          normalise(grid.centre_of(robot.position, context.field), context.opponent_attacks);
       r.mutable_cell_centre()->set_x(static_cast<float>(centre.x));
       r.mutable_cell_centre()->set_y(static_cast<float>(centre.y));
       r.set_probability(robot.probability);
@@ -189,7 +195,8 @@ void fill_prediction_message(const Formation& current, const Prediction& predict
 std::string describe_prediction(const Formation& current, const Prediction& prediction) {
   std::string line;
   char number[64];
-  std::snprintf(number, sizeof number, "t=%.2f frame=%u now C", current.time_s, current.frame_number);
+  std::snprintf(number, sizeof number, "t=%.2f frame=%u now C", current.time_s,
+                current.frame_number);
   line += number;
   append_cell(line, current.centroid_cell);
   line += " [";

@@ -67,13 +67,14 @@ void predict(const TransitionTable& table, const std::vector<RobotStateById>& ro
   out.steps.resize(steps);
   for (std::size_t k = 0; k < steps; ++k) {
     if (k == 0) {
-      predict_step(table, robots, [](const RobotStateById& r) { return r.state; }, 1.0,
-                   out.steps[0]);
+      predict_step(
+          table, robots, [](const RobotStateById& r) { return r.state; }, 1.0, out.steps[0]);
     } else {
       // The predicted formation is the base of the next step (paper §5.2).
       const PredictedStep& base = out.steps[k - 1];
-      predict_step(table, base.robots, [](const RobotPrediction& r) { return r.state; },
-                   base.confidence, out.steps[k]);
+      predict_step(
+          table, base.robots, [](const RobotPrediction& r) { return r.state; }, base.confidence,
+          out.steps[k]);
     }
   }
 }
@@ -87,7 +88,8 @@ Prediction predict(const TransitionTable& table, const Formation& formation, int
 std::vector<RobotStateById> robot_states(const Formation& formation) {
   std::vector<RobotStateById> robots;
   robots.reserve(formation.robots.size());
-  for (const FormationRobot& robot : formation.robots) robots.push_back({robot.robot_id, robot.state});
+  for (const FormationRobot& robot : formation.robots)
+    robots.push_back({robot.robot_id, robot.state});
   return robots;
 }
 

@@ -16,10 +16,7 @@ constexpr double max_instant_number = 1e12;
 }  // namespace
 
 FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample)
-    : config_(config),
-      codec_(config.grid),
-      on_sample_(std::move(on_sample)),
-      field_(config.field) {
+    : config_(config), codec_(config.grid), on_sample_(std::move(on_sample)), field_(config.field) {
   if (!std::isfinite(config_.step_s) || config_.step_s <= 0.0) {
     throw std::invalid_argument("step must be a positive number of seconds");
   }
@@ -66,8 +63,8 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
     ++counters_.frames_bad_camera;
     return;
   }
-  const auto& robots = config_.opponent_color == TeamColor::yellow ? frame.robots_yellow()
-                                                                   : frame.robots_blue();
+  const auto& robots =
+      config_.opponent_color == TeamColor::yellow ? frame.robots_yellow() : frame.robots_blue();
   if (static_cast<std::uint32_t>(robots.size()) > config_.max_robots_per_frame) {
     ++counters_.frames_too_many_robots;
     return;
@@ -85,16 +82,19 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
       ++counters_.robots_non_finite;
       continue;
     }
-    if (std::abs(x) > config_.max_abs_coordinate_mm || std::abs(y) > config_.max_abs_coordinate_mm) {
+    if (std::abs(x) > config_.max_abs_coordinate_mm ||
+        std::abs(y) > config_.max_abs_coordinate_mm) {
       ++counters_.robots_out_of_range;
       continue;
     }
     // One camera may report two blobs with the same id: keep the more confident one.
-    const auto same = std::find_if(frame_scratch_.begin(), frame_scratch_.end(),
-                                   [&](const Detection& d) { return d.robot_id == robot.robot_id(); });
+    const auto same =
+        std::find_if(frame_scratch_.begin(), frame_scratch_.end(),
+                     [&](const Detection& d) { return d.robot_id == robot.robot_id(); });
     if (same != frame_scratch_.end()) {
       ++counters_.robots_duplicate_in_frame;
-      if (robot.confidence() > same->confidence) *same = {robot.robot_id(), x, y, robot.confidence()};
+      if (robot.confidence() > same->confidence)
+        *same = {robot.robot_id(), x, y, robot.confidence()};
       continue;
     }
     frame_scratch_.push_back({robot.robot_id(), x, y, robot.confidence()});
@@ -106,7 +106,8 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
 
 // Decides which clock the frame (its detections in frame_scratch_) belongs to, and uses it.
 void FormationSampler::place_frame(std::uint32_t camera_id, std::uint32_t frame_number, double t) {
-  const double clock_reset_s = config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
+  const double clock_reset_s =
+      config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
   if (anchored_ && std::abs(t - newest_s_) > clock_reset_s) {
     set_aside(camera_id, frame_number, t);
     return;
@@ -133,8 +134,8 @@ void FormationSampler::place_frame(std::uint32_t camera_id, std::uint32_t frame_
     newest_s_ = t;
     next_k_ = 0;
   }
-  const double hold_s = config_.clock_conflict_hold_s > 0.0 ? config_.clock_conflict_hold_s
-                                                            : 4.0 * config_.step_s;
+  const double hold_s =
+      config_.clock_conflict_hold_s > 0.0 ? config_.clock_conflict_hold_s : 4.0 * config_.step_s;
   if (other_.active && std::max(newest_s_, t) - other_.seen_at_s > hold_s) {
     other_ = OtherClock{};
     conflict_ = false;
@@ -142,7 +143,8 @@ void FormationSampler::place_frame(std::uint32_t camera_id, std::uint32_t frame_
 
   auto camera = std::find_if(camera_last_.begin(), camera_last_.end(),
                              [&](const CameraClock& c) { return c.camera_id == camera_id; });
-  if (camera != camera_last_.end() && camera->last_s == t && camera->last_frame_number == frame_number) {
+  if (camera != camera_last_.end() && camera->last_s == t &&
+      camera->last_frame_number == frame_number) {
     ++counters_.frames_duplicate;
     return;
   }
@@ -183,7 +185,8 @@ void FormationSampler::place_frame(std::uint32_t camera_id, std::uint32_t frame_
 
 void FormationSampler::set_aside(std::uint32_t camera_id, std::uint32_t frame_number, double t) {
   ++counters_.frames_other_clock;
-  const double clock_reset_s = config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
+  const double clock_reset_s =
+      config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
   if (!other_.active || std::abs(t - other_.newest_s) > clock_reset_s) {
     // Not the other clock seen before: a new one, and what was set aside is not its.
     other_ = OtherClock{true, false, t, newest_s_};
@@ -206,7 +209,8 @@ void FormationSampler::set_aside(std::uint32_t camera_id, std::uint32_t frame_nu
     if (!(std::abs(time_s - last_s) <= time_epsilon_s)) ++distinct_times;
     last_s = time_s;
   }
-  if (distinct_times >= config_.clock_confirm_times || pending_.size() >= config_.max_pending_frames) {
+  if (distinct_times >= config_.clock_confirm_times ||
+      pending_.size() >= config_.max_pending_frames) {
     switch_clock();
   }
 }
@@ -277,8 +281,9 @@ Formation FormationSampler::build_formation(const StateCodec& codec, const Field
                                             std::vector<FormationRobot> robots,
                                             const Formation* previous) {
   Formation formation;
-  std::sort(robots.begin(), robots.end(),
-            [](const FormationRobot& a, const FormationRobot& b) { return a.robot_id < b.robot_id; });
+  std::sort(robots.begin(), robots.end(), [](const FormationRobot& a, const FormationRobot& b) {
+    return a.robot_id < b.robot_id;
+  });
   if (!robots.empty()) {
     double sum_x = 0.0;
     double sum_y = 0.0;
@@ -296,7 +301,8 @@ Formation FormationSampler::build_formation(const StateCodec& codec, const Field
     robot.cell = grid.cell_of(robot.position, field);
     const FormationRobot* before = previous ? previous->find(robot.robot_id) : nullptr;
     robot.previous_cell = before ? before->cell : robot.cell;
-    robot.state = codec.encode(RobotState{formation.centroid_cell, robot.cell, robot.previous_cell});
+    robot.state =
+        codec.encode(RobotState{formation.centroid_cell, robot.cell, robot.previous_cell});
   }
   formation.robots = std::move(robots);
   return formation;
@@ -376,7 +382,8 @@ struct RejectionKind {
 constexpr RejectionKind rejection_kinds[] = {
     {"non_finite", &SamplerCounters::robots_non_finite, "robots with NaN or infinite coordinates"},
     {"out_of_range", &SamplerCounters::robots_out_of_range, "robots with coordinates beyond 100 m"},
-    {"bad_id", &SamplerCounters::robots_bad_id, "robots without an id or with an id over the limit"},
+    {"bad_id", &SamplerCounters::robots_bad_id,
+     "robots without an id or with an id over the limit"},
     {"duplicate_ids", &SamplerCounters::robots_duplicate_in_frame,
      "robots reported twice in one frame (the more confident kept)"},
     {"bad_time", &SamplerCounters::frames_bad_time, "frames with a NaN or infinite t_capture"},
@@ -409,7 +416,8 @@ std::string describe_rejections(const SamplerCounters& counters) {
   return out;
 }
 
-std::vector<std::string> new_rejections(const SamplerCounters& before, const SamplerCounters& after) {
+std::vector<std::string> new_rejections(const SamplerCounters& before,
+                                        const SamplerCounters& after) {
   std::vector<std::string> out;
   for (const RejectionKind& kind : rejection_kinds) {
     const std::uint64_t now = after.*kind.counter;

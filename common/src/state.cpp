@@ -1,6 +1,5 @@
 #include "ssl_formation/state.hpp"
 
-
 namespace ssl_formation {
 
 std::string StateCodec::describe(StateIndex index) const {

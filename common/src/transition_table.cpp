@@ -96,8 +96,9 @@ TransitionTable::Count TransitionTable::count(StateIndex from, StateIndex to) co
   const auto row = storage_->rows.find(from);
   if (row == storage_->rows.end()) return 0;
   const auto& entries = row->second.entries;
-  const auto it = std::lower_bound(entries.begin(), entries.end(), to,
-                                   [](const auto& entry, StateIndex key) { return entry.first < key; });
+  const auto it =
+      std::lower_bound(entries.begin(), entries.end(), to,
+                       [](const auto& entry, StateIndex key) { return entry.first < key; });
   return it != entries.end() && it->first == to ? it->second : 0;
 }
 
@@ -116,15 +117,14 @@ std::size_t TransitionTable::nonzero_entries() const {
 
 std::size_t TransitionTable::rows_seen() const {
   if (!storage_->dense) return storage_->rows.size();
-  return static_cast<std::size_t>(std::count_if(storage_->row_totals.begin(),
-                                                storage_->row_totals.end(),
-                                                [](std::uint64_t t) { return t; }));
+  return static_cast<std::size_t>(std::count_if(
+      storage_->row_totals.begin(), storage_->row_totals.end(), [](std::uint64_t t) { return t; }));
 }
 
 std::size_t TransitionTable::memory_bytes() const {
-  std::size_t bytes = sizeof(*this) + sizeof(Storage) +
-                      (centroid_counts_.capacity() + centroid_totals_.capacity()) *
-                          sizeof(std::uint64_t);
+  std::size_t bytes =
+      sizeof(*this) + sizeof(Storage) +
+      (centroid_counts_.capacity() + centroid_totals_.capacity()) * sizeof(std::uint64_t);
   if (storage_->dense) {
     bytes += storage_->counts.capacity() * sizeof(Count) +
              storage_->row_totals.capacity() * sizeof(std::uint64_t);

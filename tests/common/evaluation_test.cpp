@@ -54,9 +54,10 @@ TEST(Accuracy, ScoresStatesCellsAndDistances) {
   const std::vector<RobotStateById> actual{{1, codec.encode({{1, 1}, {2, 1}, {1, 1}})},
                                            {2, codec.encode({{1, 1}, {0, 0}, {0, 0}})},
                                            {3, codec.encode({{1, 1}, {1, 0}, {1, 0}})}};
-  const std::vector<RobotStateById> predicted{{1, codec.encode({{1, 1}, {2, 1}, {1, 1}})},   // exact
-                                              {2, codec.encode({{1, 0}, {0, 0}, {0, 0}})}};  // cell only
-  score(accuracy, codec, predicted, actual);  // robot 3 was not predicted: wrong
+  const std::vector<RobotStateById> predicted{
+      {1, codec.encode({{1, 1}, {2, 1}, {1, 1}})},   // exact
+      {2, codec.encode({{1, 0}, {0, 0}, {0, 0}})}};  // cell only
+  score(accuracy, codec, predicted, actual);         // robot 3 was not predicted: wrong
   EXPECT_EQ(accuracy.robots, 3u);
   EXPECT_EQ(accuracy.exact_states, 1u);
   EXPECT_EQ(accuracy.exact_cells, 2u);
@@ -141,8 +142,8 @@ TEST(Holdout, ScoresOnlyConsecutiveChainsAndEveryMethodOnTheSameSamples) {
   }
   EXPECT_EQ(result.accuracy[0][0].exact_states, 2u);  // the model learned this walk
   EXPECT_EQ(result.accuracy[1][0].exact_states, 1u);
-  EXPECT_EQ(result.accuracy[0][1].exact_cells, 0u);   // persistence never moves
-  EXPECT_EQ(result.accuracy[0][2].exact_cells, 1u);   // constant velocity right once 1->2
+  EXPECT_EQ(result.accuracy[0][1].exact_cells, 0u);  // persistence never moves
+  EXPECT_EQ(result.accuracy[0][2].exact_cells, 1u);  // constant velocity right once 1->2
   EXPECT_EQ(result.calibration[0].n, 2u);
   EXPECT_NEAR(result.calibration[0].brier(), 0.0, 1e-12);  // confidence 1, right both times
 }

@@ -11,7 +11,8 @@ TEST(PredictionMessage, CarriesTheFormationAndEveryStepWithCellCentresInFeedCoor
   const StateCodec& codec = table.codec();
   std::vector<FormationRobot> robots(1);
   robots[0].robot_id = 4;
-  robots[0].feed_position = Point{3000, 1000};  // the opponent attacks -x: normalised (-3000, -1000)
+  robots[0].feed_position =
+      Point{3000, 1000};  // the opponent attacks -x: normalised (-3000, -1000)
   robots[0].position = normalise(robots[0].feed_position, AttackDirection::negative_x);
   const FieldSize field{9000, 6000};
   Formation formation = FormationSampler::build_formation(codec, field, robots, nullptr);
@@ -82,7 +83,10 @@ TEST(PredictionMessage, DirectEncodingEqualsTheGeneratedSerialiserOnRandomPredic
     formation.time_s = 1700000000.123;
     formation.frame_number = 4000000000u;
     for (const auto& r : formation.robots) {
-      table.add(r.state, codec.compose(codec.cell_count() - 1, codec.position_id(r.state), codec.position_id(r.state)), 300);
+      table.add(r.state,
+                codec.compose(codec.cell_count() - 1, codec.position_id(r.state),
+                              codec.position_id(r.state)),
+                300);
     }
     const Prediction prediction = predict(table, formation, 3);
     for (const AttackDirection side : {AttackDirection::positive_x, AttackDirection::negative_x}) {

@@ -125,8 +125,10 @@ TEST_F(PredictorTest, HorizonTwoChainsFromThePredictedFormation) {
 }
 
 TEST_F(PredictorTest, CountAndDistanceMeasures) {
-  const std::vector<RobotStateById> reference{{1, state(3, 2, 2)}, {2, state(3, 5, 4)}, {3, state(3, 0, 0)}};
-  std::vector<RobotStateById> predicted{{1, state(3, 2, 2)}, {2, state(3, 0, 4)}, {3, state(3, 0, 1)}};
+  const std::vector<RobotStateById> reference{
+      {1, state(3, 2, 2)}, {2, state(3, 5, 4)}, {3, state(3, 0, 0)}};
+  std::vector<RobotStateById> predicted{
+      {1, state(3, 2, 2)}, {2, state(3, 0, 4)}, {3, state(3, 0, 1)}};
   EXPECT_EQ(count_measure(predicted, reference), 2);  // robot 2 moved, robot 3 other velocity
   // Robot 2: cell (0,0) vs (2,1) -> 3; robot 3 same cell -> 0.
   EXPECT_EQ(distance_measure(codec, predicted, reference), 3);

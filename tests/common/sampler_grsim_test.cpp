@@ -31,7 +31,8 @@ TEST_P(GrsimSampling, EverySampleHoldsElevenRobotsAtTheirReportedPositions) {
     cameras.insert(packet.detection().camera_id());
     const auto& robots = color == TeamColor::yellow ? packet.detection().robots_yellow()
                                                     : packet.detection().robots_blue();
-    for (const auto& robot : robots) reported.emplace(robot.robot_id(), Point{robot.x(), robot.y()});
+    for (const auto& robot : robots)
+      reported.emplace(robot.robot_id(), Point{robot.x(), robot.y()});
   }
   ASSERT_EQ(cameras.size(), 4u);
   ASSERT_EQ(reported.size(), 11u);

@@ -62,8 +62,7 @@ TEST(Sampler, OneCameraOneSamplePerStepWithTransitions) {
   EXPECT_EQ(last.centroid_cell, (Cell{2, 1}));  // mean (2000, 1500)
   const StateCodec& codec = sampler.codec();
   EXPECT_EQ(out.samples[2].transitions[0].from, out.samples[1].formation.robots[0].state);
-  EXPECT_EQ(codec.decode(out.samples[2].transitions[0].to),
-            (RobotState{{2, 1}, {2, 1}, {1, 0}}));
+  EXPECT_EQ(codec.decode(out.samples[2].transitions[0].to), (RobotState{{2, 1}, {2, 1}, {1, 0}}));
   EXPECT_EQ(sampler.counters().transitions, 4u);
 }
 
@@ -154,8 +153,8 @@ TEST(Sampler, OpponentColourSelectsTheTeam) {
     config.opponent_color = color;
     FormationSampler sampler(config, out.handler());
     for (double t : {0.0, 2.0}) {
-      sampler.add(make_detection_packet(
-          frame(0, t, {{1, {-4000, 0}}, {2, {-3000, 0}}}, {{7, {4000, 0}}})));
+      sampler.add(
+          make_detection_packet(frame(0, t, {{1, {-4000, 0}}, {2, {-3000, 0}}}, {{7, {4000, 0}}})));
     }
     ASSERT_EQ(out.samples.size(), 2u);
     const auto& robots = out.samples[1].formation.robots;
@@ -232,8 +231,8 @@ TEST(Sampler, BadInputIsRejectedWithACountedReason) {
   TransitionTable table(Grid(3, 2));
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  sampler.add(make_detection_packet(frame(0, 0.0, {{1, {nan, 0}}, {2, {0, inf}}, {1001, {0, 0}},
-                                                   {3, {1e30, 0}}})));
+  sampler.add(make_detection_packet(
+      frame(0, 0.0, {{1, {nan, 0}}, {2, {0, inf}}, {1001, {0, 0}}, {3, {1e30, 0}}})));
   sampler.add(make_detection_packet(frame(0, 1.0, {})));  // an empty frame
   sampler.add(make_geometry_packet(FieldSize{0, 6000}));
   sampler.add(make_geometry_packet(FieldSize{9000, -6000}));

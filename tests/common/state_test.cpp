@@ -15,8 +15,8 @@ TEST(StateCodec, MatchesThePapersExpansionForAll216StatesOf3x2) {
         for (int py = 0; py < 2; ++py)
           for (int vx = 0; vx < 3; ++vx)
             for (int vy = 0; vy < 2; ++vy) {
-              const StateIndex paper = static_cast<StateIndex>(vy + 2 * vx + 6 * py + 12 * px +
-                                                               36 * ty + 72 * tx);
+              const StateIndex paper =
+                  static_cast<StateIndex>(vy + 2 * vx + 6 * py + 12 * px + 36 * ty + 72 * tx);
               const RobotState state{{tx, ty}, {px, py}, {vx, vy}};
               ASSERT_EQ(codec.encode(state), paper);
               ASSERT_EQ(codec.decode(paper), state);
@@ -28,8 +28,7 @@ TEST(StateCodec, MatchesThePapersExpansionForAll216StatesOf3x2) {
 TEST(StateCodec, GoldenValue) {
   const StateCodec codec(Grid(3, 2));
   EXPECT_EQ(codec.encode({{1, 1}, {2, 1}, {2, 1}}), 143u);
-  EXPECT_EQ(codec.describe(143),
-            "143 centroid=(1,1) position=(2,1) previous=(2,1) velocity=(0,0)");
+  EXPECT_EQ(codec.describe(143), "143 centroid=(1,1) position=(2,1) previous=(2,1) velocity=(0,0)");
 }
 
 TEST(StateCodec, RoundTripOnEveryGridSize) {
@@ -43,10 +42,9 @@ TEST(StateCodec, RoundTripOnEveryGridSize) {
       ASSERT_EQ(codec.encode(codec.decode(index)), index) << grid.to_string();
     }
     const StateIndex last = codec.state_count() - 1;
-    EXPECT_EQ(codec.decode(last),
-              (RobotState{{grid.length() - 1, grid.width() - 1},
-                          {grid.length() - 1, grid.width() - 1},
-                          {grid.length() - 1, grid.width() - 1}}));
+    EXPECT_EQ(codec.decode(last), (RobotState{{grid.length() - 1, grid.width() - 1},
+                                              {grid.length() - 1, grid.width() - 1},
+                                              {grid.length() - 1, grid.width() - 1}}));
   }
 }
 

@@ -11,8 +11,9 @@ namespace ssl_formation {
 namespace {
 
 // Brute-force view of a table: the sums a prediction relies on, recomputed from the counts.
-void expect_totals_match_brute_force(const TransitionTable& table,
-                                     const std::map<std::pair<StateIndex, StateIndex>, std::uint64_t>& truth) {
+void expect_totals_match_brute_force(
+    const TransitionTable& table,
+    const std::map<std::pair<StateIndex, StateIndex>, std::uint64_t>& truth) {
   const StateCodec& codec = table.codec();
   const StateIndex cells = codec.cell_count();
   std::map<StateIndex, std::uint64_t> rows;
@@ -59,11 +60,10 @@ TEST_P(TransitionTableProperty, TotalsAndCentroidMatrixEqualABruteForceResum) {
   expect_totals_match_brute_force(table, truth);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Layouts, TransitionTableProperty,
-    ::testing::Values(std::pair{Grid(3, 2), TableStorage::dense},
-                      std::pair{Grid(3, 2), TableStorage::sparse},
-                      std::pair{Grid(12, 9), TableStorage::automatic}));
+INSTANTIATE_TEST_SUITE_P(Layouts, TransitionTableProperty,
+                         ::testing::Values(std::pair{Grid(3, 2), TableStorage::dense},
+                                           std::pair{Grid(3, 2), TableStorage::sparse},
+                                           std::pair{Grid(12, 9), TableStorage::automatic}));
 
 TEST(TransitionTable, ChoosesDenseForSmallAndSparseForLargeGrids) {
   EXPECT_TRUE(TransitionTable(Grid(3, 2)).is_dense());

@@ -48,19 +48,21 @@ TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
 
 const auto entries = testing::table_entries;
 
-std::vector<std::string> trainer_args(const std::string& group, const std::filesystem::path& table) {
-  return {"--vision-address", group, "--table", table.string(), "--status-interval", "0.1",
-          "--flush-interval", "60"};
+std::vector<std::string> trainer_args(const std::string& group,
+                                      const std::filesystem::path& table) {
+  return {"--vision-address",  group, "--table",          table.string(),
+          "--status-interval", "0.1", "--flush-interval", "60"};
 }
 
 // Runs the producer to the end on `group`.
 void produce(const TempDir& dir, const std::string& group, std::uint64_t seed, int count,
              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{"--vision-address", group, "--seed", std::to_string(seed),
-                                "--count", std::to_string(count), "--period", "0.002",
-                                "--status-interval", "100"};
+  std::vector<std::string> args{
+      "--vision-address",    group,      "--seed", std::to_string(seed), "--count",
+      std::to_string(count), "--period", "0.002",  "--status-interval",  "100"};
   args.insert(args.end(), extra.begin(), extra.end());
-  const auto result = testing::run_to_end(producer_program, args, dir.path(), "producer-" + std::to_string(seed));
+  const auto result =
+      testing::run_to_end(producer_program, args, dir.path(), "producer-" + std::to_string(seed));
   ASSERT_EQ(result.exit_code, 0) << result.err;
 }
 
@@ -74,11 +76,11 @@ void stop_trainer_after(ChildProcess& trainer, int formations) {
   EXPECT_EQ(*code, 0) << trainer.stderr_text();
 }
 
-
 TEST(Daemons, TrainerTableHoldsExactlyTheLibrarysTransitions) {
   TempDir dir;
   const std::string group = new_group();
-  ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(), "trainer");
+  ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(),
+                       "trainer");
   ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
   produce(dir, group, 11, 300);
   stop_trainer_after(trainer, 300);
@@ -95,7 +97,8 @@ TEST(Daemons, TrainerTableHoldsExactlyTheLibrarysTransitions) {
 TEST(Daemons, FourCameraFeedTrainsTheSameTableAsOneCamera) {
   TempDir dir;
   const std::string group = new_group();
-  ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(), "trainer");
+  ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(),
+                       "trainer");
   ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
   produce(dir, group, 21, 200, {"--cameras", "4", "--camera-overlap", "400"});
   stop_trainer_after(trainer, 200);
@@ -158,7 +161,8 @@ TEST(Daemons, ProducerSendsNinetyPercentPlaysOverTenThousandCycles) {
       dir.path(), "producer");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   std::smatch match;
-  const std::regex summary(R"(done: 25000 formations \((\d+) from plays = ([\d.]+)%, (\d+) random = ([\d.]+)%\))");
+  const std::regex summary(
+      R"(done: 25000 formations \((\d+) from plays = ([\d.]+)%, (\d+) random = ([\d.]+)%\))");
   ASSERT_TRUE(std::regex_search(result.err, match, summary)) << result.err;
   EXPECT_NEAR(std::stod(match[2]), 90.0, 2.0);
   EXPECT_NEAR(std::stod(match[4]), 10.0, 2.0);
@@ -229,10 +233,10 @@ TEST(Daemons, TrainerRefusesATableOfAnotherGridUnlessReset) {
   TempDir dir;
   const auto table_path = dir / "table.bin";
   ASSERT_TRUE(save_table(table_path, reference_table(1, 50), TableMetadata{}));
-  const auto before = testing::run_to_end(trainer_program,
-                                          {"--table", table_path.string(), "--grid", "6x4",
-                                           "--vision-address", new_group()},
-                                          dir.path(), "refused", 5s);
+  const auto before = testing::run_to_end(
+      trainer_program,
+      {"--table", table_path.string(), "--grid", "6x4", "--vision-address", new_group()},
+      dir.path(), "refused", 5s);
   EXPECT_EQ(before.exit_code, 1);
   EXPECT_NE(before.err.find("3x2"), std::string::npos) << before.err;
   EXPECT_NE(before.err.find("6x4"), std::string::npos) << before.err;
@@ -289,8 +293,10 @@ TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
   const std::string predictions_b = new_group();
   const TransitionTable table = reference_table(3, 500);
   ASSERT_TRUE(save_table(dir / "predict.bin", table, TableMetadata{}));
-  ChildProcess trainer_a(trainer_program, trainer_args(vision_a, dir / "a.bin"), dir.path(), "trainer-a");
-  ChildProcess trainer_b(trainer_program, trainer_args(vision_b, dir / "b.bin"), dir.path(), "trainer-b");
+  ChildProcess trainer_a(trainer_program, trainer_args(vision_a, dir / "a.bin"), dir.path(),
+                         "trainer-a");
+  ChildProcess trainer_b(trainer_program, trainer_args(vision_b, dir / "b.bin"), dir.path(),
+                         "trainer-b");
   ChildProcess predictor_a(predictor_program,
                            {"--vision-address", vision_a, "--prediction-address", predictions_a,
                             "--table", (dir / "predict.bin").string(), "--quiet"},
@@ -351,7 +357,9 @@ TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
     daemons.push_back(std::make_unique<ChildProcess>(
         trainer_program, trainer_args(group, dir / "t.bin"), dir.path(), "trainer"));
     daemons.push_back(std::make_unique<ChildProcess>(
-        predictor_program, std::vector<std::string>{"--vision-address", group, "--table", (dir / "t.bin").string(), "--prediction-address", new_group()},
+        predictor_program,
+        std::vector<std::string>{"--vision-address", group, "--table", (dir / "t.bin").string(),
+                                 "--prediction-address", new_group()},
         dir.path(), "predictor"));
     daemons.push_back(std::make_unique<ChildProcess>(
         producer_program, std::vector<std::string>{"--vision-address", group, "--period", "0.05"},

@@ -42,7 +42,8 @@ void write_simulated_log(const std::filesystem::path& path, std::uint64_t seed, 
 }
 
 // What the library computes from the same files, one stream per file.
-TransitionTable library_table(const std::vector<std::filesystem::path>& logs, std::uint64_t* samples = nullptr) {
+TransitionTable library_table(const std::vector<std::filesystem::path>& logs,
+                              std::uint64_t* samples = nullptr) {
   Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
   for (const auto& log : logs) {
     training.start_new_stream();
@@ -54,14 +55,17 @@ TransitionTable library_table(const std::vector<std::filesystem::path>& logs, st
 
 const auto entries = testing::table_entries;
 
-testing::RunResult trainer(const TempDir& dir, std::vector<std::string> args, const std::string& name) {
+testing::RunResult trainer(const TempDir& dir, std::vector<std::string> args,
+                           const std::string& name) {
   return testing::run_to_end(trainer_program, std::move(args), dir.path(), name, 60s);
 }
 
 TEST(OfflineTraining, FromLogTrainsWhatTheLibraryComputes) {
   TempDir dir;
   write_simulated_log(dir / "a.log.gz", 1, 400, 4);
-  const auto run = trainer(dir, {"--from-log", (dir / "a.log.gz").string(), "--table", (dir / "t.bin").string()}, "train");
+  const auto run =
+      trainer(dir, {"--from-log", (dir / "a.log.gz").string(), "--table", (dir / "t.bin").string()},
+              "train");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find("skipped 400 referee, 400 tracker"), std::string::npos) << run.err;
   const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
@@ -77,13 +81,26 @@ TEST(OfflineTraining, MergeEqualsTrainingOnBothLogsTogether) {
   TempDir dir;
   write_simulated_log(dir / "a.log", 1, 300);
   write_simulated_log(dir / "b.log.gz", 2, 500);
-  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "ta.bin").string()}, "a").exit_code, 0);
-  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "b.log.gz").string(), "--table", (dir / "tb.bin").string()}, "b").exit_code, 0);
-  const auto both = trainer(dir, {"--from-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
-                                  "--table", (dir / "tab.bin").string()}, "ab");
+  ASSERT_EQ(
+      trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "ta.bin").string()},
+              "a")
+          .exit_code,
+      0);
+  ASSERT_EQ(
+      trainer(dir,
+              {"--from-log", (dir / "b.log.gz").string(), "--table", (dir / "tb.bin").string()},
+              "b")
+          .exit_code,
+      0);
+  const auto both = trainer(dir,
+                            {"--from-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
+                             "--table", (dir / "tab.bin").string()},
+                            "ab");
   ASSERT_EQ(both.exit_code, 0) << both.err;
-  const auto merge = trainer(dir, {"merge", (dir / "ta.bin").string(), (dir / "tb.bin").string(), "-o",
-                                   (dir / "merged.bin").string()}, "merge");
+  const auto merge = trainer(dir,
+                             {"merge", (dir / "ta.bin").string(), (dir / "tb.bin").string(), "-o",
+                              (dir / "merged.bin").string()},
+                             "merge");
   ASSERT_EQ(merge.exit_code, 0) << merge.err;
 
   const auto merged = load_table(dir / "merged.bin", Grid(3, 2));
@@ -92,16 +109,29 @@ TEST(OfflineTraining, MergeEqualsTrainingOnBothLogsTogether) {
   EXPECT_EQ(entries(merged.stored->table), entries(together.stored->table));
   EXPECT_EQ(merged.stored->metadata.samples, 800u);
   EXPECT_EQ(together.stored->metadata.samples, 800u);
-  EXPECT_EQ(entries(together.stored->table), entries(library_table({dir / "a.log", dir / "b.log.gz"})));
+  EXPECT_EQ(entries(together.stored->table),
+            entries(library_table({dir / "a.log", dir / "b.log.gz"})));
 }
 
 TEST(OfflineTraining, MergeRefusesDifferentGridsClearly) {
   TempDir dir;
   write_simulated_log(dir / "a.log", 1, 50);
-  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "small.bin").string()}, "a").exit_code, 0);
-  ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "large.bin").string(), "--grid", "12x9"}, "b").exit_code, 0);
-  const auto merge = trainer(dir, {"merge", (dir / "small.bin").string(), (dir / "large.bin").string(), "-o",
-                                   (dir / "out.bin").string()}, "merge");
+  ASSERT_EQ(
+      trainer(dir,
+              {"--from-log", (dir / "a.log").string(), "--table", (dir / "small.bin").string()},
+              "a")
+          .exit_code,
+      0);
+  ASSERT_EQ(trainer(dir,
+                    {"--from-log", (dir / "a.log").string(), "--table",
+                     (dir / "large.bin").string(), "--grid", "12x9"},
+                    "b")
+                .exit_code,
+            0);
+  const auto merge = trainer(dir,
+                             {"merge", (dir / "small.bin").string(), (dir / "large.bin").string(),
+                              "-o", (dir / "out.bin").string()},
+                             "merge");
   EXPECT_EQ(merge.exit_code, 1);
   EXPECT_NE(merge.err.find("12x9"), std::string::npos) << merge.err;
   EXPECT_NE(merge.err.find("3x2"), std::string::npos) << merge.err;
@@ -115,8 +145,10 @@ TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
   write_simulated_log(dir / "a.log", 1, 200);
   const auto size = std::filesystem::file_size(dir / "a.log");
   std::filesystem::resize_file(dir / "a.log", size / 2);
-  const auto run = trainer(dir, {"--from-log", (dir / "a.log").string(), (dir / "missing.log").string(),
-                                 "--table", (dir / "t.bin").string()}, "damaged");
+  const auto run = trainer(dir,
+                           {"--from-log", (dir / "a.log").string(), (dir / "missing.log").string(),
+                            "--table", (dir / "t.bin").string()},
+                           "damaged");
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("truncated message at byte"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("missing.log: cannot open"), std::string::npos) << run.err;
@@ -131,8 +163,10 @@ TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
 TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
   TempDir dir;
   write_simulated_log(dir / "match.log.gz", 17, 300, 4);
-  const auto offline = trainer(dir, {"--from-log", (dir / "match.log.gz").string(), "--table",
-                                     (dir / "offline.bin").string()}, "offline");
+  const auto offline = trainer(
+      dir,
+      {"--from-log", (dir / "match.log.gz").string(), "--table", (dir / "offline.bin").string()},
+      "offline");
   ASSERT_EQ(offline.exit_code, 0) << offline.err;
 
   const std::string group = testing::unique_group(testing::free_udp_port());
@@ -142,10 +176,10 @@ TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
                              dir.path(), "live");
   ASSERT_TRUE(live.wait_for_stderr("listening on", 5s)) << live.stderr_text();
   // 300 formations of 2 s of data time at 300x: 2 s of wall time, with the recorded spacing.
-  const auto replay = testing::run_to_end(producer_program,
-                                          {"--replay", (dir / "match.log.gz").string(), "--speed", "300",
-                                           "--vision-address", group},
-                                          dir.path(), "replay", 60s);
+  const auto replay = testing::run_to_end(
+      producer_program,
+      {"--replay", (dir / "match.log.gz").string(), "--speed", "300", "--vision-address", group},
+      dir.path(), "replay", 60s);
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
   ASSERT_TRUE(live.wait_for_stderr("formations=300 ", 10s)) << live.stderr_text();
   live.signal(SIGTERM);
@@ -163,7 +197,11 @@ TEST(OfflineTraining, ResumesAnExistingTable) {
   TempDir dir;
   write_simulated_log(dir / "a.log", 1, 100);
   for (int run = 0; run < 2; ++run) {
-    ASSERT_EQ(trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "t.bin").string()}, "run").exit_code, 0);
+    ASSERT_EQ(
+        trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "t.bin").string()},
+                "run")
+            .exit_code,
+        0);
   }
   const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
   ASSERT_TRUE(loaded);

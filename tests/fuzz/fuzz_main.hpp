@@ -34,10 +34,11 @@ class ScratchDir {
 
 // ParseFromArray logs every packet that lacks a required field; thousands per second of fuzzing.
 inline void silence_protobuf() {
-  google::protobuf::SetLogHandler([](google::protobuf::LogLevel level, const char*, int,
-                                     const std::string& message) {
-    if (level >= google::protobuf::LOGLEVEL_FATAL) std::fprintf(stderr, "%s\n", message.c_str());
-  });
+  google::protobuf::SetLogHandler(
+      [](google::protobuf::LogLevel level, const char*, int, const std::string& message) {
+        if (level >= google::protobuf::LOGLEVEL_FATAL)
+          std::fprintf(stderr, "%s\n", message.c_str());
+      });
 }
 
 inline void abort_on(const std::string& violation) {

@@ -73,8 +73,8 @@ inline bool write_gzip(const std::filesystem::path& path, const std::uint8_t* da
   remove_file(path);
   gzFile file = gzopen(path.c_str(), "wb1");
   if (file == nullptr) return false;
-  const bool ok = size == 0 || gzwrite(file, data, static_cast<unsigned>(size)) ==
-                                   static_cast<int>(size);
+  const bool ok =
+      size == 0 || gzwrite(file, data, static_cast<unsigned>(size)) == static_cast<int>(size);
   return gzclose(file) == Z_OK && ok;
 }
 
@@ -105,8 +105,9 @@ struct Entry {
 };
 inline std::vector<Entry> entries_of(const TransitionTable& table) {
   std::vector<Entry> out;
-  table.for_each_nonzero(
-      [&](StateIndex from, StateIndex to, TransitionTable::Count c) { out.push_back({from, to, c}); });
+  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
+    out.push_back({from, to, c});
+  });
   return out;
 }
 
@@ -201,8 +202,10 @@ class SamplerHarness {
 
     if (f.robots.empty()) v_.fail("sampler emitted an empty formation");
     if (!grid.contains(f.centroid_cell)) v_.fail("centroid cell outside the grid");
-    if (!std::isfinite(f.centroid.x) || !std::isfinite(f.centroid.y)) v_.fail("centroid not finite");
-    if (f.centroid_cell != grid.cell_of(f.centroid, sampler_.field())) v_.fail("centroid cell wrong");
+    if (!std::isfinite(f.centroid.x) || !std::isfinite(f.centroid.y))
+      v_.fail("centroid not finite");
+    if (f.centroid_cell != grid.cell_of(f.centroid, sampler_.field()))
+      v_.fail("centroid cell wrong");
     const std::uint64_t epoch = epoch_ + sampler_.counters().clock_resets;
     if (last_ && last_epoch_ == epoch && f.time_s < last_->time_s) v_.fail("sample time went back");
     if (f.continues_previous && (!last_ || last_epoch_ != epoch)) {
@@ -211,24 +214,29 @@ class SamplerHarness {
     std::size_t expected_transitions = 0;
     for (std::size_t i = 0; i < f.robots.size(); ++i) {
       const FormationRobot& r = f.robots[i];
-      if (i > 0 && f.robots[i - 1].robot_id >= r.robot_id) v_.fail("robot ids not strictly increasing");
+      if (i > 0 && f.robots[i - 1].robot_id >= r.robot_id)
+        v_.fail("robot ids not strictly increasing");
       if (r.robot_id > config.max_robot_id) v_.fail("robot id over max_robot_id");
-      if (!grid.contains(r.cell) || !grid.contains(r.previous_cell)) v_.fail("robot cell outside the grid");
+      if (!grid.contains(r.cell) || !grid.contains(r.previous_cell))
+        v_.fail("robot cell outside the grid");
       if (!std::isfinite(r.feed_position.x) || !std::isfinite(r.feed_position.y) ||
           std::abs(r.feed_position.x) > config.max_abs_coordinate_mm ||
           std::abs(r.feed_position.y) > config.max_abs_coordinate_mm) {
         v_.fail("robot position not finite or out of range");
       }
-      if (r.position != normalise(r.feed_position, config.opponent_attacks)) v_.fail("position not normalised");
+      if (r.position != normalise(r.feed_position, config.opponent_attacks))
+        v_.fail("position not normalised");
       if (r.cell != grid.cell_of(r.position, sampler_.field())) v_.fail("robot cell wrong");
       if (r.state >= states) v_.fail("state index >= S");
       if (r.state != codec.encode(RobotState{f.centroid_cell, r.cell, r.previous_cell})) {
         v_.fail("state index does not encode the robot's cells");
       }
-      const FormationRobot* before = f.continues_previous && last_ ? last_->find(r.robot_id) : nullptr;
+      const FormationRobot* before =
+          f.continues_previous && last_ ? last_->find(r.robot_id) : nullptr;
       if (before != nullptr) {
         ++expected_transitions;
-        if (r.previous_cell != before->cell) v_.fail("previous cell is not the cell of the last sample");
+        if (r.previous_cell != before->cell)
+          v_.fail("previous cell is not the cell of the last sample");
       } else if (r.previous_cell != r.cell) {
         v_.fail("robot starting a chain has a velocity");
       }
@@ -260,11 +268,13 @@ class SamplerHarness {
         const RobotPrediction& r = step.robots[i];
         if (r.robot_id != f.robots[i].robot_id) v_.fail("predicted robot ids differ");
         if (r.state >= states) v_.fail("predicted state index >= S");
-        if (!grid.contains(r.position) || !grid.contains(r.previous)) v_.fail("predicted cell outside the grid");
+        if (!grid.contains(r.position) || !grid.contains(r.previous))
+          v_.fail("predicted cell outside the grid");
         if (codec.centroid_id(r.state) != static_cast<StateIndex>(grid.cell_id(step.centroid))) {
           v_.fail("predicted robot state not in the predicted centroid block");
         }
-        if (!(r.probability > 0.0 && r.probability <= 1.0)) v_.fail("robot probability outside (0, 1]");
+        if (!(r.probability > 0.0 && r.probability <= 1.0))
+          v_.fail("robot probability outside (0, 1]");
       }
       confidence *= step.formation_probability;
       if (!(step.confidence >= 0.0 && step.confidence <= 1.0) || step.confidence != confidence) {
@@ -332,10 +342,10 @@ inline SamplerOutcome run_sampler_path(const std::uint8_t* data, std::size_t siz
 
 struct LogOutcome {
   bool opened = false;
-  std::string error;              // open's error, or the reader's at the end
-  std::uint64_t messages = 0;     // from next()
+  std::string error;                 // open's error, or the reader's at the end
+  std::uint64_t messages = 0;        // from next()
   std::uint64_t vision_packets = 0;  // from next_vision()
-  LogReadCounters counters;       // next_vision's reader
+  LogReadCounters counters;          // next_vision's reader
   std::string violation;
 };
 
@@ -361,21 +371,25 @@ inline RawRead read_raw_log(const std::filesystem::path& path, Violations& v) {
   LogMessage message;
   while (reader->next(message)) {
     if (message.offset != expected_offset) v.fail("message offset does not follow the previous");
-    if (message.type == static_cast<std::int32_t>(LogMessageType::index)) v.fail("next() returned an index");
-    if (message.payload.size() > static_cast<std::size_t>(kLogMaxMessageSize)) v.fail("payload over the limit");
+    if (message.type == static_cast<std::int32_t>(LogMessageType::index))
+      v.fail("next() returned an index");
+    if (message.payload.size() > static_cast<std::size_t>(kLogMaxMessageSize))
+      v.fail("payload over the limit");
     expected_offset += kLogMessageHeaderSize + message.payload.size();
     out.messages.push_back(message);
   }
   if (reader->next(message)) v.fail("next() returned a message after the end");
   const LogReadCounters& c = reader->counters();
   if (c.messages != out.messages.size() + c.index) v.fail("counters().messages != messages read");
-  if (c.blank + c.unknown + c.legacy_vision + c.referee + c.vision + c.tracker + c.index != c.messages) {
+  if (c.blank + c.unknown + c.legacy_vision + c.referee + c.vision + c.tracker + c.index !=
+      c.messages) {
     v.fail("counters by type do not add up to counters().messages");
   }
   if (c.index > 1) v.fail("read past an index message");
   if (c.bytes != expected_offset) v.fail("counters().bytes != bytes of the messages read");
   out.error = reader->error();
-  if (!out.error.empty() && !starts_with(out.error, path.string() + ": ")) v.fail("error does not name the path");
+  if (!out.error.empty() && !starts_with(out.error, path.string() + ": "))
+    v.fail("error does not name the path");
   out.counters = c;
   return out;
 }
@@ -409,7 +423,8 @@ inline LogOutcome run_log_path(const std::uint8_t* data, std::size_t size,
       std::int64_t receive_time_ns = 0;
       while (reader->next_vision(packet, &receive_time_ns)) {
         ++out.vision_packets;
-        if (!packet.IsInitialized()) v.fail("next_vision returned a packet lacking required fields");
+        if (!packet.IsInitialized())
+          v.fail("next_vision returned a packet lacking required fields");
         harness.add(packet);
         packet.Clear();
       }
@@ -437,7 +452,8 @@ inline LogOutcome run_log_path(const std::uint8_t* data, std::size_t size,
       Violations ignored;  // reported by the first pass
       const RawRead gz = read_raw_log(path, ignored);
       if (gz.opened != raw.opened || gz.error != raw.error) {
-        v.fail("gzip-compressed stream read differently: '" + gz.error + "' vs '" + raw.error + "'");
+        v.fail("gzip-compressed stream read differently: '" + gz.error + "' vs '" + raw.error +
+               "'");
       } else if (gz.messages.size() != raw.messages.size()) {
         v.fail("gzip-compressed stream gave another number of messages");
       } else {
@@ -472,7 +488,8 @@ inline void check_load(const TableLoadResult& r, const std::filesystem::path& pa
                        const std::string& bytes, Violations& v, const std::string& where) {
   if (r.error != TableFileError::none) {
     if (r.stored) v.fail(where + ": failed load returned a table");
-    if (!starts_with(r.message, path.string())) v.fail(where + ": error message does not name the path");
+    if (!starts_with(r.message, path.string()))
+      v.fail(where + ": error message does not name the path");
     return;
   }
   if (!r.stored) {
@@ -496,7 +513,8 @@ inline void check_load(const TableLoadResult& r, const std::filesystem::path& pa
       std::bit_cast<std::uint64_t>(m.step_s) != le64(h + 40) || m.samples != le64(h + 48)) {
     v.fail(where + ": metadata differs from the header");
   }
-  if (!m.field.valid() || !(m.step_s > 0.0) || !std::isfinite(m.step_s)) v.fail(where + ": invalid metadata loaded");
+  if (!m.field.valid() || !(m.step_s > 0.0) || !std::isfinite(m.step_s))
+    v.fail(where + ": invalid metadata loaded");
   if (table.transitions() != le64(h + 56)) v.fail(where + ": transitions != the header's total");
   const std::uint32_t encoding = le32(h + 20);
   if (encoding == 1 &&
@@ -534,7 +552,8 @@ inline TableOutcome run_table_path(const std::uint8_t* data, std::size_t size,
       v.fail(where + ": sparse storage loaded other counts");
     }
     const Grid other = table.grid() == Grid(3, 2) ? Grid(2, 3) : Grid(3, 2);
-    if (load_table(path, other).error != TableFileError::wrong_grid) v.fail(where + ": another grid was accepted");
+    if (load_table(path, other).error != TableFileError::wrong_grid)
+      v.fail(where + ": another grid was accepted");
     return std::move(r.stored);
   };
 
@@ -546,8 +565,8 @@ inline TableOutcome run_table_path(const std::uint8_t* data, std::size_t size,
     auto* b = reinterpret_cast<std::uint8_t*>(fixed.data());
     put_le32(b + 80, static_cast<std::uint32_t>(crc32(crc32(0L, Z_NULL, 0), b, 80)));
     if (size >= table_header_size + 4) {
-      put_le32(b + size - 4,
-               static_cast<std::uint32_t>(crc32(crc32(0L, Z_NULL, 0), b, static_cast<uInt>(size - 4))));
+      put_le32(b + size - 4, static_cast<std::uint32_t>(
+                                 crc32(crc32(0L, Z_NULL, 0), b, static_cast<uInt>(size - 4))));
     }
     if (fixed != input) {
       out.fixed_tried = true;

@@ -132,8 +132,10 @@ void write_sampler_corpus(const fs::path& dir, const std::vector<SSL_WrapperPack
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   hostile.add(frame(0, 1.0, team(3, 0, 0, 0)));
-  hostile.add(frame(0, 1.2, {{1, {0, 0}, 0, 0.5F}, {1, {100, 0}, 0, 0.9F}, {2, {nan, 0}, 0, 0.9F}}));
-  hostile.add(frame(0, 1.3, {{3, {2e5, 0}, 0, 0.9F}, {5000, {0, 0}, 0, 0.9F}, {4, {0, inf}, 0, 0.9F}}));
+  hostile.add(
+      frame(0, 1.2, {{1, {0, 0}, 0, 0.5F}, {1, {100, 0}, 0, 0.9F}, {2, {nan, 0}, 0, 0.9F}}));
+  hostile.add(
+      frame(0, 1.3, {{3, {2e5, 0}, 0, 0.9F}, {5000, {0, 0}, 0, 0.9F}, {4, {0, inf}, 0, 0.9F}}));
   hostile.add(frame(64, 1.4, team(3, 0, 0, 0)));
   hostile.add(frame(0, nan, team(3, 0, 0, 0)));
   hostile.add(frame(1, 1.5, team(33, 0, 0, 0)));
@@ -162,7 +164,8 @@ void write_log_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket>&
     if (!writer) throw std::runtime_error(error);
     std::int64_t t = 1'000'000'000;
     for (std::size_t i = 0; i < 4; ++i) writer->write_vision(grsim[i], t += 16'000'000);
-    for (const auto& packet : simulated_stream(1.0, 0.5, 2)) writer->write_vision(packet, t += 1'000'000);
+    for (const auto& packet : simulated_stream(1.0, 0.5, 2))
+      writer->write_vision(packet, t += 1'000'000);
     writer->write(3, t, std::string("\x08\x01\x10\x02", 4));  // a referee message (not parsed)
     // A legacy (2010) packet: today's detection decodes; then one without a frame number.
     DetectionFrameSpec spec;
@@ -213,9 +216,11 @@ void write_table_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket
   config.step_s = 0.5;
   const auto sim = simulated_stream(10.0, 0.25, 3);
   config.grid = Grid(2, 2);
-  save(dir / "dense-2x2.sslft", train(config, TransitionTable(config.grid, TableStorage::dense), sim), 20);
+  save(dir / "dense-2x2.sslft",
+       train(config, TransitionTable(config.grid, TableStorage::dense), sim), 20);
   config.grid = Grid(3, 2);
-  save(dir / "sparse-3x2.sslft", train(config, TransitionTable(config.grid, TableStorage::sparse), sim), 20);
+  save(dir / "sparse-3x2.sslft",
+       train(config, TransitionTable(config.grid, TableStorage::sparse), sim), 20);
   config.grid = Grid(12, 9);
   config.step_s = 0.2;
   save(dir / "sparse-12x9-grsim.sslft", train(config, TransitionTable(config.grid), grsim), 50);

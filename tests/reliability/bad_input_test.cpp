@@ -42,10 +42,11 @@ enum class Bad {
   other_message,    // a FormationPrediction sent to the vision port
   count
 };
-constexpr const char* bad_names[] = {"random bytes",  "truncated",     "NaN coordinates", "inf coordinates",
-                                     "1e30 coordinates", "1000 robots", "camera id 4e9", "zero field size",
-                                     "negative field size", "late frame", "old frame", "duplicate frame",
-                                     "FormationPrediction"};
+constexpr const char* bad_names[] = {
+    "random bytes",        "truncated",   "NaN coordinates", "inf coordinates",
+    "1e30 coordinates",    "1000 robots", "camera id 4e9",   "zero field size",
+    "negative field size", "late frame",  "old frame",       "duplicate frame",
+    "FormationPrediction"};
 
 struct DirtyStream {
   std::vector<std::string> datagrams;        // what goes on the wire, in order
@@ -55,11 +56,13 @@ struct DirtyStream {
   std::size_t duplicate_id_packets = 0;
 };
 
-void with_robots(SSL_WrapperPacket& packet, const std::function<void(SSL_DetectionRobot&)>& change) {
+void with_robots(SSL_WrapperPacket& packet,
+                 const std::function<void(SSL_DetectionRobot&)>& change) {
   for (auto& robot : *packet.mutable_detection()->mutable_robots_yellow()) change(robot);
 }
 
-std::string bad_datagram(Bad kind, std::mt19937_64& random, const std::vector<SSL_WrapperPacket>& detections) {
+std::string bad_datagram(Bad kind, std::mt19937_64& random,
+                         const std::vector<SSL_WrapperPacket>& detections) {
   const SSL_WrapperPacket& last = detections.back();
   SSL_WrapperPacket packet = last;
   switch (kind) {
@@ -70,13 +73,16 @@ std::string bad_datagram(Bad kind, std::mt19937_64& random, const std::vector<SS
     }
     case Bad::truncated: {
       const std::string whole = last.SerializeAsString();
-      return whole.substr(0, std::uniform_int_distribution<std::size_t>(1, whole.size() - 1)(random));
+      return whole.substr(0,
+                          std::uniform_int_distribution<std::size_t>(1, whole.size() - 1)(random));
     }
     case Bad::nan_coordinates:
-      with_robots(packet, [](SSL_DetectionRobot& r) { r.set_x(std::numeric_limits<float>::quiet_NaN()); });
+      with_robots(packet,
+                  [](SSL_DetectionRobot& r) { r.set_x(std::numeric_limits<float>::quiet_NaN()); });
       break;
     case Bad::inf_coordinates:
-      with_robots(packet, [](SSL_DetectionRobot& r) { r.set_y(-std::numeric_limits<float>::infinity()); });
+      with_robots(packet,
+                  [](SSL_DetectionRobot& r) { r.set_y(-std::numeric_limits<float>::infinity()); });
       break;
     case Bad::huge_coordinates:
       with_robots(packet, [](SSL_DetectionRobot& r) { r.set_x(1e30F); });
@@ -93,8 +99,10 @@ std::string bad_datagram(Bad kind, std::mt19937_64& random, const std::vector<SS
     case Bad::negative_field: {
       packet = make_geometry_packet(FieldSize{9000, 6000});
       auto* field = packet.mutable_geometry()->mutable_field();
-      if (kind == Bad::zero_field) field->set_field_length(0);
-      else field->set_field_width(-6000);
+      if (kind == Bad::zero_field)
+        field->set_field_length(0);
+      else
+        field->set_field_width(-6000);
       break;
     }
     case Bad::late_frame:
@@ -199,10 +207,11 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
                        {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
                         "--status-interval", "0.1", "--flush-interval", "60"},
                        dir.path(), "trainer");
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--prediction-address", predictions, "--table",
-                          (dir / "fixed.bin").string(), "--quiet", "--status-interval", "0.1"},
-                         dir.path(), "predictor");
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+       (dir / "fixed.bin").string(), "--quiet", "--status-interval", "0.1"},
+      dir.path(), "predictor");
   ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
   ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
   PredictionListener listener(predictions);
@@ -214,8 +223,10 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
     }
   }
   const auto received = listener.wait_for_bytes(expected_predictions.size(), 15s);
-  ASSERT_TRUE(wait_for_status(trainer, "formations", expected.samples, 10s)) << trainer.stderr_text();
-  ASSERT_TRUE(wait_for_status(predictor, "packets", dirty.datagrams.size(), 10s)) << predictor.stderr_text();
+  ASSERT_TRUE(wait_for_status(trainer, "formations", expected.samples, 10s))
+      << trainer.stderr_text();
+  ASSERT_TRUE(wait_for_status(predictor, "packets", dirty.datagrams.size(), 10s))
+      << predictor.stderr_text();
   trainer.signal(SIGTERM);
   predictor.signal(SIGTERM);
   EXPECT_EQ(trainer.wait(5s), 0) << trainer.stderr_text();
@@ -251,9 +262,9 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
                                            dirty.sent[static_cast<int>(Bad::negative_field)]);
   EXPECT_GE(expected.frames_duplicate, dirty.sent[static_cast<int>(Bad::duplicate_frame)]);
   // One warning per kind in the trainer's log.
-  for (const char* key : {"[non_finite]", "[out_of_range]", "[duplicate_ids]", "[bad_camera]",
-                          "[too_many_robots]", "[late]", "[duplicate_frames]", "[other_clock]",
-                          "[bad_geometry]"}) {
+  for (const char* key :
+       {"[non_finite]", "[out_of_range]", "[duplicate_ids]", "[bad_camera]", "[too_many_robots]",
+        "[late]", "[duplicate_frames]", "[other_clock]", "[bad_geometry]"}) {
     EXPECT_NE(trainer.stderr_text().find(key), std::string::npos) << key;
   }
 
@@ -280,9 +291,11 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
   }
 
   std::cout << "[ figures  ] bad datagrams sent:";
-  for (int k = 0; k < static_cast<int>(Bad::count); ++k) std::cout << " " << bad_names[k] << "=" << dirty.sent[k];
+  for (int k = 0; k < static_cast<int>(Bad::count); ++k)
+    std::cout << " " << bad_names[k] << "=" << dirty.sent[k];
   std::cout << "; clean datagrams="
-            << dirty.datagrams.size() - std::accumulate(dirty.sent.begin(), dirty.sent.end(), std::size_t{0})
+            << dirty.datagrams.size() -
+                   std::accumulate(dirty.sent.begin(), dirty.sent.end(), std::size_t{0})
             << " (of which duplicate-id frames=" << dirty.duplicate_id_packets << ")"
             << " parse_errors=" << dirty.parse_errors << " formations=" << expected.samples
             << " transitions=" << clean_training->table().transitions() << "\n";

@@ -61,8 +61,8 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
   const auto started = std::chrono::steady_clock::now();
   for (int round = 0; round < 50; ++round) {
     ChildProcess trainer(trainer_program,
-                         {"--vision-address", group, "--table", table_path.string(), "--flush-interval",
-                          "0.02", "--status-interval", "100", "--verbose"},
+                         {"--vision-address", group, "--table", table_path.string(),
+                          "--flush-interval", "0.02", "--status-interval", "100", "--verbose"},
                          dir.path(), "trainer-" + std::to_string(round));
     ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
     if (round > 0) {
@@ -106,7 +106,8 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
   // A kill mid-save leaves at most its own temporary file; the next trainer removes it.
   EXPECT_LE(most_temporaries, 1u);
   std::cout << "[ figures  ] kills=" << kills << " saves_logged=" << total_saves
-            << " final_transitions=" << previous_transitions << " final_formations=" << previous_formations
+            << " final_transitions=" << previous_transitions
+            << " final_formations=" << previous_formations
             << " most_leftover_temporaries=" << most_temporaries << " seconds=" << seconds << "\n";
 }
 

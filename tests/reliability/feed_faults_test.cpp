@@ -21,7 +21,8 @@ using Formations = std::vector<std::vector<SSL_WrapperPacket>>;
 const FieldSize division_a{12000, 9000};
 
 // The packets of each simulated formation, one vector per formation.
-Formations formations(std::uint64_t seed, int count, double start_time_s, FieldSize field = {9000, 6000}) {
+Formations formations(std::uint64_t seed, int count, double start_time_s,
+                      FieldSize field = {9000, 6000}) {
   sim::SimulationConfig config;
   config.seed = seed;
   config.start_time_s = start_time_s;
@@ -32,9 +33,11 @@ Formations formations(std::uint64_t seed, int count, double start_time_s, FieldS
   return out;
 }
 
-std::vector<SSL_WrapperPacket> flat(const Formations& f, std::size_t from = 0, std::size_t to = SIZE_MAX) {
+std::vector<SSL_WrapperPacket> flat(const Formations& f, std::size_t from = 0,
+                                    std::size_t to = SIZE_MAX) {
   std::vector<SSL_WrapperPacket> out;
-  for (std::size_t i = from; i < std::min(to, f.size()); ++i) out.insert(out.end(), f[i].begin(), f[i].end());
+  for (std::size_t i = from; i < std::min(to, f.size()); ++i)
+    out.insert(out.end(), f[i].begin(), f[i].end());
   return out;
 }
 
@@ -56,15 +59,16 @@ TransitionTable separately(std::initializer_list<std::vector<SSL_WrapperPacket>>
 }
 
 TEST(ReliabilityFeedFaults, FeedStoppingForThirtySecondsOfDataTimeCountsNothingAcrossTheGap) {
-  const auto before = flat(formations(61, 40, 0.0));     // t = 0 .. 78
-  const auto after = flat(formations(62, 40, 110.0));    // t = 110 .. 188: 30 s missing
+  const auto before = flat(formations(61, 40, 0.0));   // t = 0 .. 78
+  const auto after = flat(formations(62, 40, 110.0));  // t = 110 .. 188: 30 s missing
   const auto training = train(concat({before, after}));
   EXPECT_EQ(entries(training->table()), entries(separately({before, after})));
   EXPECT_EQ(training->sampler().counters().clock_resets, 1u);
   EXPECT_EQ(training->sampler().counters().samples, 80u);  // nothing after the gap is lost
   // A gap shorter than two steps (one missing formation) is a chain break, not a new clock.
   const auto short_gap = train(concat({before, flat(formations(62, 40, 82.0))}));
-  EXPECT_EQ(entries(short_gap->table()), entries(separately({before, flat(formations(62, 40, 82.0))})));
+  EXPECT_EQ(entries(short_gap->table()),
+            entries(separately({before, flat(formations(62, 40, 82.0))})));
   EXPECT_EQ(short_gap->sampler().counters().clock_resets, 0u);
 }
 
@@ -90,7 +94,8 @@ TEST(ReliabilityFeedFaults, TimeJumpingBackwardsStartsANewStream) {
   const auto slightly = train(concat({first, flat(formations(64, 40, 1077.0))}));
   EXPECT_EQ(slightly->sampler().counters().clock_resets, 0u);
   EXPECT_GE(slightly->sampler().counters().frames_late, 1u);
-  EXPECT_LE(slightly->table().transitions(), separately({first, flat(formations(64, 40, 1077.0))}).transitions());
+  EXPECT_LE(slightly->table().transitions(),
+            separately({first, flat(formations(64, 40, 1077.0))}).transitions());
 }
 
 // A (t from 0) runs 120 formations; B (t from 5000) interleaves formation by formation with A's
@@ -120,9 +125,9 @@ TEST(ReliabilityFeedFaults, ASecondSenderIsAClockConflictThatCountsNoTransition)
   }
   const SamplerCounters& c = sampler.counters();
   EXPECT_EQ(c.clock_conflicts, 1u);
-  EXPECT_EQ(c.clock_resets, 0u);     // no thrashing between the two clocks
+  EXPECT_EQ(c.clock_resets, 0u);         // no thrashing between the two clocks
   EXPECT_EQ(c.frames_other_clock, 40u);  // every frame of B set aside
-  EXPECT_EQ(c.samples, 120u);           // every formation of A sampled
+  EXPECT_EQ(c.samples, 120u);            // every formation of A sampled
   std::size_t quiet = 0;
   for (const auto& [time_s, transitions] : samples) {
     EXPECT_LT(time_s, 5000.0);  // nothing sampled from B's clock
@@ -160,10 +165,10 @@ TEST(ReliabilityFeedFaults, AStrayOldFrameIsNeitherARestartNorAConflict) {
 TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   TempDir dir;
   const auto stream = concat({
-      flat(formations(61, 40, 0.0)),                  // t 0 .. 78
-      flat(formations(62, 40, 110.0)),                // 30 s gap
-      flat(formations(63, 40, 190.0, division_a)),    // Division A geometry
-      flat(formations(64, 40, 100.0, division_a)),    // t jumps back 168 s
+      flat(formations(61, 40, 0.0)),                // t 0 .. 78
+      flat(formations(62, 40, 110.0)),              // 30 s gap
+      flat(formations(63, 40, 190.0, division_a)),  // Division A geometry
+      flat(formations(64, 40, 100.0, division_a)),  // t jumps back 168 s
       two_senders(formations(65, 120, 180.0, division_a), formations(66, 40, 9000.0, division_a)),
   });
   const auto expected = train(stream);
@@ -184,10 +189,11 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
                        {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
                         "--status-interval", "0.1", "--flush-interval", "60"},
                        dir.path(), "trainer");
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--prediction-address", predictions, "--table",
-                          (dir / "fixed.bin").string(), "--quiet", "--status-interval", "0.1"},
-                         dir.path(), "predictor");
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+       (dir / "fixed.bin").string(), "--quiet", "--status-interval", "0.1"},
+      dir.path(), "predictor");
   ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
   ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
   PredictionListener listener(predictions);
@@ -216,11 +222,14 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   ASSERT_TRUE(loaded) << loaded.message;
   EXPECT_EQ(entries(loaded.stored->table), entries(expected->table()));
   ASSERT_EQ(received.size(), expected_predictions.size());
-  for (std::size_t i = 0; i < received.size(); ++i) ASSERT_EQ(received[i], expected_predictions[i]) << i;
-  std::cout << "[ figures  ] faults: gap 30 s, Division B->A, back 168 s, second sender for 40 formations; "
+  for (std::size_t i = 0; i < received.size(); ++i)
+    ASSERT_EQ(received[i], expected_predictions[i]) << i;
+  std::cout << "[ figures  ] faults: gap 30 s, Division B->A, back 168 s, second sender for 40 "
+               "formations; "
             << "formations=" << c.samples << " transitions=" << expected->table().transitions()
             << " clock_resets=" << c.clock_resets << " clock_conflicts=" << c.clock_conflicts
-            << " set_aside=" << c.frames_other_clock << " samples_in_conflict=" << c.samples_in_conflict << "\n";
+            << " set_aside=" << c.frames_other_clock
+            << " samples_in_conflict=" << c.samples_in_conflict << "\n";
 }
 
 // Two real producers on one group, as a replay started beside the live feed: the trainer stays
@@ -258,13 +267,14 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   const auto b = train(simulated_packets(config, 300));
   const TableLoadResult loaded = load_table(dir / "trainer.bin", Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_LT(loaded.stored->table.transitions(), a->table().transitions() + b->table().transitions());
+  EXPECT_LT(loaded.stored->table.transitions(),
+            a->table().transitions() + b->table().transitions());
   std::cout << "[ figures  ] two producers: packets=" << status.at("packets")
-            << " transitions=" << loaded.stored->table.transitions() << " (alone: "
-            << a->table().transitions() << " + " << b->table().transitions()
+            << " transitions=" << loaded.stored->table.transitions()
+            << " (alone: " << a->table().transitions() << " + " << b->table().transitions()
             << ") clock_conflicts=" << status.at("clock_conflicts")
-            << " clock_resets=" << status.at("clock_resets") << " other_clock=" << status.at("other_clock")
-            << "\n";
+            << " clock_resets=" << status.at("clock_resets")
+            << " other_clock=" << status.at("other_clock") << "\n";
 }
 
 }  // namespace

@@ -28,7 +28,8 @@ std::int64_t now_ns() {
 }
 
 void sleep_until_ns(std::int64_t deadline) {
-  timespec until{static_cast<time_t>(deadline / 1'000'000'000), static_cast<long>(deadline % 1'000'000'000)};
+  timespec until{static_cast<time_t>(deadline / 1'000'000'000),
+                 static_cast<long>(deadline % 1'000'000'000)};
   ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr);
 }
 
@@ -46,7 +47,8 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   simulation.seed = 11;
   simulation.cameras = cameras;
   simulation.start_time_s = 1000.0;
-  simulation.geometry_interval_s = 3.0 * rate / cameras * simulation.step_s;  // every ~3 s of wall time
+  simulation.geometry_interval_s =
+      3.0 * rate / cameras * simulation.step_s;  // every ~3 s of wall time
   sim::SimulatedVision vision(simulation);
   const auto total = static_cast<std::size_t>(rate * seconds);
   std::vector<std::vector<std::string>> bursts;
@@ -83,7 +85,8 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   const std::size_t load_bursts = bursts.size() - trailing_bursts;
   std::size_t load_packets = 0;
   for (std::size_t b = 0; b < load_bursts; ++b) load_packets += bursts[b].size();
-  const double period_ns = 1e9 * (static_cast<double>(load_packets) / rate) / static_cast<double>(load_bursts);
+  const double period_ns =
+      1e9 * (static_cast<double>(load_packets) / rate) / static_cast<double>(load_bursts);
   const std::int64_t start = now_ns() + 20'000'000;
   for (std::size_t b = 0; b < load_bursts; ++b) {
     sleep_until_ns(start + static_cast<std::int64_t>(static_cast<double>(b) * period_ns));
@@ -120,9 +123,10 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
             << " | trainer received=" << t.at("packets") << " kernel_drops=" << t.at("kernel_drops")
             << " rss_kib=" << trainer_rss_start << "->" << trainer_rss_end
             << " so_rcvbuf=" << granted_buffer(trainer.stderr_text())
-            << " | predictor received=" << p.at("packets") << " kernel_drops=" << p.at("kernel_drops")
-            << " rss_kib=" << predictor_rss_start << "->" << predictor_rss_end
-            << " so_rcvbuf=" << granted_buffer(predictor.stderr_text()) << "\n";
+            << " | predictor received=" << p.at("packets")
+            << " kernel_drops=" << p.at("kernel_drops") << " rss_kib=" << predictor_rss_start
+            << "->" << predictor_rss_end << " so_rcvbuf=" << granted_buffer(predictor.stderr_text())
+            << "\n";
 }
 
 }  // namespace

@@ -92,7 +92,9 @@ class Sender {
   bool send(const std::string& bytes) {
     return sender_.send(std::as_bytes(std::span(bytes.data(), bytes.size())));
   }
-  bool send(const google::protobuf::MessageLite& message) { return send(message.SerializeAsString()); }
+  bool send(const google::protobuf::MessageLite& message) {
+    return send(message.SerializeAsString());
+  }
   std::uint64_t sent() const { return sender_.sent(); }
 
  private:
@@ -125,8 +127,8 @@ inline std::uint64_t rss_kib(pid_t pid) {
 }
 
 // Waits until `process`'s stderr has a status line with key >= value.
-inline bool wait_for_status(testing::ChildProcess& process, const std::string& key, std::uint64_t value,
-                            std::chrono::milliseconds timeout) {
+inline bool wait_for_status(testing::ChildProcess& process, const std::string& key,
+                            std::uint64_t value, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (std::chrono::steady_clock::now() < deadline) {
     const auto status = last_status(process.stderr_text());

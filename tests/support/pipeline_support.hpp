@@ -50,7 +50,8 @@ class PredictionListener {
   PredictionListener& operator=(const PredictionListener&) = delete;
 
   // What has arrived once there are `n` messages, or when `timeout` runs out.
-  std::vector<proto::FormationPrediction> wait_for(std::size_t n, std::chrono::milliseconds timeout) {
+  std::vector<proto::FormationPrediction> wait_for(std::size_t n,
+                                                   std::chrono::milliseconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (std::chrono::steady_clock::now() < deadline) {
       {

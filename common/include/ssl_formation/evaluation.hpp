@@ -23,10 +23,10 @@ PlayStates play_states(const StateCodec& codec, const FieldSize& field,
                        const std::vector<std::vector<Point>>& play_positions);
 
 struct PaperTest {
-  int count_play = 0;       // the play chosen by the count measure of formation 1
-  int distance_play = 0;    // the play chosen by the distance measure of formation 1
-  std::array<int, 3> count{};     // per formation 1-3, against count_play
-  std::array<int, 3> distance{};  // per formation 1-3, against distance_play
+  int count_play = 0;                  // the play chosen by the count measure of formation 1
+  int distance_play = 0;               // the play chosen by the distance measure of formation 1
+  std::array<int, 3> count{};          // per formation 1-3, against count_play
+  std::array<int, 3> distance{};       // per formation 1-3, against distance_play
   std::array<double, 2> confidence{};  // of the 1st and 2nd predicted formation
 };
 
@@ -37,9 +37,9 @@ PaperTest run_paper_test(const TransitionTable& table, const std::vector<RobotSt
 
 struct PaperSummary {
   int tests = 0;
-  double count_per_play = 0;        // mean over tests of the sum over formations 1-3
+  double count_per_play = 0;  // mean over tests of the sum over formations 1-3
   double distance_per_play = 0;
-  double count_per_formation = 0;   // the above / 3
+  double count_per_formation = 0;  // the above / 3
   double distance_per_formation = 0;
   std::array<double, 2> mean_confidence{};
 };
@@ -67,15 +67,15 @@ std::vector<RobotStateById> constant_velocity(const StateCodec& codec, const Fie
 struct Accuracy {
   std::uint64_t formations = 0;
   std::uint64_t robots = 0;
-  std::uint64_t exact_states = 0;    // predicted state == actual state
-  std::uint64_t exact_cells = 0;     // predicted position cell == actual
-  std::uint64_t cell_distance = 0;   // Manhattan, in cells, summed over robots
+  std::uint64_t exact_states = 0;   // predicted state == actual state
+  std::uint64_t exact_cells = 0;    // predicted position cell == actual
+  std::uint64_t cell_distance = 0;  // Manhattan, in cells, summed over robots
   double state_accuracy() const { return robots ? double(exact_states) / double(robots) : 0.0; }
   double cell_accuracy() const { return robots ? double(exact_cells) / double(robots) : 0.0; }
   double mean_distance() const { return robots ? double(cell_distance) / double(robots) : 0.0; }
 };
-void score(Accuracy& accuracy, const StateCodec& codec, const std::vector<RobotStateById>& predicted,
-           const std::vector<RobotStateById>& actual);
+void score(Accuracy& accuracy, const StateCodec& codec,
+           const std::vector<RobotStateById>& predicted, const std::vector<RobotStateById>& actual);
 
 // Calibration of a probability against 0/1 outcomes: Brier score and a reliability table.
 struct Calibration {

@@ -26,9 +26,9 @@ struct FormationRobot {
 };
 
 struct Formation {
-  double time_s = 0.0;            // the sample instant on the data clock
+  double time_s = 0.0;             // the sample instant on the data clock
   std::uint32_t frame_number = 0;  // the detection frame that completed the sample
-  Point centroid;                 // normalised, mean of the robots
+  Point centroid;                  // normalised, mean of the robots
   Cell centroid_cell;
   std::vector<FormationRobot> robots;  // sorted by robot id, each id once
   // False when this formation starts a chain: the first sample, or one after a gap.

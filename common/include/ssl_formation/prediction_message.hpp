@@ -30,7 +30,8 @@ void fill_prediction_message(const Formation& current, const Prediction& predict
 void encode_prediction(const Formation& current, const Prediction& prediction,
                        const PredictionContext& context, std::string& out);
 
-// "t=12.00 frame=6 now C(1,1) [0:(0,1) 1:(1,0) ...] | +1 C(2,1) p=0.82 [0:(1,1) ...] conf=0.412 | +2 ..."
+// "t=12.00 frame=6 now C(1,1) [0:(0,1) 1:(1,0) ...] | +1 C(2,1) p=0.82 [0:(1,1) ...] conf=0.412 |
+// +2 ..."
 std::string describe_prediction(const Formation& current, const Prediction& prediction);
 
 }  // namespace ssl_formation

@@ -64,27 +64,27 @@ struct SamplerCounters {
   std::uint64_t detection_frames = 0;
   std::uint64_t geometry_packets = 0;
   std::uint64_t robots_accepted = 0;
-  std::uint64_t robots_non_finite = 0;        // NaN or inf coordinates
-  std::uint64_t robots_out_of_range = 0;      // |x| or |y| beyond max_abs_coordinate_mm
-  std::uint64_t robots_bad_id = 0;            // missing id or id over max_robot_id
+  std::uint64_t robots_non_finite = 0;          // NaN or inf coordinates
+  std::uint64_t robots_out_of_range = 0;        // |x| or |y| beyond max_abs_coordinate_mm
+  std::uint64_t robots_bad_id = 0;              // missing id or id over max_robot_id
   std::uint64_t robots_duplicate_in_frame = 0;  // same id twice in one frame: best kept
-  std::uint64_t frames_bad_time = 0;          // NaN/inf t_capture
-  std::uint64_t frames_bad_camera = 0;        // camera id over max_camera_id
+  std::uint64_t frames_bad_time = 0;            // NaN/inf t_capture
+  std::uint64_t frames_bad_camera = 0;          // camera id over max_camera_id
   std::uint64_t frames_too_many_robots = 0;
   std::uint64_t frames_without_opponent = 0;  // empty frames (still count for completion)
   std::uint64_t frames_late = 0;              // older than the last sample: out of order
   std::uint64_t geometry_invalid = 0;         // zero, negative or non-finite field size
   std::uint64_t field_changes = 0;
-  std::uint64_t clock_resets = 0;              // switches to another clock (restart, resumed feed)
-  std::uint64_t frames_other_clock = 0;       // frames set aside as another clock's
-  std::uint64_t frames_duplicate = 0;         // same camera, frame number and t_capture again
-  std::uint64_t packets_empty = 0;            // neither detection nor geometry (another message?)
-  std::uint64_t clock_conflicts = 0;          // episodes of two clocks interleaving
-  std::uint64_t samples_in_conflict = 0;      // samples that counted no transition because of one
+  std::uint64_t clock_resets = 0;         // switches to another clock (restart, resumed feed)
+  std::uint64_t frames_other_clock = 0;   // frames set aside as another clock's
+  std::uint64_t frames_duplicate = 0;     // same camera, frame number and t_capture again
+  std::uint64_t packets_empty = 0;        // neither detection nor geometry (another message?)
+  std::uint64_t clock_conflicts = 0;      // episodes of two clocks interleaving
+  std::uint64_t samples_in_conflict = 0;  // samples that counted no transition because of one
   std::uint64_t samples = 0;
-  std::uint64_t samples_empty = 0;  // no opponent robot in the sample: not handed on
+  std::uint64_t samples_empty = 0;   // no opponent robot in the sample: not handed on
   std::uint64_t samples_forced = 0;  // handed on without every live camera (a dropped frame)
-  std::uint64_t chain_breaks = 0;   // gaps, field changes and clock resets
+  std::uint64_t chain_breaks = 0;    // gaps, field changes and clock resets
   std::uint64_t transitions = 0;
 };
 
@@ -92,7 +92,8 @@ struct SamplerCounters {
 std::string describe_rejections(const SamplerCounters& counters);
 // One sentence per kind of refusal that grew from `before` to `after` ("2 frames with a camera id
 // over the limit (5 in all)"), for a daemon to log as warnings when new kinds of bad input arrive.
-std::vector<std::string> new_rejections(const SamplerCounters& before, const SamplerCounters& after);
+std::vector<std::string> new_rejections(const SamplerCounters& before,
+                                        const SamplerCounters& after);
 
 class FormationSampler {
  public:
@@ -116,8 +117,7 @@ class FormationSampler {
   // Encodes a formation's robots as states from their positions, for callers that build
   // formations themselves (the simulated producer, evaluation).
   static Formation build_formation(const StateCodec& codec, const FieldSize& field,
-                                   std::vector<FormationRobot> robots,
-                                   const Formation* previous);
+                                   std::vector<FormationRobot> robots, const Formation* previous);
 
  private:
   struct Observation {
@@ -163,7 +163,9 @@ class FormationSampler {
   void apply_detections(std::uint32_t camera_id, double time_s);
   bool instant_complete(std::int64_t k) const;
   void emit(std::int64_t k, bool forced);
-  double instant(std::int64_t k) const { return anchor_s_ + static_cast<double>(k) * config_.step_s; }
+  double instant(std::int64_t k) const {
+    return anchor_s_ + static_cast<double>(k) * config_.step_s;
+  }
   void restart();
 
   SamplerConfig config_;
@@ -173,7 +175,7 @@ class FormationSampler {
   SamplerCounters counters_;
 
   std::vector<Detection> frame_scratch_;
-  std::vector<Observation> observations_;  // indexed by robot id
+  std::vector<Observation> observations_;    // indexed by robot id
   std::vector<std::uint32_t> observed_ids_;  // ids with an observation, sorted
   std::vector<CameraClock> camera_last_;
   std::vector<PendingFrame> pending_;

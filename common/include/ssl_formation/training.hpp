@@ -29,7 +29,9 @@ class Training {
   // Formations sampled, including those of the resumed table.
   std::uint64_t samples() const { return samples_before_ + sampler_.counters().samples; }
   // Counts added since the last call to mark_saved(): lets a daemon skip saving an unchanged table.
-  bool changed_since_save() const { return table_.transitions() != saved_transitions_ || samples() != saved_samples_; }
+  bool changed_since_save() const {
+    return table_.transitions() != saved_transitions_ || samples() != saved_samples_;
+  }
   void mark_saved() {
     saved_transitions_ = table_.transitions();
     saved_samples_ = samples();

@@ -70,8 +70,7 @@ class TransitionTable {
     Count best_count = 0;
     std::uint64_t candidates_total = 0;
   };
-  BestSuccessor best_successor(StateIndex from, StateIndex to_centroid,
-                               StateIndex previous) const;
+  BestSuccessor best_successor(StateIndex from, StateIndex to_centroid, StateIndex previous) const;
 
   // Every nonzero count in increasing (from, to) order.
   void for_each_nonzero(const std::function<void(StateIndex, StateIndex, Count)>& visit) const;

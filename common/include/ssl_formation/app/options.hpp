@@ -35,7 +35,7 @@ struct ModelOptions {
   double field_width_mm = 6000.0;
   bool ignore_geometry = false;
 
-  Grid parsed_grid() const;  // throws UsageError
+  Grid parsed_grid() const;              // throws UsageError
   SamplerConfig sampler_config() const;  // validates everything; throws UsageError
 };
 void add_model_options(po::options_description& options, ModelOptions& model);
