@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <cstdio>
+#include <cstring>
 
 namespace ssl_formation {
 
@@ -24,6 +25,11 @@ void append_cell(std::string& out, Cell cell) {
 // them) for the few types FormationPrediction uses.
 namespace wire {
 
+// Writes into memory reserved beforehand: no capacity check per byte.
+struct Writer {
+  char* p;
+};
+
 std::size_t varint_size(std::uint64_t value) {
   std::size_t size = 1;
   while (value >= 0x80) {
@@ -32,32 +38,32 @@ std::size_t varint_size(std::uint64_t value) {
   }
   return size;
 }
-void varint(std::string& out, std::uint64_t value) {
+void varint(Writer& out, std::uint64_t value) {
   while (value >= 0x80) {
-    out.push_back(static_cast<char>((value & 0x7F) | 0x80));
+    *out.p++ = (static_cast<char>((value & 0x7F) | 0x80));
     value >>= 7;
   }
-  out.push_back(static_cast<char>(value));
+  *out.p++ = (static_cast<char>(value));
 }
-void tag(std::string& out, int field, int type) {
+void tag(Writer& out, int field, int type) {
   varint(out, static_cast<std::uint64_t>(field << 3 | type));
 }
-void uint(std::string& out, int field, std::uint64_t value) {
+void uint(Writer& out, int field, std::uint64_t value) {
   tag(out, field, 0);
   varint(out, value);
 }
-void fixed(std::string& out, std::uint64_t bits, int bytes) {
-  for (int i = 0; i < bytes; ++i) out.push_back(static_cast<char>((bits >> (8 * i)) & 0xFF));
+void fixed(Writer& out, std::uint64_t bits, int bytes) {
+  for (int i = 0; i < bytes; ++i) *out.p++ = (static_cast<char>((bits >> (8 * i)) & 0xFF));
 }
-void float64(std::string& out, int field, double value) {
+void float64(Writer& out, int field, double value) {
   tag(out, field, 1);
   fixed(out, std::bit_cast<std::uint64_t>(value), 8);
 }
-void float32(std::string& out, int field, float value) {
+void float32(Writer& out, int field, float value) {
   tag(out, field, 5);
   fixed(out, std::bit_cast<std::uint32_t>(value), 4);
 }
-void length(std::string& out, int field, std::size_t size) {
+void length(Writer& out, int field, std::size_t size) {
   tag(out, field, 2);
   varint(out, size);
 }
@@ -68,12 +74,12 @@ std::size_t cell_size(Cell c) {
          varint_size(static_cast<std::uint32_t>(c.y));
 }
 constexpr std::size_t point_size = 10;
-void cell(std::string& out, int field, Cell c) {
+void cell(Writer& out, int field, Cell c) {
   length(out, field, cell_size(c));
   uint(out, 1, static_cast<std::uint32_t>(c.x));
   uint(out, 2, static_cast<std::uint32_t>(c.y));
 }
-void point(std::string& out, int field, Point p) {
+void point(Writer& out, int field, Point p) {
   length(out, field, point_size);
   float32(out, 1, static_cast<float>(p.x));
   float32(out, 2, static_cast<float>(p.y));
@@ -100,8 +106,12 @@ std::size_t step_size(std::size_t k, const PredictedStep& step) {
 }  // namespace
 
 void encode_prediction(const Formation& current, const Prediction& prediction,
-                       const PredictionContext& context, std::string& out) {
-  out.clear();
+                       const PredictionContext& context, std::string& buffer) {
+  // An upper bound of the encoded size: every varint at its longest.
+  std::size_t bound = 128 + 64 * current.robots.size();
+  for (const PredictedStep& step : prediction.steps) bound += 64 + 80 * step.robots.size();
+  if (buffer.size() < bound) buffer.resize(bound);
+  wire::Writer out{buffer.data()};
   wire::uint(out, 1, current.frame_number);
   wire::float64(out, 2, current.time_s);
   wire::cell(out, 3, current.centroid_cell);
@@ -142,7 +152,9 @@ void encode_prediction(const Formation& current, const Prediction& prediction,
   wire::float64(out, 9, context.step_s);
   const std::string_view color = to_string(context.opponent_color);
   wire::length(out, 10, color.size());
-  out.append(color);
+  std::memcpy(out.p, color.data(), color.size());
+  out.p += color.size();
+  buffer.resize(static_cast<std::size_t>(out.p - buffer.data()));
 }
 
 void fill_prediction_message(const Formation& current, const Prediction& prediction,
