@@ -407,13 +407,8 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
     marks[2] = now_ns();
     sf::predict(stored.table, sf::robot_states(sample.formation), 2, prediction);
     marks[3] = now_ns();
-    sf::PredictionContext context;
-    context.codec = &stored.table.codec();
-    context.field = sampler.field();
-    context.opponent_attacks = config.opponent_attacks;
-    context.opponent_color = config.opponent_color;
-    context.step_s = config.step_s;
-    context.table_transitions = stored.table.transitions();
+    const sf::PredictionContext context =
+        sf::prediction_context(stored.table, config, sampler.field());
     // As the daemon does: the wire format written directly.
     sf::encode_prediction(sample.formation, prediction, context, encoded);
     marks[4] = now_ns();

@@ -233,13 +233,8 @@ class PredictorDaemon {
       robot_states_.push_back({robot.robot_id, robot.state});
     }
     sf::predict(stored.table, robot_states_, options_.horizon, prediction_);
-    sf::PredictionContext context;
-    context.codec = &stored.table.codec();
-    context.field = sampler_.field();
-    context.opponent_attacks = config_.opponent_attacks;
-    context.opponent_color = config_.opponent_color;
-    context.step_s = config_.step_s;
-    context.table_transitions = stored.table.transitions();
+    const sf::PredictionContext context =
+        sf::prediction_context(stored.table, config_, sampler_.field());
     sf::encode_prediction(sample.formation, prediction_, context, datagram_);
     sender_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
     ++predictions_;

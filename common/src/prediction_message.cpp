@@ -105,6 +105,18 @@ std::size_t step_size(std::size_t k, const PredictedStep& step) {
 
 }  // namespace
 
+PredictionContext prediction_context(const TransitionTable& table, const SamplerConfig& config,
+                                     const FieldSize& field) {
+  PredictionContext context;
+  context.codec = &table.codec();
+  context.field = field;
+  context.opponent_attacks = config.opponent_attacks;
+  context.opponent_color = config.opponent_color;
+  context.step_s = config.step_s;
+  context.table_transitions = table.transitions();
+  return context;
+}
+
 void encode_prediction(const Formation& current, const Prediction& prediction,
                        const PredictionContext& context, std::string& buffer) {
   // An upper bound of the encoded size: every varint at its longest.

@@ -201,27 +201,13 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
   const std::vector<std::string> expected_predictions = library_predictions(clean, predictor_table);
   ASSERT_EQ(expected_predictions.size(), clean_training->sampler().counters().samples);
 
-  const std::string vision = new_group();
-  const std::string predictions = new_group();
-  ChildProcess trainer(trainer_program,
-                       {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
-                        "--status-interval", "0.1", "--flush-interval", "60"},
-                       dir.path(), "trainer");
-  ChildProcess predictor(
-      predictor_program,
-      {"--vision-address", vision, "--prediction-address", predictions, "--table",
-       (dir / "fixed.bin").string(), "--quiet", "--status-interval", "0.1"},
-      dir.path(), "predictor");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
-  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
-  PredictionListener listener(predictions);
-  {
-    Sender sender(vision);
-    for (const std::string& datagram : dirty.datagrams) {
-      ASSERT_TRUE(sender.send(datagram));
-      std::this_thread::sleep_for(150us);  // well within what the daemons keep up with
-    }
-  }
+  RunningPipeline pipeline(dir, dir / "fixed.bin");
+  ASSERT_TRUE(pipeline.ready());
+  ChildProcess& trainer = pipeline.trainer;
+  ChildProcess& predictor = pipeline.predictor;
+  PredictionListener listener(pipeline.predictions);
+  send_paced(pipeline.vision, dirty.datagrams);
+  if (HasFatalFailure()) return;
   const auto received = listener.wait_for_bytes(expected_predictions.size(), 15s);
   ASSERT_TRUE(wait_for_status(trainer, "formations", expected.samples, 10s))
       << trainer.stderr_text();

@@ -183,27 +183,13 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->table(), TableMetadata{}));
   const auto expected_predictions = library_predictions(stream, fixed->table());
 
-  const std::string vision = new_group();
-  const std::string predictions = new_group();
-  ChildProcess trainer(trainer_program,
-                       {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
-                        "--status-interval", "0.1", "--flush-interval", "60"},
-                       dir.path(), "trainer");
-  ChildProcess predictor(
-      predictor_program,
-      {"--vision-address", vision, "--prediction-address", predictions, "--table",
-       (dir / "fixed.bin").string(), "--quiet", "--status-interval", "0.1"},
-      dir.path(), "predictor");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
-  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
-  PredictionListener listener(predictions);
-  {
-    Sender sender(vision);
-    for (const auto& packet : stream) {
-      ASSERT_TRUE(sender.send(packet));
-      std::this_thread::sleep_for(150us);
-    }
-  }
+  RunningPipeline pipeline(dir, dir / "fixed.bin");
+  ASSERT_TRUE(pipeline.ready());
+  ChildProcess& trainer = pipeline.trainer;
+  ChildProcess& predictor = pipeline.predictor;
+  PredictionListener listener(pipeline.predictions);
+  send_paced(pipeline.vision, stream);
+  if (HasFatalFailure()) return;
   const auto received = listener.wait_for_bytes(expected_predictions.size(), 10s);
   ASSERT_TRUE(wait_for_status(trainer, "formations", c.samples, 10s)) << trainer.stderr_text();
   trainer.signal(SIGTERM);

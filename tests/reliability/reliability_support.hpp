@@ -102,6 +102,46 @@ class Sender {
   net::MulticastSender sender_;
 };
 
+// Sends every item (bytes or a message) to `group`, 150 us apart: well within what the daemons
+// keep up with, so what they count is what was sent.
+template <class Items>
+void send_paced(const std::string& group, const Items& items) {
+  Sender sender(group);
+  for (const auto& item : items) {
+    ASSERT_TRUE(sender.send(item));
+    std::this_thread::sleep_for(150us);
+  }
+}
+
+// A trainer and a predictor (reading `predictor_table`) on one fresh vision group, the predictions
+// on another, both status lines every 0.1 s. ready() waits until both listen.
+struct RunningPipeline {
+  RunningPipeline(const testing::TempDir& dir, const std::filesystem::path& predictor_table)
+      : trainer(trainer_program,
+                {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
+                 "--status-interval", "0.1", "--flush-interval", "60"},
+                dir.path(), "trainer"),
+        predictor(predictor_program,
+                  {"--vision-address", vision, "--prediction-address", predictions, "--table",
+                   predictor_table.string(), "--quiet", "--status-interval", "0.1"},
+                  dir.path(), "predictor") {}
+
+  ::testing::AssertionResult ready() {
+    if (!trainer.wait_for_stderr("listening on", 5s)) {
+      return ::testing::AssertionFailure() << trainer.stderr_text();
+    }
+    if (!predictor.wait_for_stderr("loaded table", 5s)) {
+      return ::testing::AssertionFailure() << predictor.stderr_text();
+    }
+    return ::testing::AssertionSuccess();
+  }
+
+  const std::string vision = new_group();
+  const std::string predictions = new_group();
+  testing::ChildProcess trainer;
+  testing::ChildProcess predictor;
+};
+
 // key=value pairs of the last line of `text` that contains `marker` ("status:").
 inline std::map<std::string, std::uint64_t> last_status(const std::string& text,
                                                         const std::string& marker = "status:") {

@@ -19,6 +19,11 @@ struct PredictionContext {
   std::uint64_t table_transitions = 0;
 };
 
+// The context a predictor running `config` on `table` writes its messages with, for the current
+// field size (from geometry).
+PredictionContext prediction_context(const TransitionTable& table, const SamplerConfig& config,
+                                     const FieldSize& field);
+
 // Fills `out` (cleared first; reusing one message avoids allocation per packet).
 void fill_prediction_message(const Formation& current, const Prediction& prediction,
                              const PredictionContext& context, proto::FormationPrediction& out);
