@@ -12,11 +12,11 @@
 
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
-#include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
 #include "ssl_formation/prediction_message.hpp"
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/state.hpp"
-#include "ssl_vision_wrapper.pb.h"
 #include "table_watcher.hpp"
 #include "web/field_view_json.hpp"
 #include "web/field_view_server.hpp"
@@ -106,11 +106,11 @@ class PredictorDaemon {
       web_->start();  // before the receiver, so a busy port fails before anything else runs
       spdlog::info("field view: open {}", web_->url());
     }
-    receiver_.start([this](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
+    receiver_.start([this](const sf::VisionFrame& frame, const sf::net::udp::endpoint&) {
       last_packet_ = std::chrono::steady_clock::now();
       // Ours first, so that a prediction this packet completes shows them as of this packet.
-      if (web_ && packet.has_detection()) ours_.add(packet.detection());
-      sampler_.add(packet);
+      if (web_ && frame.has_detection) ours_.add(frame.detection);
+      sampler_.add(frame);
     });
     spdlog::info("predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s",
                  options_.horizon, sf::to_string(config_.opponent_color),
@@ -261,7 +261,7 @@ class PredictorDaemon {
   sf::SamplerConfig config_;
   sf::predictor::TableWatcher watcher_;
   sf::FormationSampler sampler_;
-  sf::net::ProtoMulticastReceiver<SSL_WrapperPacket> receiver_;
+  sf::net::VisionReceiver receiver_;
   sf::net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction
   sf::Prediction prediction_;
   std::vector<sf::RobotStateById> robot_states_;

@@ -9,7 +9,7 @@
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/app/progress.hpp"
 #include "ssl_formation/log_file.hpp"
-#include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
 #include "ssl_vision_wrapper.pb.h"
 #include "table_store.hpp"
 
@@ -60,11 +60,9 @@ int run_live(const TrainerOptions& options) {
       sf::trainer::open_training(table_path, config, options.reset);
 
   boost::asio::io_context io;
-  sf::net::ProtoMulticastReceiver<SSL_WrapperPacket> receiver(io, group, interface,
-                                                              options.receive_buffer_bytes);
-  receiver.start([&](const SSL_WrapperPacket& packet, const sf::net::udp::endpoint&) {
-    training->add(packet);
-  });
+  sf::net::VisionReceiver receiver(io, group, interface, options.receive_buffer_bytes);
+  receiver.start(
+      [&](const sf::VisionFrame& frame, const sf::net::udp::endpoint&) { training->add(frame); });
   spdlog::info("training: opponent {} attacking {}; grid {}, step {} s; table {} saved every {} s",
                sf::to_string(config.opponent_color), sf::to_string(config.opponent_attacks),
                config.grid.to_string(), config.step_s, table_path.string(),

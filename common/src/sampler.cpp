@@ -27,17 +27,21 @@ FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample
 }
 
 void FormationSampler::add(const SSL_WrapperPacket& packet) {
-  ++counters_.packets;
-  if (!packet.has_geometry() && !packet.has_detection()) ++counters_.packets_empty;
-  if (packet.has_geometry()) add_geometry(packet.geometry());
-  if (packet.has_detection()) add_detection(packet.detection());
+  to_vision_frame(packet, packet_scratch_);
+  add(packet_scratch_);
 }
 
-void FormationSampler::add_geometry(const SSL_GeometryData& geometry) {
+void FormationSampler::add(const VisionFrame& frame) {
+  ++counters_.packets;
+  if (!frame.has_geometry && !frame.has_detection) ++counters_.packets_empty;
+  if (frame.has_geometry) add_geometry(frame.field_length, frame.field_width);
+  if (frame.has_detection) add_detection(frame.detection);
+}
+
+void FormationSampler::add_geometry(std::int32_t field_length, std::int32_t field_width) {
   ++counters_.geometry_packets;
   if (!config_.use_geometry) return;
-  const FieldSize field{static_cast<double>(geometry.field().field_length()),
-                        static_cast<double>(geometry.field().field_width())};
+  const FieldSize field{static_cast<double>(field_length), static_cast<double>(field_width)};
   if (!field.valid()) {
     ++counters_.geometry_invalid;
     return;
@@ -52,32 +56,31 @@ void FormationSampler::add_geometry(const SSL_GeometryData& geometry) {
   }
 }
 
-void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
+void FormationSampler::add_detection(const VisionDetection& frame) {
   ++counters_.detection_frames;
-  const double t = frame.t_capture();
+  const double t = frame.t_capture;
   if (!std::isfinite(t)) {
     ++counters_.frames_bad_time;
     return;
   }
-  if (frame.camera_id() > config_.max_camera_id) {
+  if (frame.camera_id > config_.max_camera_id) {
     ++counters_.frames_bad_camera;
     return;
   }
-  const auto& robots =
-      config_.opponent_color == TeamColor::yellow ? frame.robots_yellow() : frame.robots_blue();
+  const std::vector<VisionRobot>& robots = frame.robots(config_.opponent_color);
   if (static_cast<std::uint32_t>(robots.size()) > config_.max_robots_per_frame) {
     ++counters_.frames_too_many_robots;
     return;
   }
 
   frame_scratch_.clear();
-  for (const SSL_DetectionRobot& robot : robots) {
-    if (!robot.has_robot_id() || robot.robot_id() > config_.max_robot_id) {
+  for (const VisionRobot& robot : robots) {
+    if (!robot.has_robot_id || robot.robot_id > config_.max_robot_id) {
       ++counters_.robots_bad_id;
       continue;
     }
-    const double x = robot.x();
-    const double y = robot.y();
+    const double x = robot.x;
+    const double y = robot.y;
     if (!std::isfinite(x) || !std::isfinite(y)) {
       ++counters_.robots_non_finite;
       continue;
@@ -90,18 +93,17 @@ void FormationSampler::add_detection(const SSL_DetectionFrame& frame) {
     // One camera may report two blobs with the same id: keep the more confident one.
     const auto same =
         std::find_if(frame_scratch_.begin(), frame_scratch_.end(),
-                     [&](const Detection& d) { return d.robot_id == robot.robot_id(); });
+                     [&](const Detection& d) { return d.robot_id == robot.robot_id; });
     if (same != frame_scratch_.end()) {
       ++counters_.robots_duplicate_in_frame;
-      if (robot.confidence() > same->confidence)
-        *same = {robot.robot_id(), x, y, robot.confidence()};
+      if (robot.confidence > same->confidence) *same = {robot.robot_id, x, y, robot.confidence};
       continue;
     }
-    frame_scratch_.push_back({robot.robot_id(), x, y, robot.confidence()});
+    frame_scratch_.push_back({robot.robot_id, x, y, robot.confidence});
   }
   counters_.robots_accepted += frame_scratch_.size();
   if (frame_scratch_.empty()) ++counters_.frames_without_opponent;
-  place_frame(frame.camera_id(), frame.frame_number(), t);
+  place_frame(frame.camera_id, frame.frame_number, t);
 }
 
 // Decides which clock the frame (its detections in frame_scratch_) belongs to, and uses it.
@@ -281,6 +283,16 @@ Formation FormationSampler::build_formation(const StateCodec& codec, const Field
                                             std::vector<FormationRobot> robots,
                                             const Formation* previous) {
   Formation formation;
+  build_formation(codec, field, robots, previous, formation);
+  return formation;
+}
+
+void FormationSampler::build_formation(const StateCodec& codec, const FieldSize& field,
+                                       std::vector<FormationRobot>& robots,
+                                       const Formation* previous, Formation& formation) {
+  formation.time_s = 0.0;
+  formation.frame_number = 0;
+  formation.centroid = Point{};
   std::sort(robots.begin(), robots.end(), [](const FormationRobot& a, const FormationRobot& b) {
     return a.robot_id < b.robot_id;
   });
@@ -304,8 +316,7 @@ Formation FormationSampler::build_formation(const StateCodec& codec, const Field
     robot.state =
         codec.encode(RobotState{formation.centroid_cell, robot.cell, robot.previous_cell});
   }
-  formation.robots = std::move(robots);
-  return formation;
+  formation.robots.swap(robots);
 }
 
 void FormationSampler::emit(std::int64_t k, bool forced) {
@@ -314,8 +325,8 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
   open_k_.reset();
 
   const double fresh_s = std::min(config_.robot_timeout_s, config_.step_s);
-  std::vector<FormationRobot> robots;
-  robots.reserve(observed_ids_.size());
+  std::vector<FormationRobot>& robots = robots_scratch_;
+  robots.clear();
   for (const std::uint32_t id : observed_ids_) {
     const Observation& obs = observations_[id];
     if (obs.time_s <= sample_s - fresh_s + time_epsilon_s) continue;
@@ -338,8 +349,7 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
   if (previous_ && !continues) ++counters_.chain_breaks;
   if (conflict_) ++counters_.samples_in_conflict;
   FormationSample& sample = sample_scratch_;
-  sample.formation =
-      build_formation(codec_, field_, std::move(robots), continues ? &*previous_ : nullptr);
+  build_formation(codec_, field_, robots, continues ? &*previous_ : nullptr, sample.formation);
   sample.formation.time_s = sample_s;
   sample.formation.frame_number = last_frame_number_;
   sample.transitions.clear();

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "ssl_vision_detection.pb.h"
 
 namespace ssl_formation::predictor::web {
 
@@ -22,29 +21,27 @@ void TeamRobots::clear() {
   newest_s_ = 0.0;
 }
 
-void TeamRobots::add(const SSL_DetectionFrame& frame) {
-  const double t = frame.t_capture();
+void TeamRobots::add(const VisionDetection& frame) {
+  const double t = frame.t_capture;
   if (!std::isfinite(t)) return;
   if (any_ && t < newest_s_ - clock_reset_s_) clear();
   if (!any_ || t > newest_s_) newest_s_ = t;
   any_ = true;
-  const auto& detections =
-      color_ == TeamColor::yellow ? frame.robots_yellow() : frame.robots_blue();
-  for (const SSL_DetectionRobot& robot : detections) {
-    if (!robot.has_robot_id() || robot.robot_id() > max_robot_id) continue;
-    const double x = robot.x();
-    const double y = robot.y();
+  for (const VisionRobot& robot : frame.robots(color_)) {
+    if (!robot.has_robot_id || robot.robot_id > max_robot_id) continue;
+    const double x = robot.x;
+    const double y = robot.y;
     if (!std::isfinite(x) || !std::isfinite(y) || std::abs(x) > max_abs_coordinate_mm ||
         std::abs(y) > max_abs_coordinate_mm) {
       continue;
     }
     const auto at =
-        std::lower_bound(robots_.begin(), robots_.end(), robot.robot_id(),
+        std::lower_bound(robots_.begin(), robots_.end(), robot.robot_id,
                          [](const TeamRobot& r, std::uint32_t id) { return r.robot_id < id; });
-    if (at != robots_.end() && at->robot_id == robot.robot_id()) {
-      if (t >= at->time_s) *at = TeamRobot{robot.robot_id(), x, y, t};  // newest wins
+    if (at != robots_.end() && at->robot_id == robot.robot_id) {
+      if (t >= at->time_s) *at = TeamRobot{robot.robot_id, x, y, t};  // newest wins
     } else {
-      robots_.insert(at, TeamRobot{robot.robot_id(), x, y, t});
+      robots_.insert(at, TeamRobot{robot.robot_id, x, y, t});
     }
   }
 }

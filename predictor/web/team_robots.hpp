@@ -7,8 +7,7 @@
 #include <vector>
 
 #include "ssl_formation/formation.hpp"
-
-class SSL_DetectionFrame;
+#include "ssl_formation/vision_frame.hpp"
 
 namespace ssl_formation::predictor::web {
 
@@ -26,7 +25,7 @@ class TeamRobots {
   // means the data clock restarted.
   TeamRobots(TeamColor color, double timeout_s, double clock_reset_s);
 
-  void add(const SSL_DetectionFrame& frame);
+  void add(const VisionDetection& frame);
   // The robots seen within the timeout, sorted by id.
   const std::vector<TeamRobot>& current();
   void clear();

@@ -4,37 +4,29 @@
 
 #include <limits>
 
-#include "ssl_vision_detection.pb.h"
 
 namespace ssl_formation::predictor::web {
 namespace {
 
-SSL_DetectionFrame frame(double t, std::uint32_t camera) {
-  SSL_DetectionFrame f;
-  f.set_frame_number(1);
-  f.set_t_capture(t);
-  f.set_t_sent(t);
-  f.set_camera_id(camera);
+VisionDetection frame(double t, std::uint32_t camera) {
+  VisionDetection f;
+  f.frame_number = 1;
+  f.t_capture = t;
+  f.camera_id = camera;
   return f;
 }
 
-void add_robot(SSL_DetectionFrame& f, bool blue, std::uint32_t id, float x, float y) {
-  SSL_DetectionRobot& r = blue ? *f.add_robots_blue() : *f.add_robots_yellow();
-  r.set_confidence(1.0f);
-  r.set_robot_id(id);
-  r.set_x(x);
-  r.set_y(y);
-  r.set_pixel_x(0);
-  r.set_pixel_y(0);
+void add_robot(VisionDetection& f, bool blue, std::uint32_t id, float x, float y) {
+  (blue ? f.robots_blue : f.robots_yellow).push_back(VisionRobot{id, true, x, y, 1.0F});
 }
 
 TEST(TeamRobots, MergesCamerasByIdNewestWins) {
   TeamRobots ours(TeamColor::blue, 1.0, 4.0);
-  SSL_DetectionFrame left = frame(10.0, 0);
+  VisionDetection left = frame(10.0, 0);
   add_robot(left, true, 3, -1000, 0);
   add_robot(left, true, 1, -2000, 500);
   add_robot(left, false, 7, 0, 0);  // the opponent: not ours
-  SSL_DetectionFrame right = frame(10.02, 1);
+  VisionDetection right = frame(10.02, 1);
   add_robot(right, true, 3, -990, 10);  // seen by both cameras: the newer detection wins
   ours.add(left);
   ours.add(right);
@@ -44,7 +36,7 @@ TEST(TeamRobots, MergesCamerasByIdNewestWins) {
   EXPECT_EQ(robots[1].robot_id, 3u);
   EXPECT_DOUBLE_EQ(robots[1].x, -990);
   // An older frame arriving late does not overwrite a newer detection.
-  SSL_DetectionFrame late = frame(10.01, 2);
+  VisionDetection late = frame(10.01, 2);
   add_robot(late, true, 3, 4000, 4000);
   ours.add(late);
   EXPECT_DOUBLE_EQ(ours.current()[1].x, -990);
@@ -52,21 +44,21 @@ TEST(TeamRobots, MergesCamerasByIdNewestWins) {
 
 TEST(TeamRobots, ForgetsRobotsNoCameraReportsAndRestartsWithTheClock) {
   TeamRobots ours(TeamColor::yellow, 1.0, 4.0);
-  SSL_DetectionFrame first = frame(10.0, 0);
+  VisionDetection first = frame(10.0, 0);
   add_robot(first, false, 2, 100, 100);
   add_robot(first, false, 5, 200, 200);
   ours.add(first);
-  SSL_DetectionFrame later = frame(10.8, 0);
+  VisionDetection later = frame(10.8, 0);
   add_robot(later, false, 5, 210, 200);
   ours.add(later);
   EXPECT_EQ(ours.current().size(), 2u);
-  SSL_DetectionFrame much_later = frame(11.5, 0);
+  VisionDetection much_later = frame(11.5, 0);
   add_robot(much_later, false, 5, 220, 200);
   ours.add(much_later);
   ASSERT_EQ(ours.current().size(), 1u);  // robot 2 not seen for 1.5 s
   EXPECT_EQ(ours.current()[0].robot_id, 5u);
   // The data clock restarts (a new log or producer): the old robots go at once.
-  SSL_DetectionFrame restarted = frame(0.0, 0);
+  VisionDetection restarted = frame(0.0, 0);
   add_robot(restarted, false, 9, 0, 0);
   ours.add(restarted);
   ASSERT_EQ(ours.current().size(), 1u);
@@ -75,7 +67,7 @@ TEST(TeamRobots, ForgetsRobotsNoCameraReportsAndRestartsWithTheClock) {
 
 TEST(TeamRobots, IgnoresNonsense) {
   TeamRobots ours(TeamColor::blue, 1.0, 4.0);
-  SSL_DetectionFrame f = frame(1.0, 0);
+  VisionDetection f = frame(1.0, 0);
   add_robot(f, true, 1, std::numeric_limits<float>::quiet_NaN(), 0);
   add_robot(f, true, 2, 1e9f, 0);
   add_robot(f, true, 5000, 0, 0);

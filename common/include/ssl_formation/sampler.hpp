@@ -15,10 +15,9 @@
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/state.hpp"
+#include "ssl_formation/vision_frame.hpp"
 
 class SSL_WrapperPacket;
-class SSL_DetectionFrame;
-class SSL_GeometryData;
 
 namespace ssl_formation {
 
@@ -103,6 +102,7 @@ class FormationSampler {
   FormationSampler(SamplerConfig config, SampleHandler on_sample);
 
   // Feeds one packet; calls the handler for every sample it completes (zero, one or two).
+  void add(const VisionFrame& frame);
   void add(const SSL_WrapperPacket& packet);
 
   // Forgets the stream so far (cameras, clock, previous formation) but keeps the field size and
@@ -118,6 +118,10 @@ class FormationSampler {
   // formations themselves (the simulated producer, evaluation).
   static Formation build_formation(const StateCodec& codec, const FieldSize& field,
                                    std::vector<FormationRobot> robots, const Formation* previous);
+  // The same into `out`, whose robots vector is swapped with `robots` (both keep their memory).
+  static void build_formation(const StateCodec& codec, const FieldSize& field,
+                              std::vector<FormationRobot>& robots, const Formation* previous,
+                              Formation& out);
 
  private:
   struct Observation {
@@ -155,8 +159,8 @@ class FormationSampler {
     double seen_at_s = 0.0;  // the current clock's newest time when last seen
   };
 
-  void add_geometry(const SSL_GeometryData& geometry);
-  void add_detection(const SSL_DetectionFrame& frame);
+  void add_geometry(std::int32_t field_length, std::int32_t field_width);
+  void add_detection(const VisionDetection& frame);
   void place_frame(std::uint32_t camera_id, std::uint32_t frame_number, double time_s);
   void set_aside(std::uint32_t camera_id, std::uint32_t frame_number, double time_s);
   void switch_clock();
@@ -174,6 +178,7 @@ class FormationSampler {
   FieldSize field_;
   SamplerCounters counters_;
 
+  VisionFrame packet_scratch_;  // add(SSL_WrapperPacket) converts into this
   std::vector<Detection> frame_scratch_;
   std::vector<Observation> observations_;    // indexed by robot id
   std::vector<std::uint32_t> observed_ids_;  // ids with an observation, sorted
@@ -191,6 +196,8 @@ class FormationSampler {
 
   std::optional<Formation> previous_;
   std::int64_t previous_k_ = 0;
+  // Reused from sample to sample, so that a steady stream allocates nothing.
+  std::vector<FormationRobot> robots_scratch_;
   FormationSample sample_scratch_;
 };
 

@@ -21,6 +21,7 @@ class Training {
   Training& operator=(const Training&) = delete;
 
   void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
+  void add(const VisionFrame& frame) { sampler_.add(frame); }
   // A new log file: its first formation follows nothing (no transition across two files).
   void start_new_stream() { sampler_.start_new_stream(); }
 

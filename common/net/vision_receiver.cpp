@@ -1,0 +1,37 @@
+#include "ssl_formation/net/vision_receiver.hpp"
+
+#include <utility>
+
+#include "ssl_formation/net/proto_multicast.hpp"
+
+namespace ssl_formation::net {
+
+VisionReceiver::VisionReceiver(boost::asio::io_context& io, MulticastEndpoint endpoint,
+                               InterfaceChoice interface, int receive_buffer_bytes)
+    : receiver_(io, endpoint, interface, receive_buffer_bytes) {}
+
+void VisionReceiver::start(FrameHandler on_frame) {
+  on_frame_ = std::move(on_frame);
+  receiver_.start([this](std::span<const std::byte> data, const udp::endpoint& from) {
+    on_datagram(data, from);
+  });
+}
+
+void VisionReceiver::on_datagram(std::span<const std::byte> data, const udp::endpoint& from) {
+  if (decode_detection_datagram(data, frame_)) {
+    ++direct_decodes_;
+  } else {
+    // As ProtoMulticastReceiver: ParsePartialFromArray plus IsInitialized() is ParseFromArray
+    // without protobuf's own unthrottled error log per packet. data.size() fits in an int.
+    if (!packet_.ParsePartialFromArray(data.data(), static_cast<int>(data.size())) ||
+        !packet_.IsInitialized()) {
+      receiver_.count_parse_error();
+      detail::log_parse_error(receiver_, packet_.GetTypeName(), data.size());
+      return;
+    }
+    to_vision_frame(packet_, frame_);
+  }
+  if (on_frame_) on_frame_(frame_, from);
+}
+
+}  // namespace ssl_formation::net

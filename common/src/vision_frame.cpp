@@ -1,0 +1,253 @@
+#include "ssl_formation/vision_frame.hpp"
+
+#include <bit>
+#include <initializer_list>
+
+#include "ssl_vision_wrapper.pb.h"
+
+namespace ssl_formation {
+
+namespace {
+
+void copy_robots(const google::protobuf::RepeatedPtrField<SSL_DetectionRobot>& from,
+                 std::vector<VisionRobot>& to) {
+  to.clear();
+  for (const SSL_DetectionRobot& robot : from) {
+    to.push_back({robot.robot_id(), robot.has_robot_id(), robot.x(), robot.y(), robot.confidence()});
+  }
+}
+
+// The protobuf wire format (https://protobuf.dev/programming-guides/encoding/), read only as far
+// as the detection schema needs. Every read returns false at the first thing it does not handle;
+// the caller then gives the whole datagram to protobuf.
+namespace wire {
+
+enum Type : std::uint32_t { varint_type = 0, fixed64_type = 1, bytes_type = 2, fixed32_type = 5 };
+
+constexpr std::uint32_t tag(std::uint32_t field, Type type) { return field << 3 | type; }
+
+class Reader {
+ public:
+  explicit Reader(std::span<const std::byte> bytes)
+      : p_(reinterpret_cast<const unsigned char*>(bytes.data())), end_(p_ + bytes.size()) {}
+  Reader(const unsigned char* begin, const unsigned char* end) : p_(begin), end_(end) {}
+
+  bool done() const { return p_ == end_; }
+
+  // A varint of at most 32 bits. Longer ones (which protobuf truncates for uint32 fields, or
+  // negative enum values) are left to protobuf.
+  bool varint32(std::uint32_t& out) {
+    std::uint32_t value = 0;
+    for (int shift = 0; shift <= 28; shift += 7) {
+      if (p_ == end_) return false;
+      const std::uint32_t byte = *p_++;
+      if (shift == 28 && (byte & 0xF0U) != 0) return false;  // beyond 32 bits, or a 6th byte
+      value |= (byte & 0x7FU) << shift;
+      if ((byte & 0x80U) == 0) {
+        out = value;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  bool fixed32(std::uint32_t& out) {
+    if (end_ - p_ < 4) return false;
+    out = 0;
+    for (int i = 3; i >= 0; --i) out = out << 8 | p_[i];  // little-endian on the wire
+    p_ += 4;
+    return true;
+  }
+  bool float32(float& out) {
+    std::uint32_t bits = 0;
+    if (!fixed32(bits)) return false;
+    out = std::bit_cast<float>(bits);
+    return true;
+  }
+
+  bool fixed64(std::uint64_t& out) {
+    if (end_ - p_ < 8) return false;
+    out = 0;
+    for (int i = 7; i >= 0; --i) out = out << 8 | p_[i];
+    p_ += 8;
+    return true;
+  }
+  bool float64(double& out) {
+    std::uint64_t bits = 0;
+    if (!fixed64(bits)) return false;
+    out = std::bit_cast<double>(bits);
+    return true;
+  }
+  bool skip(std::ptrdiff_t bytes) {
+    if (end_ - p_ < bytes) return false;
+    p_ += bytes;
+    return true;
+  }
+
+  // A length-delimited field's contents, as a reader of their own.
+  bool nested(Reader& out) {
+    std::uint32_t length = 0;
+    if (!varint32(length) || static_cast<std::uint64_t>(end_ - p_) < length) return false;
+    out = Reader(p_, p_ + length);
+    p_ += length;
+    return true;
+  }
+
+ private:
+  const unsigned char* p_;
+  const unsigned char* end_;
+};
+
+// Fields of one message seen so far: for "at most once" and "every required field" checks.
+class SeenFields {
+ public:
+  // False if the field was seen before (protobuf would merge or overwrite: its business).
+  bool first(std::uint32_t field) {
+    if (field >= 32) return false;  // beyond every schema here
+    const std::uint32_t bit = 1U << field;
+    if ((seen_ & bit) != 0) return false;
+    seen_ |= bit;
+    return true;
+  }
+  bool has_all(std::initializer_list<std::uint32_t> fields) const {
+    for (const std::uint32_t field : fields)
+      if ((seen_ & (1U << field)) == 0) return false;
+    return true;
+  }
+
+ private:
+  std::uint32_t seen_ = 0;
+};
+
+// SSL_DetectionRobot: confidence 1, robot_id 2, x 3, y 4, orientation 5, pixel_x 6, pixel_y 7,
+// height 8.
+bool robot(Reader in, VisionRobot& out) {
+  SeenFields seen;
+  out.has_robot_id = false;
+  while (!in.done()) {
+    std::uint32_t key = 0;
+    if (!in.varint32(key) || !seen.first(key >> 3)) return false;
+    float ignored = 0.0F;
+    bool ok = false;
+    switch (key) {
+      case tag(1, fixed32_type): ok = in.float32(out.confidence); break;
+      case tag(2, varint_type): ok = out.has_robot_id = in.varint32(out.robot_id); break;
+      case tag(3, fixed32_type): ok = in.float32(out.x); break;
+      case tag(4, fixed32_type): ok = in.float32(out.y); break;
+      case tag(5, fixed32_type):
+      case tag(6, fixed32_type):
+      case tag(7, fixed32_type):
+      case tag(8, fixed32_type): ok = in.float32(ignored); break;
+      default: return false;
+    }
+    if (!ok) return false;
+  }
+  return seen.has_all({1, 3, 4, 6, 7});
+}
+
+// SSL_DetectionBall, checked only: confidence 1, area 2, x 3, y 4, z 5, pixel_x 6, pixel_y 7.
+bool ball(Reader in) {
+  SeenFields seen;
+  while (!in.done()) {
+    std::uint32_t key = 0;
+    if (!in.varint32(key) || !seen.first(key >> 3)) return false;
+    std::uint32_t ignored = 0;
+    bool ok = false;
+    switch (key) {
+      case tag(2, varint_type): ok = in.varint32(ignored); break;
+      case tag(1, fixed32_type):
+      case tag(3, fixed32_type):
+      case tag(4, fixed32_type):
+      case tag(5, fixed32_type):
+      case tag(6, fixed32_type):
+      case tag(7, fixed32_type): ok = in.skip(4); break;
+      default: return false;
+    }
+    if (!ok) return false;
+  }
+  return seen.has_all({1, 3, 4, 6, 7});
+}
+
+// SSL_DetectionFrame: frame_number 1, t_capture 2, t_sent 3, camera_id 4, balls 5,
+// robots_yellow 6, robots_blue 7, t_capture_camera 8.
+bool detection(Reader in, VisionDetection& out) {
+  SeenFields seen;
+  out.robots_yellow.clear();
+  out.robots_blue.clear();
+  while (!in.done()) {
+    std::uint32_t key = 0;
+    if (!in.varint32(key)) return false;
+    const std::uint32_t field = key >> 3;
+    if (field < 5 || field > 7) {  // the repeated fields may come many times, the others once
+      if (!seen.first(field)) return false;
+    }
+    Reader nested(nullptr, nullptr);
+    bool ok = false;
+    switch (key) {
+      case tag(1, varint_type): ok = in.varint32(out.frame_number); break;
+      case tag(2, fixed64_type): ok = in.float64(out.t_capture); break;
+      case tag(3, fixed64_type):
+      case tag(8, fixed64_type): ok = in.skip(8); break;
+      case tag(4, varint_type): ok = in.varint32(out.camera_id); break;
+      case tag(5, bytes_type): ok = in.nested(nested) && ball(nested); break;
+      case tag(6, bytes_type):
+        ok = in.nested(nested) && robot(nested, out.robots_yellow.emplace_back());
+        break;
+      case tag(7, bytes_type):
+        ok = in.nested(nested) && robot(nested, out.robots_blue.emplace_back());
+        break;
+      default: return false;
+    }
+    if (!ok) return false;
+  }
+  return seen.has_all({1, 2, 3, 4});
+}
+
+}  // namespace wire
+
+}  // namespace
+
+void to_vision_frame(const SSL_WrapperPacket& packet, VisionFrame& frame) {
+  frame.has_detection = packet.has_detection();
+  if (frame.has_detection) {
+    const SSL_DetectionFrame& detection = packet.detection();
+    frame.detection.frame_number = detection.frame_number();
+    frame.detection.t_capture = detection.t_capture();
+    frame.detection.camera_id = detection.camera_id();
+    copy_robots(detection.robots_yellow(), frame.detection.robots_yellow);
+    copy_robots(detection.robots_blue(), frame.detection.robots_blue);
+  }
+  frame.has_geometry = packet.has_geometry();
+  if (frame.has_geometry) {
+    frame.field_length = packet.geometry().field().field_length();
+    frame.field_width = packet.geometry().field().field_width();
+  }
+}
+
+bool decode_detection_datagram(std::span<const std::byte> datagram, VisionFrame& frame) {
+  // SSL_WrapperPacket: detection 1, geometry 2 (left to protobuf), source 3 (an enum, 0 to 3).
+  wire::Reader in(datagram);
+  wire::SeenFields seen;
+  frame.has_geometry = false;
+  while (!in.done()) {
+    std::uint32_t key = 0;
+    if (!in.varint32(key) || !seen.first(key >> 3)) return false;
+    wire::Reader nested(nullptr, nullptr);
+    std::uint32_t source = 0;
+    switch (key) {
+      case wire::tag(1, wire::bytes_type):
+        if (!in.nested(nested) || !wire::detection(nested, frame.detection)) return false;
+        break;
+      case wire::tag(3, wire::varint_type):
+        // An unknown enum value goes to protobuf's unknown fields: its business.
+        if (!in.varint32(source) || source > SSL_VisionSource_MAX) return false;
+        break;
+      default:
+        return false;
+    }
+  }
+  frame.has_detection = seen.has_all({1});
+  return frame.has_detection;
+}
+
+}  // namespace ssl_formation
