@@ -20,8 +20,31 @@ struct SparseRow {
 struct TransitionTable::Storage {
   bool dense = true;
   std::uint64_t states = 0;
-  // Dense: states*states counts, row-major, and a total per row.
+  // Dense: states*states counts and a total per FROM row. The counts are not row-major: they
+  // are grouped in blocks by (FROM centroid, TO centroid), and within a block the candidates that
+  // best_successor() weighs (same previous cell, every position) sit side by side. One prediction
+  // step looks up every robot in one block (all share the centroid and the predicted centroid):
+  // a few kilobytes on one or two pages, instead of one page per robot. That is what a
+  // prediction costs when the predictor wakes with cold caches and TLB every 16 ms.
   std::vector<Count> counts;
+  std::uint64_t cells = 0;
+  // Offset of the candidates (to_centroid, every position, previous) of row `from`.
+  std::uint64_t candidates(StateIndex from, std::uint64_t to_centroid,
+                           std::uint64_t previous) const {
+    const std::uint64_t block_rows = cells * cells;  // (position, previous) of one centroid
+    const std::uint64_t from_centroid = from / block_rows;
+    const std::uint64_t from_in_block = from % block_rows;
+    const std::uint64_t block = from_centroid * cells + to_centroid;
+    return ((block * block_rows + from_in_block) * cells + previous) * cells;
+  }
+  std::uint64_t offset(StateIndex from, StateIndex to) const {
+    const std::uint64_t previous = to % cells;
+    const std::uint64_t position = (to / cells) % cells;
+    const std::uint64_t to_centroid = to / (cells * cells);
+    return candidates(from, to_centroid, previous) + position;
+  }
+  Count& at(StateIndex from, StateIndex to) { return counts[offset(from, to)]; }
+  Count at(StateIndex from, StateIndex to) const { return counts[offset(from, to)]; }
   std::vector<std::uint64_t> row_totals;
   // Sparse: only the rows and entries seen.
   std::unordered_map<StateIndex, SparseRow> rows;
@@ -33,6 +56,7 @@ TransitionTable::TransitionTable(Grid grid, TableStorage storage)
   const std::uint64_t states = codec_.state_count();
   const std::uint64_t cells = codec_.cell_count();
   storage_->states = states;
+  storage_->cells = cells;
   storage_->dense = (storage == TableStorage::dense && states * states <= dense_entry_hard_limit) ||
                     (storage == TableStorage::automatic && states * states <= dense_entry_limit);
   if (storage_->dense) {
@@ -66,7 +90,7 @@ TransitionTable::Count TransitionTable::add(StateIndex from, StateIndex to, Coun
   Count* cell = nullptr;
   std::uint64_t* row_total = nullptr;
   if (storage_->dense) {
-    cell = &storage_->counts[std::uint64_t{from} * storage_->states + to];
+    cell = &storage_->at(from, to);
     row_total = &storage_->row_totals[from];
   } else {
     if (n == 0) return 0;
@@ -92,7 +116,7 @@ TransitionTable::Count TransitionTable::add(StateIndex from, StateIndex to, Coun
 
 TransitionTable::Count TransitionTable::count(StateIndex from, StateIndex to) const {
   if (from >= storage_->states || to >= storage_->states) return 0;
-  if (storage_->dense) return storage_->counts[std::uint64_t{from} * storage_->states + to];
+  if (storage_->dense) return storage_->at(from, to);
   const auto row = storage_->rows.find(from);
   if (row == storage_->rows.end()) return 0;
   const auto& entries = row->second.entries;
@@ -145,11 +169,12 @@ TransitionTable::BestSuccessor TransitionTable::best_successor(StateIndex from,
   BestSuccessor best;
   const StateIndex cells = codec_.cell_count();
   if (storage_->dense) {
-    // Candidates are (to_centroid, p', previous) for every cell p': one per cell, in index order.
-    const Count* row = &storage_->counts[std::uint64_t{from} * storage_->states];
+    // Candidates are (to_centroid, p', previous) for every cell p': one per cell, in index order,
+    // and contiguous (see Storage).
+    const Count* candidates = &storage_->counts[storage_->candidates(from, to_centroid, previous)];
     for (StateIndex position = 0; position < cells; ++position) {
       const StateIndex to = codec_.compose(to_centroid, position, previous);
-      const Count c = row[to];
+      const Count c = candidates[position];
       best.candidates_total += c;
       if (c > best.best_count) {
         best.best_count = c;
@@ -180,12 +205,20 @@ void TransitionTable::for_each_nonzero(
     const std::function<void(StateIndex, StateIndex, Count)>& visit) const {
   if (storage_->dense) {
     const std::uint64_t states = storage_->states;
+    const std::uint64_t cells = storage_->cells;
     for (std::uint64_t from = 0; from < states; ++from) {
       if (storage_->row_totals[from] == 0) continue;
-      const Count* row = &storage_->counts[from * states];
-      for (std::uint64_t to = 0; to < states; ++to) {
-        if (row[to] != 0) {
-          visit(static_cast<StateIndex>(from), static_cast<StateIndex>(to), row[to]);
+      // TO states in index order, each read from where the layout keeps it.
+      StateIndex to = 0;
+      for (std::uint64_t centroid = 0; centroid < cells; ++centroid) {
+        for (std::uint64_t position = 0; position < cells; ++position) {
+          for (std::uint64_t previous = 0; previous < cells; ++previous, ++to) {
+            const Count c =
+                storage_->counts[storage_->candidates(static_cast<StateIndex>(from), centroid,
+                                                      previous) +
+                                 position];
+            if (c != 0) visit(static_cast<StateIndex>(from), to, c);
+          }
         }
       }
     }
