@@ -129,6 +129,60 @@ TEST(TransitionTable, MergeEqualsCountingBothStreams) {
   EXPECT_THROW(a.merge(TransitionTable(Grid(6, 4))), std::invalid_argument);
 }
 
+// The dense layout keeps counts in (from centroid, to centroid) blocks, not row-major: every
+// query must still answer as if it scanned the plain S x S matrix.
+TEST(TransitionTable, DenseLayoutAnswersLikeAScanOfThePlainMatrix) {
+  for (const Grid grid : {Grid(3, 2), Grid(4, 3)}) {
+    TransitionTable table(grid, TableStorage::dense);
+    ASSERT_TRUE(table.is_dense());
+    const StateCodec& codec = table.codec();
+    const StateIndex cells = codec.cell_count();
+    std::mt19937 random(7);
+    std::uniform_int_distribution<StateIndex> any_state(0, codec.state_count() - 1);
+    std::map<std::pair<StateIndex, StateIndex>, std::uint64_t> truth;
+    std::vector<StateIndex> rows;
+    for (int i = 0; i < 4000; ++i) {
+      const StateIndex from = i % 2 == 0 && !rows.empty() ? rows[i % rows.size()] : any_state(random);
+      const StateIndex to = any_state(random);
+      table.add(from, to);
+      ++truth[{from, to}];
+      if (rows.size() < 40) rows.push_back(from);
+    }
+    // for_each_nonzero: exactly the counts, in increasing (from, to) order.
+    std::vector<std::pair<std::pair<StateIndex, StateIndex>, std::uint64_t>> visited;
+    table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
+      visited.push_back({{from, to}, c});
+    });
+    const std::vector<std::pair<std::pair<StateIndex, StateIndex>, std::uint64_t>> expected(
+        truth.begin(), truth.end());
+    ASSERT_EQ(visited, expected) << grid.to_string();
+    // best_successor: the brute-force best over every position, ties to the lowest index.
+    for (const StateIndex from : rows) {
+      for (StateIndex to_centroid = 0; to_centroid < cells; ++to_centroid) {
+        for (StateIndex previous = 0; previous < cells; ++previous) {
+          TransitionTable::BestSuccessor expected;
+          for (StateIndex position = 0; position < cells; ++position) {
+            const StateIndex to = codec.compose(to_centroid, position, previous);
+            const auto it = truth.find({from, to});
+            const std::uint64_t c = it == truth.end() ? 0 : it->second;
+            expected.candidates_total += c;
+            if (c > expected.best_count) {
+              expected.best_count = static_cast<TransitionTable::Count>(c);
+              expected.state = to;
+            }
+          }
+          const auto best = table.best_successor(from, to_centroid, previous);
+          ASSERT_EQ(best.candidates_total, expected.candidates_total);
+          ASSERT_EQ(best.best_count, expected.best_count);
+          if (expected.best_count > 0) {
+            ASSERT_EQ(best.state, expected.state);
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(TransitionTable, SparseAndDenseGiveIdenticalPredictions) {
   const Grid grid(3, 2);
   TransitionTable dense(grid, TableStorage::dense);
