@@ -12,9 +12,10 @@
 //               (by frame_number) or echoed datagram. Both paths run interleaved in the same
 //               run, so they see the same machine conditions.
 //   pipeline    times, in this process, the work ssl-predictor does for one packet (decode,
-//               sample, predict, fill and encode the message; predictor/main.cpp's on_sample), with
-//               warm caches and with the caches flushed before each packet, as they are when a
-//               daemon that sleeps between packets shares the machine with other work.
+//               sample, predict, encode the message: net::VisionReceiver and predictor/main.cpp's
+//               on_sample), back to back and after sleeping --idle seconds before each packet, as
+//               the daemon does between packets at 60 packets/s: meanwhile the machine runs other
+//               work and the caches and TLB go cold, which is most of the daemon's cost.
 //   load        sends 4-camera, 6+6-robot packets at a high rate to the vision group, for the
 //               trainer and the predictor to keep up with.
 //
@@ -51,6 +52,7 @@
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
+#include "ssl_formation/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace sf = ssl_formation;
@@ -381,7 +383,7 @@ int run_latency(const LatencyOptions& o) {
 // pipeline
 
 int run_pipeline(const std::string& table_path, std::size_t count, double step_s,
-                 std::uint64_t seed, std::size_t flush_bytes) {
+                 std::uint64_t seed, double idle_s) {
   sf::TableLoadResult loaded = sf::load_table(table_path);
   if (!loaded) {
     std::cerr << "e2e_bench pipeline: " << loaded.message << '\n';
@@ -392,68 +394,67 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   o.step_s = step_s;
   o.seed = seed;
   const std::vector<std::string> packets = latency_packets(o, 2 * count);
-  std::vector<unsigned char> flush(flush_bytes, 1);
 
-  // The predictor's per-packet path, as in predictor/main.cpp (decode, sampler, on_sample).
+  // The predictor's per-packet path, as in predictor/main.cpp (net::VisionReceiver's decode, the
+  // sampler, on_sample), with its buffers reused the same way.
   sf::SamplerConfig config;
   config.grid = stored.table.grid();
   config.step_s = step_s;
   sf::Prediction prediction;
+  std::vector<sf::RobotStateById> robot_states;
   std::string encoded;
   std::uint64_t predictions = 0;
-  // Stage times of the current packet: decode, sample, predict, fill, encode.
+  // Stage times of the current packet: decode, sample, predict, encode.
   std::array<std::int64_t, 5> marks{};
   sf::FormationSampler sampler(config, [&](const sf::FormationSample& sample) {
     marks[2] = now_ns();
-    sf::predict(stored.table, sf::robot_states(sample.formation), 2, prediction);
+    robot_states.clear();
+    for (const sf::FormationRobot& robot : sample.formation.robots)
+      robot_states.push_back({robot.robot_id, robot.state});
+    sf::predict(stored.table, robot_states, 2, prediction);
     marks[3] = now_ns();
     const sf::PredictionContext context =
         sf::prediction_context(stored.table, config, sampler.field());
-    // As the daemon does: the wire format written directly.
     sf::encode_prediction(sample.formation, prediction, context, encoded);
     marks[4] = now_ns();
     ++predictions;
   });
-  SSL_WrapperPacket packet;
-  std::array<std::vector<double>, 4> cold_stages;
+  sf::VisionFrame frame;
+  std::array<std::vector<double>, 4> idle_stages;
   const auto one = [&](const std::string& bytes) {
     marks = {};
     marks[0] = now_ns();
-    if (packet.ParsePartialFromArray(bytes.data(), static_cast<int>(bytes.size())) &&
-        packet.IsInitialized()) {
+    if (sf::decode_detection_datagram(bytes_of(bytes), frame)) {
       marks[1] = now_ns();
-      sampler.add(packet);
+      sampler.add(frame);
     }
     return static_cast<double>(now_ns() - marks[0]) / 1000.0;
   };
-  // First every packet with the caches flushed just before it, then as many more back to back.
-  std::vector<double> warm, cold;
-  unsigned sink = 0;
+  // First every packet after sleeping as a daemon does between packets at 60 packets/s (its
+  // caches and TLB go cold meanwhile: the machine runs other work), then as many back to back.
+  std::vector<double> warm, idle;
   for (std::size_t i = 0; i < count; ++i) {
-    // Evict: touch a buffer larger than the last-level cache.
-    for (std::size_t b = 0; b < flush.size(); b += 64)
-      flush[b] = static_cast<unsigned char>(flush[b] + i);
-    sink += flush[i % flush.size()];
-    cold.push_back(one(packets[i]));
+    std::this_thread::sleep_for(std::chrono::duration<double>(idle_s));
+    idle.push_back(one(packets[i]));
     if (marks[4] != 0) {
-      for (std::size_t k = 0; k < cold_stages.size(); ++k) {
-        cold_stages[k].push_back(static_cast<double>(marks[k + 1] - marks[k]) / 1000.0);
+      for (std::size_t k = 0; k < idle_stages.size(); ++k) {
+        idle_stages[k].push_back(static_cast<double>(marks[k + 1] - marks[k]) / 1000.0);
       }
     }
   }
   for (std::size_t i = count; i < 2 * count; ++i) warm.push_back(one(packets[i]));
   std::sort(warm.begin(), warm.end());
-  std::sort(cold.begin(), cold.end());
+  std::sort(idle.begin(), idle.end());
   std::printf(
       "pipeline packets=%zu predictions=%llu message_bytes=%zu warm_p50_us=%.2f warm_p99_us=%.2f "
-      "cold_p50_us=%.2f cold_p99_us=%.2f flush_bytes=%zu (%u)\n",
+      "idle_p50_us=%.2f idle_p99_us=%.2f idle_ms=%.1f\n",
       count, static_cast<unsigned long long>(predictions), encoded.size(), percentile(warm, 50),
-      percentile(warm, 99), percentile(cold, 50), percentile(cold, 99), flush_bytes, sink % 2);
+      percentile(warm, 99), percentile(idle, 50), percentile(idle, 99), idle_s * 1000.0);
   const char* names[] = {"decode", "sample", "predict", "encode"};
-  std::printf("pipeline cold stage medians (us):");
-  for (std::size_t k = 0; k < cold_stages.size(); ++k) {
-    std::sort(cold_stages[k].begin(), cold_stages[k].end());
-    std::printf(" %s=%.2f", names[k], percentile(cold_stages[k], 50));
+  std::printf("pipeline stage medians after idling (us):");
+  for (std::size_t k = 0; k < idle_stages.size(); ++k) {
+    std::sort(idle_stages[k].begin(), idle_stages[k].end());
+    std::printf(" %s=%.2f", names[k], percentile(idle_stages[k], 50));
   }
   std::printf("\n");
   return 0;
@@ -560,10 +561,12 @@ int main(int argc, char** argv) {
     std::string vision_address = kVisionGroup;
     double rate = 0.0;
     bool verbose = false;
+    std::size_t pipeline_packets = 300;
+    double idle_s = 1.0 / 60.0;
 
     po::options_description general("Options (each mode uses the ones that concern it)");
     general.add_options()("mode", po::value(&mode)->required(),
-                          "make-table, echo, latency or load")(
+                          "make-table, echo, latency, pipeline or load")(
         "interface", po::value(&interface)->default_value(interface),
         "IPv4 address to send from and join on")(
         "vision-address", po::value(&vision_address)->default_value(vision_address),
@@ -589,11 +592,15 @@ int main(int argc, char** argv) {
         "latency: seconds to wait for the last replies")(
         "no-echo", po::bool_switch(&latency.no_echo), "latency: time the predictor alone")(
         "no-predictor", po::bool_switch(&latency.no_predictor), "latency: time the echo alone")(
+        "packets", po::value(&pipeline_packets)->default_value(pipeline_packets),
+        "pipeline: packets to time each way")(
+        "idle", po::value(&idle_s)->default_value(idle_s, "1/60"),
+        "pipeline: seconds slept before each timed packet")(
         "cameras", po::value(&load.cameras)->default_value(load.cameras), "load: cameras")(
         "frame-dt", po::value(&load.frame_dt_s)->default_value(load.frame_dt_s),
         "load: data-clock seconds per camera frame (2 = the predictor's step: every frame "
         "completes a formation)")("table", po::value(&table)->default_value(table),
-                                  "make-table: file to write")(
+                                  "make-table: file to write; pipeline: table to predict from")(
         "formations", po::value(&formations)->default_value(formations),
         "make-table: formations to train on")("seed", po::value(&seed), "simulated vision seed")(
         "receive-buffer", po::value(&receive_buffer)->default_value(receive_buffer),
@@ -611,8 +618,10 @@ int main(int argc, char** argv) {
 
     if (mode == "make-table") return make_table(table, formations, seed ? seed : 1, step_s);
     if (mode == "pipeline") {
-      return run_pipeline(table, static_cast<std::size_t>(rate > 0 ? rate : 2000), step_s,
-                          seed ? seed : 7, std::size_t{64} << 20);
+      if (pipeline_packets < 1 || pipeline_packets > 100000)
+        throw sf::app::UsageError("--packets must be 1 to 100000");
+      if (!(idle_s >= 0 && idle_s <= 1)) throw sf::app::UsageError("--idle must be 0 to 1");
+      return run_pipeline(table, pipeline_packets, step_s, seed ? seed : 7, idle_s);
     }
     if (mode == "echo") {
       spdlog::set_level(spdlog::level::info);  // the script waits for "listening on"
@@ -639,6 +648,6 @@ int main(int argc, char** argv) {
         throw sf::app::UsageError("--cameras must be 1 to 8");
       return run_load(load);
     }
-    throw sf::app::UsageError("unknown mode '" + mode + "': make-table, echo, latency or load");
+    throw sf::app::UsageError("unknown mode '" + mode + "': make-table, echo, latency, pipeline or load");
   });
 }
