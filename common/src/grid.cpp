@@ -20,11 +20,6 @@ std::string_view to_string(AttackDirection direction) {
   return direction == AttackDirection::positive_x ? "+x" : "-x";
 }
 
-Point normalise(Point feed_point, AttackDirection opponent_attacks) {
-  if (opponent_attacks == AttackDirection::positive_x) return feed_point;
-  return Point{-feed_point.x, -feed_point.y};
-}
-
 Grid::Grid(int length_cells, int width_cells) : length_(length_cells), width_(width_cells) {
   if (length_cells < 1 || width_cells < 1 || length_cells > max_cells || width_cells > max_cells ||
       length_cells * width_cells > max_cells) {
@@ -63,20 +58,6 @@ std::optional<Grid> Grid::parse(std::string_view text, std::string* error) {
 
 std::string Grid::to_string() const {
   return std::to_string(length_) + "x" + std::to_string(width_);
-}
-
-Cell Grid::cell_of(Point point, const FieldSize& field) const {
-  // NaN never reaches here (the sampler rejects it); clamping in double first keeps huge
-  // coordinates from overflowing the int conversion.
-  const double fx = std::floor((point.x + field.length_mm / 2.0) / field.length_mm * length_);
-  const double fy = std::floor((point.y + field.width_mm / 2.0) / field.width_mm * width_);
-  return Cell{static_cast<int>(std::clamp(fx, 0.0, static_cast<double>(length_ - 1))),
-              static_cast<int>(std::clamp(fy, 0.0, static_cast<double>(width_ - 1)))};
-}
-
-Point Grid::centre_of(Cell cell, const FieldSize& field) const {
-  return Point{(cell.x + 0.5) * field.length_mm / length_ - field.length_mm / 2.0,
-               (cell.y + 0.5) * field.width_mm / width_ - field.width_mm / 2.0};
 }
 
 }  // namespace ssl_formation

@@ -23,6 +23,16 @@ FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample
   if (!field_.valid()) {
     throw std::invalid_argument("field length and width must be positive");
   }
+  // The buffers every sample goes through, reserved here, one after the other, so they share a
+  // few pages: a daemon waking every 16 ms pays for each page it touches (its TLB and caches
+  // are cold by then), and a stream of up to 16 robots per team then never reallocates.
+  constexpr std::size_t usual_robots = 16;
+  frame_scratch_.reserve(usual_robots);
+  observed_ids_.reserve(2 * usual_robots);
+  camera_last_.reserve(8);
+  robots_scratch_.reserve(usual_robots);
+  sample_scratch_.formation.robots.reserve(usual_robots);
+  sample_scratch_.transitions.reserve(usual_robots);
   observations_.resize(std::size_t{config_.max_robot_id} + 1);
 }
 
@@ -293,9 +303,13 @@ void FormationSampler::build_formation(const StateCodec& codec, const FieldSize&
   formation.time_s = 0.0;
   formation.frame_number = 0;
   formation.centroid = Point{};
-  std::sort(robots.begin(), robots.end(), [](const FormationRobot& a, const FormationRobot& b) {
+  const auto by_id = [](const FormationRobot& a, const FormationRobot& b) {
     return a.robot_id < b.robot_id;
-  });
+  };
+  // The sampler hands its robots over in id order already: no sort code to run (cold) then.
+  if (!std::is_sorted(robots.begin(), robots.end(), by_id)) {
+    std::sort(robots.begin(), robots.end(), by_id);
+  }
   if (!robots.empty()) {
     double sum_x = 0.0;
     double sum_y = 0.0;
@@ -363,8 +377,18 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
   ++counters_.samples;
   if (forced) ++counters_.samples_forced;
   counters_.transitions += sample.transitions.size();
-  previous_ = sample.formation;
   previous_k_ = k;
+  // This sample becomes the previous one after the handler has run (the predictor sends its
+  // prediction from there, so nothing else should come first), by swapping buffers rather than
+  // copying; also if the handler throws, or the next sample would follow a stale formation.
+  struct BecomesPrevious {
+    std::optional<Formation>& previous;
+    Formation& formation;
+    ~BecomesPrevious() {
+      if (!previous) previous.emplace();
+      std::swap(*previous, formation);
+    }
+  } becomes_previous{previous_, sample.formation};
   if (on_sample_) on_sample_(sample);
 }
 

@@ -2,6 +2,7 @@
 // A formation (paper §3): the opponent robots of one sample, each with its state, and the
 // transitions that sample adds to the table.
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -34,7 +35,12 @@ struct Formation {
   // False when this formation starts a chain: the first sample, or one after a gap.
   bool continues_previous = false;
 
-  const FormationRobot* find(std::uint32_t robot_id) const;
+  const FormationRobot* find(std::uint32_t robot_id) const {
+    const auto it = std::lower_bound(
+        robots.begin(), robots.end(), robot_id,
+        [](const FormationRobot& robot, std::uint32_t id) { return robot.robot_id < id; });
+    return it != robots.end() && it->robot_id == robot_id ? &*it : nullptr;
+  }
 };
 
 struct Transition {

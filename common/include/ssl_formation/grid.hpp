@@ -2,6 +2,8 @@
 // The field grid of the paper (§3.1): L columns along the field length and W rows along its
 // width, with the attack-direction normalisation of §7.1 (DESIGN.md §3).
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -40,7 +42,10 @@ std::optional<AttackDirection> parse_attack_direction(std::string_view text);  /
 std::string_view to_string(AttackDirection direction);
 
 // The rotation is its own inverse, so the same call undoes it for output.
-Point normalise(Point feed_point, AttackDirection opponent_attacks);
+inline Point normalise(Point feed_point, AttackDirection opponent_attacks) {
+  if (opponent_attacks == AttackDirection::positive_x) return feed_point;
+  return Point{-feed_point.x, -feed_point.y};
+}
 
 class Grid {
  public:
@@ -59,9 +64,22 @@ class Grid {
   std::string to_string() const;  // "3x2"
 
   // The cell of a point of the normalised field, clamped so that the boundary area and
-  // anything beyond land in the edge cells.
-  Cell cell_of(Point normalised_point, const FieldSize& field) const;
-  Point centre_of(Cell cell, const FieldSize& field) const;
+  // anything beyond land in the edge cells. Inline, as centre_of: both run for every robot of
+  // every packet, and a call into another file's code costs a cold page per packet.
+  Cell cell_of(Point normalised_point, const FieldSize& field) const {
+    // NaN never reaches here (the sampler rejects it); clamping in double first keeps huge
+    // coordinates from overflowing the int conversion.
+    const double fx =
+        std::floor((normalised_point.x + field.length_mm / 2.0) / field.length_mm * length_);
+    const double fy =
+        std::floor((normalised_point.y + field.width_mm / 2.0) / field.width_mm * width_);
+    return Cell{static_cast<int>(std::clamp(fx, 0.0, static_cast<double>(length_ - 1))),
+                static_cast<int>(std::clamp(fy, 0.0, static_cast<double>(width_ - 1)))};
+  }
+  Point centre_of(Cell cell, const FieldSize& field) const {
+    return Point{(cell.x + 0.5) * field.length_mm / length_ - field.length_mm / 2.0,
+                 (cell.y + 0.5) * field.width_mm / width_ - field.width_mm / 2.0};
+  }
 
   // Cells numbered x*W + y, the digit order of the state index (DESIGN.md §3).
   int cell_id(Cell cell) const { return cell.x * width_ + cell.y; }
