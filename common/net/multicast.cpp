@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cstring>
+#include <exception>
 #include <ostream>
 #include <system_error>
 #include <utility>
@@ -230,9 +231,22 @@ void MulticastReceiver::State::arm(const std::shared_ptr<State>& self) {
 void MulticastReceiver::State::on_readable(const std::shared_ptr<State>& self,
                                            std::uint64_t generation, const error_code& ec) {
   if (!self->running || generation != self->generation) return;  // stopped or restarted
-  // Re-arm before anything else: whatever happens below (an error, a throwing callback), the
-  // loop goes on. Only one wait is ever outstanding, since each completion arms one.
-  arm(self);
+  // Re-armed when this returns, whatever happens below (an error, a throwing callback): the loop
+  // goes on. Only one wait is ever outstanding, since each completion arms one. Arming costs a
+  // system call (epoll_ctl), so it comes after the datagrams are handled, not before: a datagram
+  // that arrives meanwhile is not lost, the edge-triggered wait fires at once for a socket that is
+  // already readable.
+  struct RearmOnExit {
+    const std::shared_ptr<State>& self;
+    ~RearmOnExit() {
+      try {
+        arm(self);
+      } catch (const std::exception& e) {
+        spdlog::error("multicast receiver {}: cannot wait for the next datagram: {}",
+                      self->describe(), e.what());
+      }
+    }
+  } rearm{self};
   if (ec) {
     const auto errors = self->counters.receive_errors.fetch_add(1, std::memory_order_relaxed) + 1;
     if (worth_logging(errors)) {
