@@ -8,7 +8,11 @@ namespace ssl_formation::net {
 
 VisionReceiver::VisionReceiver(boost::asio::io_context& io, MulticastEndpoint endpoint,
                                InterfaceChoice interface, int receive_buffer_bytes)
-    : receiver_(io, endpoint, interface, receive_buffer_bytes) {}
+    : receiver_(io, endpoint, interface, receive_buffer_bytes) {
+  // Room for the usual frame from the start, so the robots share a page with what comes next.
+  frame_.detection.robots_yellow.reserve(16);
+  frame_.detection.robots_blue.reserve(16);
+}
 
 void VisionReceiver::start(FrameHandler on_frame) {
   on_frame_ = std::move(on_frame);
