@@ -7,7 +7,8 @@
 //               unchanged, to another, through the same MulticastReceiver/MulticastSender path
 //               the predictor uses, doing no work in between.
 //   latency     the producer and the listener: sends SSL_WrapperPackets at a fixed rate to the
-//               predictor and, half a period later, the same packet to the echo, and times each
+//               predictor and, half a period apart, the same packet to the echo (which of the two
+//               goes first swaps every 100 packets), and times each
 //               one from just before its send to the reception of the matching prediction
 //               (by frame_number) or echoed datagram. Both paths run interleaved in the same
 //               run, so they see the same machine conditions.
@@ -343,21 +344,35 @@ int run_latency(const LatencyOptions& o) {
   const auto spin_ns = static_cast<std::int64_t>(o.spin_us * 1000.0);
   const std::int64_t start = now_ns() + 100'000'000;  // 100 ms for the receivers to settle
   std::int64_t latest_start_ns = 0;
+  // Each path's packets go one period apart, the two paths half a period apart: interleaved, so
+  // both see the same machine, and apart, so neither queues behind the other. Which path goes on
+  // the period and which half a period later swaps every kBlock packets, so that neither always
+  // follows the other (whatever the other's wake-up leaves behind, warm or busy, both get it).
+  constexpr std::size_t kBlock = 100;
+  const auto send_predictor = [&](std::size_t i, std::int64_t due) {
+    wait_until(due, spin_ns);
+    const std::int64_t at = now_ns();
+    latest_start_ns = std::max(latest_start_ns, at - due);
+    predictor_times.sent[i].store(at, std::memory_order_release);
+    to_predictor.send(bytes_of(packets[i]));
+  };
+  const auto send_echo = [&](std::size_t i, std::int64_t due) {
+    wait_until(due, spin_ns);
+    const std::int64_t at = now_ns();
+    latest_start_ns = std::max(latest_start_ns, at - due);
+    echo_times.sent[i].store(at, std::memory_order_release);
+    to_echo.send(bytes_of(packets[i]));
+  };
   for (std::size_t i = 0; i < count; ++i) {
-    // The predictor's packet on the period, the echo's half a period later: interleaved, so both
-    // paths see the same machine, and apart, so neither queues behind the other.
     const std::int64_t due = start + static_cast<std::int64_t>(i) * period_ns;
-    if (!o.no_predictor) {
-      wait_until(due, spin_ns);
-      const std::int64_t at = now_ns();
-      latest_start_ns = std::max(latest_start_ns, at - due);
-      predictor_times.sent[i].store(at, std::memory_order_release);
-      to_predictor.send(bytes_of(packets[i]));
-    }
-    if (!o.no_echo) {
-      wait_until(due + period_ns / 2, spin_ns);
-      echo_times.sent[i].store(now_ns(), std::memory_order_release);
-      to_echo.send(bytes_of(packets[i]));
+    const std::int64_t half_later = due + period_ns / 2;
+    const bool predictor_on_the_period = (i / kBlock) % 2 == 0;
+    if (predictor_on_the_period) {
+      if (!o.no_predictor) send_predictor(i, due);
+      if (!o.no_echo) send_echo(i, half_later);
+    } else {
+      if (!o.no_echo) send_echo(i, due);
+      if (!o.no_predictor) send_predictor(i, half_later);
     }
   }
   const double achieved_s = static_cast<double>(now_ns() - start) / 1e9;
