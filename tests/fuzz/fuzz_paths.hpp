@@ -17,6 +17,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -25,6 +26,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <span>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -34,6 +36,7 @@
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/transition_table.hpp"
+#include "ssl_formation/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::fuzz {
@@ -173,6 +176,8 @@ class SamplerHarness {
         sampler_(config, [this](const FormationSample& sample) { on_sample(sample); }) {}
 
   void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
+  void add(const VisionFrame& frame) { sampler_.add(frame); }
+  void fail(const std::string& what) { v_.fail(what); }
   void start_new_stream() {
     sampler_.start_new_stream();
     ++epoch_;
@@ -311,11 +316,34 @@ inline SamplerConfig sampler_config(std::uint8_t selector) {
 
 inline constexpr std::uint16_t new_stream_record = 0xFFFF;
 
+// Bit for bit, so that NaN coordinates compare equal.
+inline bool same_frame(const VisionFrame& a, const VisionFrame& b) {
+  const auto same_robots = [](const std::vector<VisionRobot>& x, const std::vector<VisionRobot>& y) {
+    return std::equal(x.begin(), x.end(), y.begin(), y.end(),
+                      [](const VisionRobot& r, const VisionRobot& q) {
+                        return r.robot_id == q.robot_id && r.has_robot_id == q.has_robot_id &&
+                               std::bit_cast<std::uint32_t>(r.x) == std::bit_cast<std::uint32_t>(q.x) &&
+                               std::bit_cast<std::uint32_t>(r.y) == std::bit_cast<std::uint32_t>(q.y) &&
+                               std::bit_cast<std::uint32_t>(r.confidence) ==
+                                   std::bit_cast<std::uint32_t>(q.confidence);
+                      });
+  };
+  return a.has_detection == b.has_detection && a.has_geometry == b.has_geometry &&
+         a.detection.frame_number == b.detection.frame_number &&
+         std::bit_cast<std::uint64_t>(a.detection.t_capture) ==
+             std::bit_cast<std::uint64_t>(b.detection.t_capture) &&
+         a.detection.camera_id == b.detection.camera_id &&
+         same_robots(a.detection.robots_yellow, b.detection.robots_yellow) &&
+         same_robots(a.detection.robots_blue, b.detection.robots_blue);
+}
+
 inline SamplerOutcome run_sampler_path(const std::uint8_t* data, std::size_t size) {
   SamplerOutcome out;
   if (size == 0) return out;
   SamplerHarness harness(sampler_config(data[0]));
   SSL_WrapperPacket packet;
+  VisionFrame direct;
+  VisionFrame reference;
   std::size_t at = 1;
   while (at + 2 <= size) {
     const std::uint16_t length = static_cast<std::uint16_t>(data[at] | (data[at + 1] << 8));
@@ -325,9 +353,24 @@ inline SamplerOutcome run_sampler_path(const std::uint8_t* data, std::size_t siz
       continue;
     }
     const std::size_t n = std::min<std::size_t>(length, size - at);
-    // As the daemons decode a datagram (net/proto_multicast.hpp): partial parse, then required
-    // fields, so that a packet missing one is dropped.
-    if (packet.ParsePartialFromArray(data + at, static_cast<int>(n)) && packet.IsInitialized()) {
+    // As the daemons decode a datagram (net/vision_receiver.hpp): straight from the bytes if
+    // decode_detection_datagram takes it, which must then agree with protobuf; otherwise a
+    // partial parse, then required fields, so that a packet missing one is dropped.
+    const auto bytes = std::as_bytes(std::span(data + at, n));
+    const bool parsed =
+        packet.ParsePartialFromArray(data + at, static_cast<int>(n)) && packet.IsInitialized();
+    if (decode_detection_datagram(bytes, direct)) {
+      if (!parsed) {
+        harness.fail("decode_detection_datagram took a datagram protobuf refuses");
+      } else {
+        to_vision_frame(packet, reference);
+        if (!same_frame(direct, reference)) {
+          harness.fail("decode_detection_datagram and protobuf read a datagram differently");
+        }
+      }
+      ++out.packets;
+      harness.add(direct);
+    } else if (parsed) {
       ++out.packets;
       harness.add(packet);
     } else {
