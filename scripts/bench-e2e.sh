@@ -13,14 +13,14 @@
 # 10210-10213), away from the defaults and from the tests. Every run stops by itself.
 #
 # Environment: SSLF_BUILD_DIR (default build/), SSLF_BENCH_SLOW_SECONDS (60 packets/s run,
-# default 30), SSLF_BENCH_FAST_SECONDS (1,000 packets/s run, default 10), SSLF_BENCH_LOAD_RATE
+# default 60), SSLF_BENCH_FAST_SECONDS (1,000 packets/s run, default 10), SSLF_BENCH_LOAD_RATE
 # (default 20000), SSLF_BENCH_LOAD_SECONDS (default 5). The whole script takes about 1.5 minutes
 # after the build. Exit status 1 if a target is missed.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
-slow_seconds="${SSLF_BENCH_SLOW_SECONDS:-30}"
+slow_seconds="${SSLF_BENCH_SLOW_SECONDS:-60}"
 fast_seconds="${SSLF_BENCH_FAST_SECONDS:-10}"
 load_rate="${SSLF_BENCH_LOAD_RATE:-20000}"
 load_seconds="${SSLF_BENCH_LOAD_SECONDS:-5}"
