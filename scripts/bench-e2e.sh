@@ -4,8 +4,8 @@
 #   - latency from just before the producer's send to the prediction received by a listener, at
 #     60 and 1,000 packets/s, next to the floor measured in the same run: a bare multicast round
 #     trip through an echo process that has the predictor's receive+send path and no work. The
-#     two paths are interleaved packet by packet (the echo's packet half a period after the
-#     predictor's), so both see the same machine conditions;
+#     two paths are interleaved packet by packet, half a period apart (which goes first swaps
+#     every 100 packets), so both see the same machine conditions;
 #   - what the predictor adds over the floor (targets: median <= 20 us, p99 <= 1.5 x floor p99);
 #   - ssl-trainer and ssl-predictor under 20,000 packets/s (6+6 robots, 4 cameras): every packet
 #     received and zero kernel drops, from the daemons' own final status lines.
@@ -14,7 +14,7 @@
 #
 # Environment: SSLF_BUILD_DIR (default build/), SSLF_BENCH_SLOW_SECONDS (60 packets/s run,
 # default 60), SSLF_BENCH_FAST_SECONDS (1,000 packets/s run, default 10), SSLF_BENCH_LOAD_RATE
-# (default 20000), SSLF_BENCH_LOAD_SECONDS (default 5). The whole script takes about 1.5 minutes
+# (default 20000), SSLF_BENCH_LOAD_SECONDS (default 5). The whole script takes about 2.5 minutes
 # after the build. Exit status 1 if a target is missed.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -196,7 +196,8 @@ echo
 echo "ssl-formation end-to-end benchmark: loopback multicast (127.0.0.1, TTL 1), $(nproc) CPUs,"
 echo "$(date -u '+%Y-%m-%d %H:%M UTC'), load average $(cut -d' ' -f1-3 /proc/loadavg)."
 echo "Latency in microseconds from just before the producer's send to reception by the listener;"
-echo "floor and predictor interleaved packet by packet in the same run; first 10 of each left out."
+echo "floor and predictor interleaved packet by packet in the same run, half a period apart (which"
+echo "goes first swaps every 100 packets); first 10 of each left out."
 printf '%-40s %7s %6s %5s %8s %8s %8s %8s  %-22s %s\n' measure rate n lost p50 p90 p99 max target result
 printf '%s\n' "$(printf '%.0s-' $(seq 128))"
 printf '%s\n' "${rows[@]}"
