@@ -349,30 +349,24 @@ int run_latency(const LatencyOptions& o) {
   // the period and which half a period later swaps every kBlock packets, so that neither always
   // follows the other (whatever the other's wake-up leaves behind, warm or busy, both get it).
   constexpr std::size_t kBlock = 100;
-  const auto send_predictor = [&](std::size_t i, std::int64_t due) {
+  const auto send = [&](PathTimes& times, sf::net::MulticastSender& to, std::size_t i,
+                        std::int64_t due) {
     wait_until(due, spin_ns);
     const std::int64_t at = now_ns();
     latest_start_ns = std::max(latest_start_ns, at - due);
-    predictor_times.sent[i].store(at, std::memory_order_release);
-    to_predictor.send(bytes_of(packets[i]));
-  };
-  const auto send_echo = [&](std::size_t i, std::int64_t due) {
-    wait_until(due, spin_ns);
-    const std::int64_t at = now_ns();
-    latest_start_ns = std::max(latest_start_ns, at - due);
-    echo_times.sent[i].store(at, std::memory_order_release);
-    to_echo.send(bytes_of(packets[i]));
+    times.sent[i].store(at, std::memory_order_release);
+    to.send(bytes_of(packets[i]));
   };
   for (std::size_t i = 0; i < count; ++i) {
     const std::int64_t due = start + static_cast<std::int64_t>(i) * period_ns;
     const std::int64_t half_later = due + period_ns / 2;
     const bool predictor_on_the_period = (i / kBlock) % 2 == 0;
-    if (predictor_on_the_period) {
-      if (!o.no_predictor) send_predictor(i, due);
-      if (!o.no_echo) send_echo(i, half_later);
-    } else {
-      if (!o.no_echo) send_echo(i, due);
-      if (!o.no_predictor) send_predictor(i, half_later);
+    const std::int64_t predictor_due = predictor_on_the_period ? due : half_later;
+    const std::int64_t echo_due = predictor_on_the_period ? half_later : due;
+    if (predictor_on_the_period && !o.no_predictor) send(predictor_times, to_predictor, i, due);
+    if (!o.no_echo) send(echo_times, to_echo, i, echo_due);
+    if (!predictor_on_the_period && !o.no_predictor) {
+      send(predictor_times, to_predictor, i, predictor_due);
     }
   }
   const double achieved_s = static_cast<double>(now_ns() - start) / 1e9;

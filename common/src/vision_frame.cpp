@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <initializer_list>
+#include <type_traits>
 
 #include "ssl_vision_wrapper.pb.h"
 
@@ -51,31 +52,15 @@ class Reader {
     return false;
   }
 
-  bool fixed32(std::uint32_t& out) {
-    if (end_ - p_ < 4) return false;
-    out = 0;
-    for (int i = 3; i >= 0; --i) out = out << 8 | p_[i];  // little-endian on the wire
-    p_ += 4;
-    return true;
-  }
-  bool float32(float& out) {
-    std::uint32_t bits = 0;
-    if (!fixed32(bits)) return false;
-    out = std::bit_cast<float>(bits);
-    return true;
-  }
-
-  bool fixed64(std::uint64_t& out) {
-    if (end_ - p_ < 8) return false;
-    out = 0;
-    for (int i = 7; i >= 0; --i) out = out << 8 | p_[i];
-    p_ += 8;
-    return true;
-  }
-  bool float64(double& out) {
-    std::uint64_t bits = 0;
-    if (!fixed64(bits)) return false;
-    out = std::bit_cast<double>(bits);
+  // A float or double: fixed-size, little-endian on the wire.
+  template <class Float, class Bits = std::conditional_t<sizeof(Float) == 4, std::uint32_t,
+                                                         std::uint64_t>>
+  bool fixed(Float& out) {
+    if (end_ - p_ < static_cast<std::ptrdiff_t>(sizeof(Bits))) return false;
+    Bits bits = 0;
+    for (int i = sizeof(Bits) - 1; i >= 0; --i) bits = bits << 8 | p_[i];
+    p_ += sizeof(Bits);
+    out = std::bit_cast<Float>(bits);
     return true;
   }
   bool skip(std::ptrdiff_t bytes) {
@@ -130,14 +115,14 @@ bool robot(Reader in, VisionRobot& out) {
     float ignored = 0.0F;
     bool ok = false;
     switch (key) {
-      case tag(1, fixed32_type): ok = in.float32(out.confidence); break;
+      case tag(1, fixed32_type): ok = in.fixed(out.confidence); break;
       case tag(2, varint_type): ok = out.has_robot_id = in.varint32(out.robot_id); break;
-      case tag(3, fixed32_type): ok = in.float32(out.x); break;
-      case tag(4, fixed32_type): ok = in.float32(out.y); break;
+      case tag(3, fixed32_type): ok = in.fixed(out.x); break;
+      case tag(4, fixed32_type): ok = in.fixed(out.y); break;
       case tag(5, fixed32_type):
       case tag(6, fixed32_type):
       case tag(7, fixed32_type):
-      case tag(8, fixed32_type): ok = in.float32(ignored); break;
+      case tag(8, fixed32_type): ok = in.fixed(ignored); break;
       default: return false;
     }
     if (!ok) return false;
@@ -185,7 +170,7 @@ bool detection(Reader in, VisionDetection& out) {
     bool ok = false;
     switch (key) {
       case tag(1, varint_type): ok = in.varint32(out.frame_number); break;
-      case tag(2, fixed64_type): ok = in.float64(out.t_capture); break;
+      case tag(2, fixed64_type): ok = in.fixed(out.t_capture); break;
       case tag(3, fixed64_type):
       case tag(8, fixed64_type): ok = in.skip(8); break;
       case tag(4, varint_type): ok = in.varint32(out.camera_id); break;
