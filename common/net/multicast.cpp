@@ -238,7 +238,10 @@ void MulticastReceiver::State::on_readable(const std::shared_ptr<State>& self,
   // already readable.
   struct RearmOnExit {
     const std::shared_ptr<State>& self;
+    std::uint64_t generation;
     ~RearmOnExit() {
+      // Not after stop() (or a restart, which armed its own wait) from inside the handler.
+      if (!self->running || generation != self->generation) return;
       try {
         arm(self);
       } catch (const std::exception& e) {
@@ -246,7 +249,7 @@ void MulticastReceiver::State::on_readable(const std::shared_ptr<State>& self,
                       self->describe(), e.what());
       }
     }
-  } rearm{self};
+  } rearm{self, generation};
   if (ec) {
     const auto errors = self->counters.receive_errors.fetch_add(1, std::memory_order_relaxed) + 1;
     if (worth_logging(errors)) {
