@@ -8,10 +8,9 @@
 //               the predictor uses, doing no work in between.
 //   latency     the producer and the listener: sends SSL_WrapperPackets at a fixed rate to the
 //               predictor and, half a period apart, the same packet to the echo (which of the two
-//               goes first swaps every 100 packets), and times each
-//               one from just before its send to the reception of the matching prediction
-//               (by frame_number) or echoed datagram. Both paths run interleaved in the same
-//               run, so they see the same machine conditions.
+//               goes first swaps every 100 packets). Each is timed from just before its send to
+//               the reception of the matching prediction (by frame_number) or echoed datagram.
+//               Both paths run interleaved in the same run, so they see the same machine.
 //   pipeline    times, in this process, the work ssl-predictor does for one packet (decode,
 //               sample, predict, encode the message: net::VisionReceiver and predictor/main.cpp's
 //               on_sample), back to back and after sleeping --idle seconds before each packet, as
@@ -347,7 +346,8 @@ int run_latency(const LatencyOptions& o) {
   // Each path's packets go one period apart, the two paths half a period apart: interleaved, so
   // both see the same machine, and apart, so neither queues behind the other. Which path goes on
   // the period and which half a period later swaps every kBlock packets, so that neither always
-  // follows the other (whatever the other's wake-up leaves behind, warm or busy, both get it).
+  // follows the other (whatever the other's wake-up leaves behind, warm or busy, both get it);
+  // at each swap one path's packets come half a period apart, the other's one and a half.
   constexpr std::size_t kBlock = 100;
   const auto send = [&](PathTimes& times, sf::net::MulticastSender& to, std::size_t i,
                         std::int64_t due) {
@@ -363,7 +363,9 @@ int run_latency(const LatencyOptions& o) {
     const bool predictor_on_the_period = (i / kBlock) % 2 == 0;
     const std::int64_t predictor_due = predictor_on_the_period ? due : half_later;
     const std::int64_t echo_due = predictor_on_the_period ? half_later : due;
-    if (predictor_on_the_period && !o.no_predictor) send(predictor_times, to_predictor, i, due);
+    if (predictor_on_the_period && !o.no_predictor) {
+      send(predictor_times, to_predictor, i, predictor_due);
+    }
     if (!o.no_echo) send(echo_times, to_echo, i, echo_due);
     if (!predictor_on_the_period && !o.no_predictor) {
       send(predictor_times, to_predictor, i, predictor_due);
@@ -428,12 +430,20 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
     marks[4] = now_ns();
     ++predictions;
   });
+  // As net::VisionReceiver: detection packets decoded straight from the bytes, anything else
+  // by protobuf.
   sf::VisionFrame frame;
+  SSL_WrapperPacket parsed;
   std::array<std::vector<double>, 4> idle_stages;
   const auto one = [&](const std::string& bytes) {
     marks = {};
     marks[0] = now_ns();
-    if (sf::decode_detection_datagram(bytes_of(bytes), frame)) {
+    bool decoded = sf::decode_detection_datagram(bytes_of(bytes), frame);
+    if (!decoded && parsed.ParseFromString(bytes)) {
+      sf::to_vision_frame(parsed, frame);
+      decoded = true;
+    }
+    if (decoded) {
       marks[1] = now_ns();
       sampler.add(frame);
     }
@@ -602,9 +612,9 @@ int main(int argc, char** argv) {
         "no-echo", po::bool_switch(&latency.no_echo), "latency: time the predictor alone")(
         "no-predictor", po::bool_switch(&latency.no_predictor), "latency: time the echo alone")(
         "packets", po::value(&pipeline_packets)->default_value(pipeline_packets),
-        "pipeline: packets to time each way")(
-        "idle", po::value(&idle_s)->default_value(idle_s, "1/60"),
-        "pipeline: seconds slept before each timed packet")(
+        "pipeline: packets to time each way")("idle",
+                                              po::value(&idle_s)->default_value(idle_s, "1/60"),
+                                              "pipeline: seconds slept before each timed packet")(
         "cameras", po::value(&load.cameras)->default_value(load.cameras), "load: cameras")(
         "frame-dt", po::value(&load.frame_dt_s)->default_value(load.frame_dt_s),
         "load: data-clock seconds per camera frame (2 = the predictor's step: every frame "
@@ -657,6 +667,7 @@ int main(int argc, char** argv) {
         throw sf::app::UsageError("--cameras must be 1 to 8");
       return run_load(load);
     }
-    throw sf::app::UsageError("unknown mode '" + mode + "': make-table, echo, latency, pipeline or load");
+    throw sf::app::UsageError("unknown mode '" + mode +
+                              "': make-table, echo, latency, pipeline or load");
   });
 }
