@@ -239,9 +239,16 @@ void MulticastReceiver::State::on_readable(const std::shared_ptr<State>& self,
   struct RearmOnExit {
     const std::shared_ptr<State>& self;
     std::uint64_t generation;
-    ~RearmOnExit() {
+    int exceptions_at_entry = std::uncaught_exceptions();
+    // A failure to arm (only bad_alloc in practice) leaves io_context::run() as it always did,
+    // unless a throwing handler is already doing so: then it is logged, and that one goes on.
+    ~RearmOnExit() noexcept(false) {
       // Not after stop() (or a restart, which armed its own wait) from inside the handler.
       if (!self->running || generation != self->generation) return;
+      if (std::uncaught_exceptions() == exceptions_at_entry) {
+        arm(self);
+        return;
+      }
       try {
         arm(self);
       } catch (const std::exception& e) {

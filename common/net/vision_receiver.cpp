@@ -15,15 +15,18 @@ VisionReceiver::VisionReceiver(boost::asio::io_context& io, MulticastEndpoint en
 }
 
 void VisionReceiver::start(FrameHandler on_frame) {
-  on_frame_ = std::move(on_frame);
+  // The handler is replaced only once the socket is up: a start() that throws (already started,
+  // cannot bind or join) leaves a running receiver's handler alone. No datagram can arrive in
+  // between: they are handled inside io_context::run().
   receiver_.start([this](std::span<const std::byte> data, const udp::endpoint& from) {
     on_datagram(data, from);
   });
+  on_frame_ = std::move(on_frame);
 }
 
 void VisionReceiver::on_datagram(std::span<const std::byte> data, const udp::endpoint& from) {
   if (decode_detection_datagram(data, frame_)) {
-    ++direct_decodes_;
+    direct_decodes_.fetch_add(1, std::memory_order_relaxed);
   } else {
     // As ProtoMulticastReceiver: ParsePartialFromArray plus IsInitialized() is ParseFromArray
     // without protobuf's own unthrottled error log per packet. data.size() fits in an int.

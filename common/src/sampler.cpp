@@ -25,7 +25,8 @@ FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample
   }
   // The buffers every sample goes through, reserved here, one after the other, so they share a
   // few pages: a daemon waking every 16 ms pays for each page it touches (its TLB and caches
-  // are cold by then), and a stream of up to 16 robots per team then never reallocates.
+  // are cold by then). A steady stream of up to 16 robots per team then never allocates; a chain
+  // break costs one allocation, when the next sample becomes the previous one.
   constexpr std::size_t usual_robots = 16;
   frame_scratch_.reserve(usual_robots);
   observed_ids_.reserve(2 * usual_robots);
@@ -381,18 +382,21 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
   // This sample becomes the previous one after the handler has run (the predictor sends its
   // prediction from there, so nothing else should come first), by swapping buffers rather than
   // copying; also if the handler throws, or the next sample would follow a stale formation.
+  // A handler that starts a new stream (restart()) forgets this sample too.
   struct BecomesPrevious {
-    std::optional<Formation>& previous;
-    Formation& formation;
+    FormationSampler& sampler;
+    std::uint64_t restarts;
     ~BecomesPrevious() {
-      if (!previous) previous.emplace();
-      std::swap(*previous, formation);
+      if (sampler.restarts_ != restarts) return;
+      if (!sampler.previous_) sampler.previous_.emplace();
+      std::swap(*sampler.previous_, sampler.sample_scratch_.formation);
     }
-  } becomes_previous{previous_, sample.formation};
+  } becomes_previous{*this, restarts_};
   if (on_sample_) on_sample_(sample);
 }
 
 void FormationSampler::restart() {
+  ++restarts_;
   if (previous_) ++counters_.chain_breaks;
   previous_.reset();
   anchored_ = false;

@@ -173,12 +173,11 @@ TransitionTable::BestSuccessor TransitionTable::best_successor(StateIndex from,
     // and contiguous (see Storage).
     const Count* candidates = &storage_->counts[storage_->candidates(from, to_centroid, previous)];
     for (StateIndex position = 0; position < cells; ++position) {
-      const StateIndex to = codec_.compose(to_centroid, position, previous);
       const Count c = candidates[position];
       best.candidates_total += c;
       if (c > best.best_count) {
         best.best_count = c;
-        best.state = to;
+        best.state = codec_.compose(to_centroid, position, previous);
       }
     }
     return best;
@@ -213,10 +212,9 @@ void TransitionTable::for_each_nonzero(
       for (std::uint64_t centroid = 0; centroid < cells; ++centroid) {
         for (std::uint64_t position = 0; position < cells; ++position) {
           for (std::uint64_t previous = 0; previous < cells; ++previous, ++to) {
-            const Count c =
-                storage_->counts[storage_->candidates(static_cast<StateIndex>(from), centroid,
-                                                      previous) +
-                                 position];
+            const Count c = storage_->counts[storage_->candidates(static_cast<StateIndex>(from),
+                                                                  centroid, previous) +
+                                             position];
             if (c != 0) visit(static_cast<StateIndex>(from), to, c);
           }
         }

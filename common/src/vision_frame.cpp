@@ -14,7 +14,8 @@ void copy_robots(const google::protobuf::RepeatedPtrField<SSL_DetectionRobot>& f
                  std::vector<VisionRobot>& to) {
   to.clear();
   for (const SSL_DetectionRobot& robot : from) {
-    to.push_back({robot.robot_id(), robot.has_robot_id(), robot.x(), robot.y(), robot.confidence()});
+    to.push_back(
+        {robot.robot_id(), robot.has_robot_id(), robot.x(), robot.y(), robot.confidence()});
   }
 }
 
@@ -53,8 +54,8 @@ class Reader {
   }
 
   // A float or double: fixed-size, little-endian on the wire.
-  template <class Float, class Bits = std::conditional_t<sizeof(Float) == 4, std::uint32_t,
-                                                         std::uint64_t>>
+  template <class Float,
+            class Bits = std::conditional_t<sizeof(Float) == 4, std::uint32_t, std::uint64_t>>
   bool fixed(Float& out) {
     if (end_ - p_ < static_cast<std::ptrdiff_t>(sizeof(Bits))) return false;
     Bits bits = 0;
@@ -115,15 +116,26 @@ bool robot(Reader in, VisionRobot& out) {
     float ignored = 0.0F;
     bool ok = false;
     switch (key) {
-      case tag(1, fixed32_type): ok = in.fixed(out.confidence); break;
-      case tag(2, varint_type): ok = out.has_robot_id = in.varint32(out.robot_id); break;
-      case tag(3, fixed32_type): ok = in.fixed(out.x); break;
-      case tag(4, fixed32_type): ok = in.fixed(out.y); break;
+      case tag(1, fixed32_type):
+        ok = in.fixed(out.confidence);
+        break;
+      case tag(2, varint_type):
+        ok = out.has_robot_id = in.varint32(out.robot_id);
+        break;
+      case tag(3, fixed32_type):
+        ok = in.fixed(out.x);
+        break;
+      case tag(4, fixed32_type):
+        ok = in.fixed(out.y);
+        break;
       case tag(5, fixed32_type):
       case tag(6, fixed32_type):
       case tag(7, fixed32_type):
-      case tag(8, fixed32_type): ok = in.fixed(ignored); break;
-      default: return false;
+      case tag(8, fixed32_type):
+        ok = in.fixed(ignored);
+        break;
+      default:
+        return false;
     }
     if (!ok) return false;
   }
@@ -139,14 +151,19 @@ bool ball(Reader in) {
     std::uint32_t ignored = 0;
     bool ok = false;
     switch (key) {
-      case tag(2, varint_type): ok = in.varint32(ignored); break;
+      case tag(2, varint_type):
+        ok = in.varint32(ignored);
+        break;
       case tag(1, fixed32_type):
       case tag(3, fixed32_type):
       case tag(4, fixed32_type):
       case tag(5, fixed32_type):
       case tag(6, fixed32_type):
-      case tag(7, fixed32_type): ok = in.skip(4); break;
-      default: return false;
+      case tag(7, fixed32_type):
+        ok = in.skip(4);
+        break;
+      default:
+        return false;
     }
     if (!ok) return false;
   }
@@ -169,19 +186,30 @@ bool detection(Reader in, VisionDetection& out) {
     Reader nested(nullptr, nullptr);
     bool ok = false;
     switch (key) {
-      case tag(1, varint_type): ok = in.varint32(out.frame_number); break;
-      case tag(2, fixed64_type): ok = in.fixed(out.t_capture); break;
+      case tag(1, varint_type):
+        ok = in.varint32(out.frame_number);
+        break;
+      case tag(2, fixed64_type):
+        ok = in.fixed(out.t_capture);
+        break;
       case tag(3, fixed64_type):
-      case tag(8, fixed64_type): ok = in.skip(8); break;
-      case tag(4, varint_type): ok = in.varint32(out.camera_id); break;
-      case tag(5, bytes_type): ok = in.nested(nested) && ball(nested); break;
+      case tag(8, fixed64_type):
+        ok = in.skip(8);
+        break;
+      case tag(4, varint_type):
+        ok = in.varint32(out.camera_id);
+        break;
+      case tag(5, bytes_type):
+        ok = in.nested(nested) && ball(nested);
+        break;
       case tag(6, bytes_type):
         ok = in.nested(nested) && robot(nested, out.robots_yellow.emplace_back());
         break;
       case tag(7, bytes_type):
         ok = in.nested(nested) && robot(nested, out.robots_blue.emplace_back());
         break;
-      default: return false;
+      default:
+        return false;
     }
     if (!ok) return false;
   }

@@ -66,6 +66,28 @@ TEST(Sampler, OneCameraOneSamplePerStepWithTransitions) {
   EXPECT_EQ(sampler.counters().transitions, 4u);
 }
 
+// The handler may start a new stream (the trainer does between log files): the sample it was
+// handed then belongs to the old stream, and the next one follows nothing.
+TEST(Sampler, ANewStreamStartedByTheHandlerForgetsTheSampleBeingHandled) {
+  std::vector<FormationSample> samples;
+  FormationSampler* sampler_ptr = nullptr;
+  FormationSampler sampler(config_3x2(), [&](const FormationSample& sample) {
+    samples.push_back(sample);
+    if (samples.size() == 2) sampler_ptr->start_new_stream();
+  });
+  sampler_ptr = &sampler;
+  for (int i = 0; i < 4; ++i) {
+    sampler.add(make_detection_packet(frame(0, 100.0 + 2.0 * i, {{1, {-4000.0 + 2000 * i, 0}}})));
+  }
+  ASSERT_EQ(samples.size(), 4u);
+  EXPECT_TRUE(samples[1].formation.continues_previous);
+  EXPECT_FALSE(samples[2].formation.continues_previous);
+  EXPECT_TRUE(samples[2].transitions.empty());
+  EXPECT_TRUE(samples[3].formation.continues_previous);
+  EXPECT_EQ(sampler.counters().chain_breaks, 1u);  // the restart, and nothing else
+  EXPECT_EQ(sampler.counters().transitions, 2u);
+}
+
 TEST(Sampler, TwoCamerasReportingTheSameRobotCountItOnce) {
   Collector out;
   FormationSampler sampler(config_3x2(), out.handler());

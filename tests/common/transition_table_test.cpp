@@ -142,7 +142,8 @@ TEST(TransitionTable, DenseLayoutAnswersLikeAScanOfThePlainMatrix) {
     std::map<std::pair<StateIndex, StateIndex>, std::uint64_t> truth;
     std::vector<StateIndex> rows;
     for (int i = 0; i < 4000; ++i) {
-      const StateIndex from = i % 2 == 0 && !rows.empty() ? rows[i % rows.size()] : any_state(random);
+      const StateIndex from =
+          i % 2 == 0 && !rows.empty() ? rows[i % rows.size()] : any_state(random);
       const StateIndex to = any_state(random);
       table.add(from, to);
       ++truth[{from, to}];

@@ -318,15 +318,16 @@ inline constexpr std::uint16_t new_stream_record = 0xFFFF;
 
 // Bit for bit, so that NaN coordinates compare equal.
 inline bool same_frame(const VisionFrame& a, const VisionFrame& b) {
-  const auto same_robots = [](const std::vector<VisionRobot>& x, const std::vector<VisionRobot>& y) {
-    return std::equal(x.begin(), x.end(), y.begin(), y.end(),
-                      [](const VisionRobot& r, const VisionRobot& q) {
-                        return r.robot_id == q.robot_id && r.has_robot_id == q.has_robot_id &&
-                               std::bit_cast<std::uint32_t>(r.x) == std::bit_cast<std::uint32_t>(q.x) &&
-                               std::bit_cast<std::uint32_t>(r.y) == std::bit_cast<std::uint32_t>(q.y) &&
-                               std::bit_cast<std::uint32_t>(r.confidence) ==
-                                   std::bit_cast<std::uint32_t>(q.confidence);
-                      });
+  const auto same_robots = [](const std::vector<VisionRobot>& x,
+                              const std::vector<VisionRobot>& y) {
+    return std::equal(
+        x.begin(), x.end(), y.begin(), y.end(), [](const VisionRobot& r, const VisionRobot& q) {
+          return r.robot_id == q.robot_id && r.has_robot_id == q.has_robot_id &&
+                 std::bit_cast<std::uint32_t>(r.x) == std::bit_cast<std::uint32_t>(q.x) &&
+                 std::bit_cast<std::uint32_t>(r.y) == std::bit_cast<std::uint32_t>(q.y) &&
+                 std::bit_cast<std::uint32_t>(r.confidence) ==
+                     std::bit_cast<std::uint32_t>(q.confidence);
+        });
   };
   return a.has_detection == b.has_detection && a.has_geometry == b.has_geometry &&
          a.detection.frame_number == b.detection.frame_number &&

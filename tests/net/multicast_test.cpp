@@ -19,12 +19,14 @@
 #include <cstring>
 #include <functional>
 #include <random>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
 
 #include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::net {
@@ -532,6 +534,70 @@ TEST(ProtoMulticast, AnIncompleteMessageIsNotSent) {
   EXPECT_FALSE(sender.send(incomplete));
   EXPECT_EQ(sender.encode_errors(), 1u);
   EXPECT_EQ(sender.sent(), 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Vision layer: VisionReceiver decodes detection packets itself and leaves the rest to protobuf.
+
+TEST(VisionReceiver, DecodesDetectionsItselfAndLeavesEverythingElseToProtobuf) {
+  boost::asio::io_context io;
+  const auto endpoint = endpoint_for(16);
+  VisionReceiver receiver(io, endpoint, kLoopback);
+  std::vector<std::string> seen;  // one line per frame handed on, in order
+  receiver.start([&](const VisionFrame& frame, const udp::endpoint&) {
+    std::string line = frame.has_detection
+                           ? "detection " + std::to_string(frame.detection.frame_number) + " " +
+                                 std::to_string(frame.detection.robots_yellow.size())
+                           : "no detection";
+    if (frame.has_geometry) line += " geometry " + std::to_string(frame.field_length);
+    seen.push_back(line);
+  });
+  MulticastSender raw(io, endpoint);
+  raw.open();
+  ProtoMulticastSender<SSL_WrapperPacket> sender(io, endpoint);
+  sender.open();
+
+  ASSERT_TRUE(sender.send(detection_packet(42)));  // the fast path
+  SSL_WrapperPacket geometry;
+  auto* field = geometry.mutable_geometry()->mutable_field();
+  field->set_field_length(9000);
+  field->set_field_width(6000);
+  field->set_goal_width(1000);
+  field->set_goal_depth(180);
+  field->set_boundary_width(300);
+  ASSERT_TRUE(sender.send(geometry));  // protobuf's
+  const std::vector<std::byte> garbage(32, std::byte{0x0f});
+  ASSERT_TRUE(raw.send(garbage));  // a parse error
+  // A field our schema does not know (number 15, a varint): valid, but protobuf's to read.
+  std::string unknown_field = detection_packet(43).SerializeAsString() + std::string("\x78\x01", 2);
+  ASSERT_TRUE(raw.send(std::as_bytes(std::span(unknown_field.data(), unknown_field.size()))));
+
+  ASSERT_TRUE(run_until(io, [&] { return seen.size() >= 3; }));
+  EXPECT_EQ(seen, (std::vector<std::string>{"detection 42 1", "no detection geometry 9000",
+                                            "detection 43 1"}));
+  EXPECT_EQ(receiver.direct_decodes(), 1u);
+  EXPECT_EQ(receiver.counters().parse_errors.load(), 1u);
+  EXPECT_EQ(receiver.counters().datagrams.load(), 4u);
+}
+
+TEST(VisionReceiver, AFailedSecondStartKeepsTheRunningHandler) {
+  boost::asio::io_context io;
+  const auto endpoint = endpoint_for(17);
+  VisionReceiver receiver(io, endpoint, kLoopback);
+  std::vector<std::uint32_t> first;
+  receiver.start([&](const VisionFrame& frame, const udp::endpoint&) {
+    first.push_back(frame.detection.frame_number);
+  });
+  bool second_called = false;
+  EXPECT_THROW(
+      receiver.start([&](const VisionFrame&, const udp::endpoint&) { second_called = true; }),
+      std::logic_error);
+  ProtoMulticastSender<SSL_WrapperPacket> sender(io, endpoint);
+  sender.open();
+  ASSERT_TRUE(sender.send(detection_packet(7)));
+  ASSERT_TRUE(run_until(io, [&] { return !first.empty(); }));
+  EXPECT_EQ(first, (std::vector<std::uint32_t>{7}));
+  EXPECT_FALSE(second_called);
 }
 
 }  // namespace

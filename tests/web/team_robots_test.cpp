@@ -4,7 +4,6 @@
 
 #include <limits>
 
-
 namespace ssl_formation::predictor::web {
 namespace {
 

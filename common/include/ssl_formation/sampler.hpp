@@ -196,6 +196,7 @@ class FormationSampler {
 
   std::optional<Formation> previous_;
   std::int64_t previous_k_ = 0;
+  std::uint64_t restarts_ = 0;  // calls of restart(), so emit() sees one made by its handler
   // Reused from sample to sample, so that a steady stream allocates nothing.
   std::vector<FormationRobot> robots_scratch_;
   FormationSample sample_scratch_;

@@ -2,8 +2,8 @@
 // The part of an SSL-Vision packet that sampling reads (frame number, capture time, camera,
 // robots, field size) as plain values. Filled from a parsed SSL_WrapperPacket, or decoded
 // straight from the datagram for the packets a live feed is made of (one detection frame each):
-// on the daemons' hot path that skips protobuf's general parser and its ~30 heap objects per
-// packet, which cost microseconds when a daemon wakes with cold caches every 16 ms.
+// on the daemons' hot path that skips protobuf's general parser, whose code and message objects
+// cost microseconds when a daemon wakes with cold caches every 16 ms.
 
 #include <cstddef>
 #include <cstdint>
@@ -48,12 +48,12 @@ struct VisionFrame {
 void to_vision_frame(const SSL_WrapperPacket& packet, VisionFrame& frame);
 
 // Decodes `datagram` into `frame` if it is an SSL_WrapperPacket holding exactly one detection
-// frame, every proto2-required field present, every field once and known to our schema, every
-// robot id within 32 bits: what SSL-Vision, grSim and ssl-producer send 60 times a second.
-// Returns false for anything else (geometry, unknown or repeated fields, damaged bytes), with
-// `frame` unspecified: parse those with protobuf, which decides whether they are valid. When it
-// returns true, protobuf's parser would accept the datagram and to_vision_frame() on the parsed
-// packet would give the same frame.
+// frame, every proto2-required field present, every singular field at most once, every field
+// known to our schema, every varint within 32 bits: what SSL-Vision, grSim and ssl-producer send 60
+// times a second. Returns false for anything else (geometry, unknown or repeated fields, damaged
+// bytes), with `frame` unspecified: parse those with protobuf, which decides whether they are
+// valid. When it returns true, protobuf's parser would accept the datagram and to_vision_frame() on
+// the parsed packet would give the same frame.
 bool decode_detection_datagram(std::span<const std::byte> datagram, VisionFrame& frame);
 
 }  // namespace ssl_formation

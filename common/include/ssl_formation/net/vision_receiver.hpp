@@ -8,6 +8,7 @@
 //   net::VisionReceiver vision(io, group, iface);
 //   vision.start([&](const VisionFrame& frame, const net::udp::endpoint& from) { ... });
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 
@@ -34,7 +35,7 @@ class VisionReceiver {
 
   const ReceiverCounters& counters() const { return receiver_.counters(); }
   // Datagrams decoded without protobuf (the rest were parsed by protobuf or refused by it).
-  std::uint64_t direct_decodes() const { return direct_decodes_; }
+  std::uint64_t direct_decodes() const { return direct_decodes_.load(std::memory_order_relaxed); }
   int granted_receive_buffer() const { return receiver_.granted_receive_buffer(); }
   bool kernel_drops_supported() const { return receiver_.kernel_drops_supported(); }
   const MulticastReceiver& bytes_receiver() const { return receiver_; }
@@ -43,9 +44,9 @@ class VisionReceiver {
   void on_datagram(std::span<const std::byte> data, const udp::endpoint& from);
 
   FrameHandler on_frame_;
-  VisionFrame frame_;          // reused: its robot vectors keep their capacity
-  SSL_WrapperPacket packet_;   // for the datagrams protobuf parses
-  std::uint64_t direct_decodes_ = 0;
+  VisionFrame frame_;         // reused: its robot vectors keep their capacity
+  SSL_WrapperPacket packet_;  // for the datagrams protobuf parses
+  std::atomic<std::uint64_t> direct_decodes_{0};
   // Declared last so it is destroyed (and stopped) first: no callback sees a dead member.
   MulticastReceiver receiver_;
 };
