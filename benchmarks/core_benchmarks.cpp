@@ -35,18 +35,12 @@ TrainedModel train_random_walks(sf::Grid grid, int robots, int samples, unsigned
   const double cell_x = field.length_mm / grid.length();
   const double cell_y = field.width_mm / grid.width();
   for (int s = 0; s < samples; ++s) {
-    std::vector<sf::FormationRobot> formation_robots;
-    for (int r = 0; r < robots; ++r) {
-      auto& p = positions[static_cast<std::size_t>(r)];
+    for (sf::Point& p : positions) {
       p.x = std::clamp(p.x + step(random) * cell_x, -4499.0, 4499.0);
       p.y = std::clamp(p.y + step(random) * cell_y, -2999.0, 2999.0);
-      sf::FormationRobot robot;
-      robot.robot_id = static_cast<std::uint32_t>(r);
-      robot.position = p;
-      formation_robots.push_back(robot);
     }
-    sf::Formation formation = sf::FormationSampler::build_formation(
-        codec, field, std::move(formation_robots), previous ? &*previous : nullptr);
+    sf::Formation formation = sf::FormationSampler::formation_at(codec, field, positions,
+                                                                 previous ? &*previous : nullptr);
     if (previous) {
       for (const auto& robot : formation.robots) {
         model.table.add(previous->find(robot.robot_id)->state, robot.state);

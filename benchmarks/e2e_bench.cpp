@@ -438,12 +438,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   const auto one = [&](const std::string& bytes) {
     marks = {};
     marks[0] = now_ns();
-    bool decoded = sf::decode_detection_datagram(bytes_of(bytes), frame);
-    if (!decoded && parsed.ParseFromString(bytes)) {
-      sf::to_vision_frame(parsed, frame);
-      decoded = true;
-    }
-    if (decoded) {
+    if (sf::read_vision_datagram(bytes_of(bytes), frame, parsed) != sf::VisionDatagram::invalid) {
       marks[1] = now_ns();
       sampler.add(frame);
     }

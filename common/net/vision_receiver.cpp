@@ -25,18 +25,16 @@ void VisionReceiver::start(FrameHandler on_frame) {
 }
 
 void VisionReceiver::on_datagram(std::span<const std::byte> data, const udp::endpoint& from) {
-  if (decode_detection_datagram(data, frame_)) {
-    direct_decodes_.fetch_add(1, std::memory_order_relaxed);
-  } else {
-    // As ProtoMulticastReceiver: ParsePartialFromArray plus IsInitialized() is ParseFromArray
-    // without protobuf's own unthrottled error log per packet. data.size() fits in an int.
-    if (!packet_.ParsePartialFromArray(data.data(), static_cast<int>(data.size())) ||
-        !packet_.IsInitialized()) {
+  switch (read_vision_datagram(data, frame_, packet_)) {
+    case VisionDatagram::decoded_directly:
+      direct_decodes_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case VisionDatagram::parsed_by_protobuf:
+      break;
+    case VisionDatagram::invalid:
       receiver_.count_parse_error();
       detail::log_parse_error(receiver_, packet_.GetTypeName(), data.size());
       return;
-    }
-    to_vision_frame(packet_, frame_);
   }
   if (on_frame_) on_frame_(frame_, from);
 }

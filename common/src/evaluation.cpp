@@ -13,15 +13,8 @@ PlayStates play_states(const StateCodec& codec, const FieldSize& field,
   PlayStates states;
   std::optional<Formation> previous;
   for (const std::vector<Point>& positions : play_positions) {
-    std::vector<FormationRobot> robots;
-    for (std::size_t id = 0; id < positions.size(); ++id) {
-      FormationRobot robot;
-      robot.robot_id = static_cast<std::uint32_t>(id);
-      robot.position = positions[id];
-      robots.push_back(robot);
-    }
-    Formation formation = FormationSampler::build_formation(codec, field, std::move(robots),
-                                                            previous ? &*previous : nullptr);
+    Formation formation =
+        FormationSampler::formation_at(codec, field, positions, previous ? &*previous : nullptr);
     states.push_back(robot_states(formation));
     previous = std::move(formation);
   }

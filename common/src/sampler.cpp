@@ -298,6 +298,17 @@ Formation FormationSampler::build_formation(const StateCodec& codec, const Field
   return formation;
 }
 
+Formation FormationSampler::formation_at(const StateCodec& codec, const FieldSize& field,
+                                         const std::vector<Point>& positions,
+                                         const Formation* previous) {
+  std::vector<FormationRobot> robots(positions.size());
+  for (std::size_t id = 0; id < positions.size(); ++id) {
+    robots[id].robot_id = static_cast<std::uint32_t>(id);
+    robots[id].position = positions[id];
+  }
+  return build_formation(codec, field, std::move(robots), previous);
+}
+
 void FormationSampler::build_formation(const StateCodec& codec, const FieldSize& field,
                                        std::vector<FormationRobot>& robots,
                                        const Formation* previous, Formation& formation) {

@@ -263,4 +263,17 @@ bool decode_detection_datagram(std::span<const std::byte> datagram, VisionFrame&
   return frame.has_detection;
 }
 
+VisionDatagram read_vision_datagram(std::span<const std::byte> datagram, VisionFrame& frame,
+                                    SSL_WrapperPacket& scratch) {
+  if (decode_detection_datagram(datagram, frame)) return VisionDatagram::decoded_directly;
+  // ParsePartialFromArray plus IsInitialized() is ParseFromArray without protobuf's own
+  // unthrottled error log per packet. A datagram's size fits in an int.
+  if (!scratch.ParsePartialFromArray(datagram.data(), static_cast<int>(datagram.size())) ||
+      !scratch.IsInitialized()) {
+    return VisionDatagram::invalid;
+  }
+  to_vision_frame(scratch, frame);
+  return VisionDatagram::parsed_by_protobuf;
+}
+
 }  // namespace ssl_formation

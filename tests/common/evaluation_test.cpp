@@ -12,14 +12,7 @@ const FieldSize field{9000, 6000};
 // 3x2 cells are 3000 x 3000 mm; centres at x = -3000, 0, 3000 and y = -1500, 1500.
 Formation formation_at(const StateCodec& codec, const std::vector<Point>& positions,
                        const Formation* previous = nullptr) {
-  std::vector<FormationRobot> robots;
-  for (std::size_t id = 0; id < positions.size(); ++id) {
-    FormationRobot robot;
-    robot.robot_id = static_cast<std::uint32_t>(id);
-    robot.position = positions[id];
-    robots.push_back(robot);
-  }
-  return FormationSampler::build_formation(codec, field, robots, previous);
+  return FormationSampler::formation_at(codec, field, positions, previous);
 }
 
 TEST(Baselines, PersistenceKeepsEveryCellAndTheCentroid) {

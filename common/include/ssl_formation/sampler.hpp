@@ -118,6 +118,10 @@ class FormationSampler {
   // formations themselves (the simulated producer, evaluation).
   static Formation build_formation(const StateCodec& codec, const FieldSize& field,
                                    std::vector<FormationRobot> robots, const Formation* previous);
+  // Robots 0, 1, 2, ... at these normalised positions, for callers that place robots by hand
+  // (evaluation of the paper's plays, benchmarks, tests).
+  static Formation formation_at(const StateCodec& codec, const FieldSize& field,
+                                const std::vector<Point>& positions, const Formation* previous);
   // The same into `out`, whose robots vector is swapped with `robots` (both keep their memory).
   static void build_formation(const StateCodec& codec, const FieldSize& field,
                               std::vector<FormationRobot>& robots, const Formation* previous,

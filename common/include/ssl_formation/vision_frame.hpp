@@ -56,4 +56,12 @@ void to_vision_frame(const SSL_WrapperPacket& packet, VisionFrame& frame);
 // the parsed packet would give the same frame.
 bool decode_detection_datagram(std::span<const std::byte> datagram, VisionFrame& frame);
 
+enum class VisionDatagram { decoded_directly, parsed_by_protobuf, invalid };
+
+// What a daemon does with a vision datagram: decode_detection_datagram() if it takes it, else
+// protobuf's parser (into `scratch`, reused between calls) and to_vision_frame(). `invalid` is
+// protobuf's verdict: bytes it cannot parse or a proto2-required field missing.
+VisionDatagram read_vision_datagram(std::span<const std::byte> datagram, VisionFrame& frame,
+                                    SSL_WrapperPacket& scratch);
+
 }  // namespace ssl_formation
