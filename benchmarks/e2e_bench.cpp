@@ -43,7 +43,7 @@
 #include <vector>
 
 #include "formation_prediction.pb.h"
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"

@@ -3,7 +3,7 @@
 // it writes the same packets to an official SSL log instead; with --replay it sends a log's
 // vision packets with their recorded timing.
 
-#include "producer_options.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
 

@@ -3,7 +3,11 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <csignal>
 #include <sstream>
 
@@ -36,9 +40,40 @@ net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_
 StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> on_stop)
     : signals_(io, SIGINT, SIGTERM) {
   signals_.async_wait(
-      [on_stop = std::move(on_stop)](const boost::system::error_code& error, int signal) {
-        if (!error) on_stop(signal);
+      [this, on_stop = std::move(on_stop)](const boost::system::error_code& error, int signal) {
+        if (error) return;
+        // Asio gives the signals back their default action when no set holds them any more.
+        boost::system::error_code ignored;
+        signals_.clear(ignored);
+        on_stop(signal);
       });
+}
+
+ReadyFile::~ReadyFile() {
+  if (!written_) return;
+  std::error_code ignored;  // nothing to do about a file that is already gone
+  std::filesystem::remove(path_, ignored);
+}
+
+void ReadyFile::mark_ready(const std::string& program,
+                           const std::vector<std::pair<std::string, std::string>>& facts) {
+  if (path_.empty()) return;
+  std::string text = "program=" + program + "\npid=" + std::to_string(::getpid()) + "\n";
+  for (const auto& [key, value] : facts) text += key + "=" + value + "\n";
+  const std::string temporary = path_ + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(temporary, std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error("cannot write the ready file " + temporary);
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path_, error);
+  if (error) {
+    std::filesystem::remove(temporary, error);
+    throw std::runtime_error("cannot write the ready file " + path_ + ": " + error.message());
+  }
+  written_ = true;
 }
 
 RepeatingTimer::RepeatingTimer(boost::asio::io_context& io,
@@ -57,6 +92,28 @@ void RepeatingTimer::arm() {
     tick_();
     arm();
   });
+}
+
+std::string describe_reception(const net::VisionReceiver& receiver) {
+  const net::ReceiverCounters& counters = receiver.counters();
+  const std::uint64_t datagrams = counters.datagrams.load();
+  std::string text = fmt::format("packets={} parse_errors={} kernel_drops={} fast_path=", datagrams,
+                                 counters.parse_errors.load(), counters.kernel_drops.load());
+  if (datagrams == 0) return text + "-";
+  return text + fmt::format("{:.1f}%", 100.0 * static_cast<double>(receiver.direct_decodes()) /
+                                           static_cast<double>(datagrams));
+}
+
+FieldSizeLog::FieldSizeLog(const FieldSize& from_options, bool geometry_used)
+    : logged_(from_options) {
+  spdlog::info("field: {} from the options{}", describe(from_options),
+               geometry_used ? ", until a geometry packet gives the size" : " (--ignore-geometry)");
+}
+
+void FieldSizeLog::update(const FieldSize& field) {
+  if (field == logged_) return;
+  spdlog::info("field: {} from a geometry packet (was {})", describe(field), describe(logged_));
+  logged_ = field;
 }
 
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds) {

@@ -63,6 +63,13 @@ void add_vision_options(po::options_description& options, NetworkOptions& networ
       "IPv4 address of the interface to join on, or 'all' for every interface");
 }
 
+void add_daemon_options(po::options_description& options, DaemonOptions& daemon) {
+  options.add_options()(
+      "ready-file", po::value(&daemon.ready_file)->value_name("PATH"),
+      "write PATH (atomically) once the sockets are open and joined, as key=value lines "
+      "(program, pid, ...); removed at exit. For scripts and tests that wait for the daemon");
+}
+
 bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,
                         const std::string& usage_line, const std::string& description,
                         const po::positional_options_description* positional) {

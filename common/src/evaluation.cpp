@@ -174,31 +174,56 @@ void Calibration::add(double confidence, bool outcome) {
   if (outcome) ++bin_hits[b];
 }
 
-HoldoutResult evaluate_holdout(const TransitionTable& table, const std::vector<Formation>& test,
+HoldoutResult evaluate_holdout(const StateCodec& codec, const std::vector<PredictedTest>& test,
                                const FieldSize& field) {
   HoldoutResult result;
-  const StateCodec& codec = table.codec();
   for (std::size_t i = 0; i < test.size(); ++i) {
+    const Formation& current = test[i].formation;
     for (int horizon = 1; horizon <= HoldoutResult::max_horizon; ++horizon) {
       const std::size_t target = i + static_cast<std::size_t>(horizon);
-      if (target >= test.size() || !test[target].continues_previous) break;
-      const std::vector<RobotStateById> actual = robot_states(test[target]);
+      if (target >= test.size() || !test[target].formation.continues_previous) break;
+      const std::vector<RobotStateById> actual = robot_states(test[target].formation);
+      const auto h = static_cast<std::size_t>(horizon - 1);
       for (std::size_t m = 0; m < all_methods.size(); ++m) {
+        std::vector<RobotStateById> predicted;
         double confidence = 0.0;
-        const auto predicted =
-            predict_with(all_methods[m], table, test[i], horizon, field, &confidence);
-        Accuracy& accuracy = result.accuracy[static_cast<std::size_t>(horizon - 1)][m];
+        switch (all_methods[m]) {
+          case Method::persistence:
+            predicted = persistence(codec, current);
+            break;
+          case Method::constant_velocity:
+            predicted = constant_velocity(codec, field, current, horizon);
+            break;
+          case Method::model:
+            if (h < test[i].prediction.steps.size()) {
+              const PredictedStep& step = test[i].prediction.steps[h];
+              predicted = robot_states(step);
+              confidence = step.confidence;
+            }
+            break;
+        }
+        Accuracy& accuracy = result.accuracy[h][m];
         const std::uint64_t exact_before = accuracy.exact_states;
         score(accuracy, codec, predicted, actual);
         if (all_methods[m] == Method::model) {
           const bool all_right = accuracy.exact_states - exact_before == actual.size() &&
                                  predicted.size() == actual.size();
-          result.calibration[static_cast<std::size_t>(horizon - 1)].add(confidence, all_right);
+          result.calibration[h].add(confidence, all_right);
         }
       }
     }
   }
   return result;
+}
+
+HoldoutResult evaluate_holdout(const TransitionTable& table, const std::vector<Formation>& test,
+                               const FieldSize& field) {
+  std::vector<PredictedTest> predicted;
+  predicted.reserve(test.size());
+  for (const Formation& formation : test) {
+    predicted.push_back({formation, predict(table, formation, HoldoutResult::max_horizon)});
+  }
+  return evaluate_holdout(table.codec(), predicted, field);
 }
 
 }  // namespace ssl_formation::evaluation

@@ -10,6 +10,14 @@ bool FieldSize::valid() const {
   return std::isfinite(length_mm) && std::isfinite(width_mm) && length_mm > 0.0 && width_mm > 0.0;
 }
 
+std::string describe(const FieldSize& field) {
+  const auto mm = [](double value) { return std::to_string(std::lround(value)); };
+  std::string text = mm(field.length_mm) + " x " + mm(field.width_mm) + " mm";
+  if (field == FieldSize{12000.0, 9000.0}) return text + " (Division A)";
+  if (field == FieldSize{9000.0, 6000.0}) return text + " (Division B)";
+  return text + " (neither Division A nor B)";
+}
+
 std::optional<AttackDirection> parse_attack_direction(std::string_view text) {
   if (text == "+x" || text == "x" || text == "positive") return AttackDirection::positive_x;
   if (text == "-x" || text == "negative") return AttackDirection::negative_x;

@@ -198,8 +198,17 @@ std::string LogReader::gz_problem() const {
   return " (gzip: " + strip_path(message != nullptr ? message : "", path_) + ")";
 }
 
-bool LogReader::fail(std::string message) {
+LogReader::Ending LogReader::cut_off_ending() const {
+  int code = Z_OK;
+  gzerror(file_.get(), &code);
+  // The bytes simply stop (a plain file, or a gzip stream cut off): a cut-off last message.
+  // Any other gzip error is damage inside the stream.
+  return code == Z_OK || code == Z_BUF_ERROR ? Ending::cut_off : Ending::damaged;
+}
+
+bool LogReader::fail(std::string message, Ending ending) {
   error_ = path_.string() + ": " + std::move(message);
+  ending_ = ending;
   done_ = true;
   return false;
 }
@@ -241,10 +250,13 @@ bool LogReader::next_view(Header& header, std::string_view& payload) {
       done_ = true;  // clean end
       return false;
     }
-    if (available() == 0) return fail("read failed at byte " + std::to_string(at) + gz);
+    if (available() == 0) {
+      return fail("read failed at byte " + std::to_string(at) + gz, cut_off_ending());
+    }
     return fail("truncated message header at byte " + std::to_string(at) + ": " +
-                std::to_string(kLogMessageHeaderSize) + " bytes needed, " +
-                std::to_string(available()) + " remain" + gz);
+                    std::to_string(kLogMessageHeaderSize) + " bytes needed, " +
+                    std::to_string(available()) + " remain" + gz,
+                cut_off_ending());
   }
   const char* data = buffer_.get() + begin_;
   header.receive_time_ns = load_be64(data);
@@ -266,8 +278,10 @@ bool LogReader::next_view(Header& header, std::string_view& payload) {
   if (kLogMessageHeaderSize + size <= kReadBufferSize) {
     if (!fill(kLogMessageHeaderSize + size)) {
       return fail("truncated message at byte " + std::to_string(at) + ": header says " +
-                  std::to_string(size) + " bytes, " +
-                  std::to_string(available() - kLogMessageHeaderSize) + " remain" + gz_problem());
+                      std::to_string(size) + " bytes, " +
+                      std::to_string(available() - kLogMessageHeaderSize) + " remain" +
+                      gz_problem(),
+                  cut_off_ending());
     }
     payload = std::string_view(buffer_.get() + begin_ + kLogMessageHeaderSize, size);
     consume(kLogMessageHeaderSize + size);
@@ -276,8 +290,9 @@ bool LogReader::next_view(Header& header, std::string_view& payload) {
     const std::size_t got = read_large(size);
     if (got < size) {
       return fail("truncated message at byte " + std::to_string(at) + ": header says " +
-                  std::to_string(size) + " bytes, " + std::to_string(got) + " remain" +
-                  gz_problem());
+                      std::to_string(size) + " bytes, " + std::to_string(got) + " remain" +
+                      gz_problem(),
+                  cut_off_ending());
     }
     payload = scratch_;
   }

@@ -11,7 +11,7 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/prediction_message.hpp"
 #include "ssl_formation/table_file.hpp"

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "child_process.hpp"
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/sampler.hpp"

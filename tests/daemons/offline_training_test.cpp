@@ -5,7 +5,7 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"

@@ -18,7 +18,7 @@
 #include <thread>
 
 #include "child_process.hpp"
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 #include "web_test_support.hpp"

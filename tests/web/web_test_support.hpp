@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "formation_prediction.pb.h"
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_vision_wrapper.pb.h"

@@ -100,8 +100,19 @@ struct HoldoutResult {
   std::array<Calibration, max_horizon> calibration{};
 };
 
+// A test formation and the model's prediction from it, max_horizon steps ahead, as the
+// PredictionPipeline made it.
+struct PredictedTest {
+  Formation formation;
+  Prediction prediction;
+};
+
 // Scores every sample of `test` that starts a chain of `horizon` consecutive formations (no gap,
-// same robots), for horizons 1-3 and all three methods, on the same samples.
+// same robots), for horizons 1-3 and all three methods, on the same samples. The model's guess
+// at horizon h is step h of the test's prediction.
+HoldoutResult evaluate_holdout(const StateCodec& codec, const std::vector<PredictedTest>& test,
+                               const FieldSize& field);
+// The same for formations alone: predicts each from `table` first.
 HoldoutResult evaluate_holdout(const TransitionTable& table, const std::vector<Formation>& test,
                                const FieldSize& field);
 

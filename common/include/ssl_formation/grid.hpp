@@ -27,6 +27,10 @@ struct FieldSize {
   bool valid() const;
 };
 
+// "12000 x 9000 mm (Division A)": the size and the SSL division it implies (A: 12 x 9 m,
+// B: 9 x 6 m; anything else is said to be neither), for the daemons' logs.
+std::string describe(const FieldSize& field);
+
 // A grid cell: x counts columns along the length, y rows along the width.
 struct Cell {
   int x = 0;

@@ -84,6 +84,11 @@ class LogReader {
   bool next_vision(SSL_WrapperPacket& packet, std::int64_t* receive_time_ns = nullptr);
 
   const std::string& error() const { return error_; }
+  // How reading ended so far: the file ending inside its last message (what a recorder killed
+  // mid-write leaves: everything before it is whole) is told apart from damage (an absurd size,
+  // corrupt gzip data, a failed read), after which nothing more could be trusted.
+  enum class Ending { none, cut_off, damaged };
+  Ending ending() const { return ending_; }
   const LogReadCounters& counters() const { return counters_; }
   const std::filesystem::path& path() const { return path_; }
   std::uint64_t offset() const { return offset_; }  // bytes consumed so far (uncompressed)
@@ -108,9 +113,11 @@ class LogReader {
   void consume(std::size_t n);
   // Fills `scratch_` with a payload too large for the buffer; returns the bytes got.
   std::size_t read_large(std::size_t size);
-  bool fail(std::string message);
+  bool fail(std::string message, Ending ending = Ending::damaged);
   // zlib's own error after a short read (corrupt or cut-off gzip data), or empty.
   std::string gz_problem() const;
+  // cut_off when the file (or its gzip stream) just stops, damaged for any other gzip error.
+  Ending cut_off_ending() const;
 
   std::filesystem::path path_;
   detail::GzFilePtr file_;
@@ -121,6 +128,7 @@ class LogReader {
   bool done_ = false;  // clean end or error: next() returns false from now on
   std::string scratch_;
   std::string error_;
+  Ending ending_ = Ending::none;
   LogReadCounters counters_;
   std::uint64_t offset_ = 0;
   std::uint64_t compressed_size_ = 0;

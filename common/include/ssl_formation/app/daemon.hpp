@@ -9,8 +9,12 @@
 #include <chrono>
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "ssl_formation/grid.hpp"
 #include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
 
 namespace ssl_formation::app {
 
@@ -21,8 +25,10 @@ void init_logging(const std::string& program, bool verbose = false);
 net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text);
 net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_all);
 
-// Calls `on_stop` once on the first SIGINT or SIGTERM, from the io_context's thread. A second
-// signal leaves the default behaviour to the user: the handler is not re-armed.
+// Calls `on_stop` once on the first SIGINT or SIGTERM, from the io_context's thread. From then on
+// the signals have their default action again, so a second Ctrl-C (or SIGTERM) ends the process
+// at once, even while `on_stop` is still busy (a slow save): the user always has a way out, and
+// the table file is never half-written because saves replace it atomically.
 class StopSignals {
  public:
   StopSignals(boost::asio::io_context& io, std::function<void(int signal)> on_stop);
@@ -43,6 +49,44 @@ class RepeatingTimer {
   boost::asio::steady_timer timer_;
   std::chrono::steady_clock::duration period_;
   std::function<void()> tick_;
+};
+
+// The daemon's readiness, for whoever started it: once the sockets are open and joined (and, for
+// the predictor, the table there at start-up is loaded), `mark_ready` writes the file atomically
+// (a reader never sees part of it) as "key=value" lines, starting with "program=" and "pid=".
+// The destructor removes it, so a file left behind names a process that died.
+class ReadyFile {
+ public:
+  explicit ReadyFile(std::string path) : path_(std::move(path)) {}
+  ReadyFile(const ReadyFile&) = delete;
+  ReadyFile& operator=(const ReadyFile&) = delete;
+  ~ReadyFile();
+  // Does nothing without a path. Throws std::runtime_error if the file cannot be written: a
+  // supervisor waiting for it would wait forever.
+  void mark_ready(const std::string& program,
+                  const std::vector<std::pair<std::string, std::string>>& facts);
+
+ private:
+  std::string path_;
+  bool written_ = false;
+};
+
+// "packets=N parse_errors=N kernel_drops=N fast_path=99.9%": the receiving side of a status
+// line, the same in every daemon. fast_path is the share of datagrams decoded without protobuf,
+// so a change in SSL-Vision's packets that moves everything to the slow path is visible.
+std::string describe_reception(const net::VisionReceiver& receiver);
+
+// Logs the field size sampling uses, once at start and once per change (geometry packets), with
+// the division it implies: a wrong field size silently moves every robot to other cells.
+class FieldSizeLog {
+ public:
+  // `from_options`: the size the options give, used until a geometry packet says otherwise.
+  FieldSizeLog(const FieldSize& from_options, bool geometry_used);
+  // Cheap when nothing changed; call it after every packet that carries geometry.
+  void update(const FieldSize& field);
+
+ private:
+  FieldSize logged_;
 };
 
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds);

@@ -46,6 +46,13 @@ struct NetworkOptions {
 };
 void add_vision_options(po::options_description& options, NetworkOptions& network);
 
+// What every long-running program offers its supervisor (a script, a test, systemd).
+struct DaemonOptions {
+  // Written once the program is ready (see app::ReadyFile); empty: none.
+  std::string ready_file;
+};
+void add_daemon_options(po::options_description& options, DaemonOptions& daemon);
+
 // Parses argv. Prints --help (with defaults) and returns false when the program should exit 0.
 // Throws UsageError for anything wrong, with one line of explanation.
 bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,

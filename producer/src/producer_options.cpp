@@ -1,4 +1,4 @@
-#include "producer_options.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
 
 namespace ssl_formation::producer {
 

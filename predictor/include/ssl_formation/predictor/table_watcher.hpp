@@ -4,6 +4,7 @@
 // that fails to load is reported once and the table in use is kept.
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -20,7 +21,9 @@ class TableWatcher {
   // Looks at the file once; loads it if it changed since the last look.
   Change poll();
 
-  const std::optional<StoredTable>& table() const { return table_; }
+  // The table in use (nullptr until one loads). Shared, so that a prediction under way keeps
+  // the table it started with while a reload replaces it here.
+  const std::shared_ptr<const StoredTable>& table() const { return table_; }
   const std::string& last_error() const { return last_error_; }
   std::uint64_t reloads() const { return reloads_; }
   const std::filesystem::path& path() const { return path_; }
@@ -37,7 +40,7 @@ class TableWatcher {
   std::filesystem::path path_;
   Grid expected_grid_;
   std::optional<Identity> seen_;
-  std::optional<StoredTable> table_;
+  std::shared_ptr<const StoredTable> table_;
   std::string last_error_;
   std::uint64_t reloads_ = 0;
 };

@@ -7,7 +7,7 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
 
-#include "producer_options.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 

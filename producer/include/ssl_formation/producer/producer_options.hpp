@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
 

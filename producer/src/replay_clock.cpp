@@ -1,4 +1,4 @@
-#include "replay_clock.hpp"
+#include "ssl_formation/producer/replay_clock.hpp"
 
 #include <cmath>
 

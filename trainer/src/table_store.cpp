@@ -1,4 +1,4 @@
-#include "table_store.hpp"
+#include "ssl_formation/trainer/table_store.hpp"
 
 #include <signal.h>
 #include <spdlog/spdlog.h>

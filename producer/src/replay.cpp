@@ -11,8 +11,8 @@
 #include <cmath>
 #include <deque>
 
-#include "producer_options.hpp"
-#include "replay_clock.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
+#include "ssl_formation/producer/replay_clock.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"

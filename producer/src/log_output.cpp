@@ -9,7 +9,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "producer_options.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/log_file.hpp"
 

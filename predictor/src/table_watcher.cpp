@@ -1,4 +1,4 @@
-#include "table_watcher.hpp"
+#include "ssl_formation/predictor/table_watcher.hpp"
 
 #include <sys/stat.h>
 
@@ -25,7 +25,7 @@ TableWatcher::Change TableWatcher::poll() {
     last_error_ = loaded.message;
     return Change::failed;
   }
-  table_ = std::move(loaded.stored);
+  table_ = std::make_shared<const StoredTable>(std::move(*loaded.stored));
   last_error_.clear();
   ++reloads_;
   return Change::loaded;

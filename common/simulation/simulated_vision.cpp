@@ -1,4 +1,4 @@
-#include "simulated_vision.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,75 @@
+#pragma once
+// Prediction: the sampler feeding the predictor, the twin of Training. The live predictor,
+// `ssl-predictor --from-log`, the evaluation, the benchmarks and the tests all run exactly this
+// code, fed from a socket, a file or a vector: vision frames in, each sampled formation with its
+// prediction out, on the data's own clock.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+
+#include "ssl_formation/prediction_message.hpp"
+#include "ssl_formation/predictor.hpp"
+#include "ssl_formation/sampler.hpp"
+#include "ssl_formation/table_file.hpp"
+
+class SSL_WrapperPacket;
+
+namespace ssl_formation {
+
+struct PredictionConfig {
+  SamplerConfig sampler;
+  int horizon = 2;  // formations predicted ahead, 1 to max_horizon
+  static constexpr int max_horizon = 100;
+};
+
+// One sampled formation and what was predicted from it. Valid only during the handler's call:
+// the pipeline reuses its buffers for the next one.
+struct PredictedFormation {
+  const FormationSample& sample;
+  const Prediction& prediction;
+  const PredictionContext& context;
+  const Formation& formation() const { return sample.formation; }
+};
+
+class PredictionPipeline {
+ public:
+  using Handler = std::function<void(const PredictedFormation&)>;
+
+  // Throws std::invalid_argument for a horizon out of range or a bad sampler configuration.
+  PredictionPipeline(PredictionConfig config, Handler on_prediction);
+  // The sampler's handler points at this object.
+  PredictionPipeline(const PredictionPipeline&) = delete;
+  PredictionPipeline& operator=(const PredictionPipeline&) = delete;
+
+  // The table predictions come from; until one is set, formations are sampled (so the data
+  // clock and the chains run on) and counted, but nothing is predicted. Throws
+  // std::invalid_argument for a table of another grid than the sampler's.
+  void set_table(std::shared_ptr<const StoredTable> table);
+  const std::shared_ptr<const StoredTable>& table() const { return table_; }
+
+  void add(const VisionFrame& frame) { sampler_.add(frame); }
+  void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
+  // A new log file: its first formation follows nothing (no chain across two files).
+  void start_new_stream() { sampler_.start_new_stream(); }
+
+  const PredictionConfig& config() const { return config_; }
+  const FormationSampler& sampler() const { return sampler_; }
+  std::uint64_t predictions() const { return predictions_; }
+  std::uint64_t samples_without_table() const { return samples_without_table_; }
+
+ private:
+  void on_sample(const FormationSample& sample);
+
+  PredictionConfig config_;
+  Handler on_prediction_;
+  std::shared_ptr<const StoredTable> table_;
+  FormationSampler sampler_;
+  // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
+  std::vector<RobotStateById> robot_states_;
+  Prediction prediction_;
+  std::uint64_t predictions_ = 0;
+  std::uint64_t samples_without_table_ = 0;
+};
+
+}  // namespace ssl_formation

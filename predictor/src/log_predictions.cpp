@@ -1,0 +1,97 @@
+// ssl-predictor --from-log: official log files through the same PredictionPipeline the daemon
+// runs, as fast as the machine allows, every prediction written as CSV (prediction_csv.hpp).
+// What the daemon would have multicast during the recorded match, without any network.
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+
+#include "ssl_formation/app/progress.hpp"
+#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/prediction_csv.hpp"
+#include "ssl_formation/predictor/predictor_options.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_vision_wrapper.pb.h"
+
+namespace ssl_formation::predictor {
+
+namespace {
+// Logs above this size get a progress bar; CSV text is handed to the stream in blocks this big.
+constexpr std::uint64_t progress_bar_bytes = 4 << 20;
+constexpr std::size_t flush_bytes = 1 << 20;
+}  // namespace
+
+int run_from_log(const PredictorOptions& options) {
+  const PredictionConfig config = prediction_config(options);
+  TableLoadResult loaded = load_table(options.table, config.sampler.grid);
+  if (!loaded) throw std::runtime_error(loaded.message);
+  if (loaded.stored->metadata.step_s != config.sampler.step_s) {
+    spdlog::warn("the table was trained with --step {} but the logs are sampled every {} s",
+                 loaded.stored->metadata.step_s, config.sampler.step_s);
+  }
+
+  const bool to_stdout = options.output.empty() || options.output == "-";
+  std::ofstream file;
+  if (!to_stdout) {
+    file.open(options.output, std::ios::binary | std::ios::trunc);
+    if (!file) throw std::runtime_error("cannot write " + options.output);
+  }
+  std::ostream& out = to_stdout ? std::cout : file;
+  std::string text(prediction_csv_header());
+  const auto flush = [&] {
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    text.clear();
+  };
+
+  PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
+    append_prediction_csv(predicted, text);
+    if (text.size() >= flush_bytes) flush();
+  });
+  pipeline.set_table(std::make_shared<const StoredTable>(std::move(*loaded.stored)));
+
+  bool every_file_whole = true;
+  SSL_WrapperPacket packet;
+  for (const std::string& path : options.from_logs) {
+    std::string error;
+    std::optional<LogReader> reader = LogReader::open(path, &error);
+    if (!reader) {
+      spdlog::error("{}", error);
+      every_file_whole = false;
+      continue;
+    }
+    // Each file is its own stream: no prediction follows a formation of another file.
+    pipeline.start_new_stream();
+    const std::uint64_t predictions_before = pipeline.predictions();
+    std::optional<app::ProgressBar> bar;
+    if (reader->compressed_size() > progress_bar_bytes && !to_stdout)
+      bar.emplace("predicting from " + path, reader->compressed_size());
+    std::uint64_t frames = 0;
+    while (reader->next_vision(packet)) {
+      pipeline.add(packet);
+      if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);
+    }
+    if (bar) bar->finish(frames);
+    spdlog::info("{}: {} vision packets ({} parse errors), {} predictions", path, frames,
+                 reader->counters().parse_errors, pipeline.predictions() - predictions_before);
+    if (reader->ending() == LogReader::Ending::damaged) {
+      spdlog::error("{}; the {} vision packets before it were used", reader->error(), frames);
+      every_file_whole = false;
+    } else if (reader->ending() == LogReader::Ending::cut_off) {
+      spdlog::warn("{}: the file ends inside its last message; the {} vision packets before it "
+                   "were used",
+                   reader->error(), frames);
+    }
+  }
+  flush();
+  out.flush();
+  if (!out) throw std::runtime_error("cannot write " + (to_stdout ? "standard output" : options.output));
+  spdlog::info("{} predictions from {} formations{}", pipeline.predictions(),
+               pipeline.sampler().counters().samples,
+               to_stdout ? std::string() : " written to " + options.output);
+  return every_file_whole ? 0 : 1;
+}
+
+}  // namespace ssl_formation::predictor

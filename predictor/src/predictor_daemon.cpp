@@ -1,0 +1,319 @@
+// ssl-predictor's daemon: the vision feed through the core's PredictionPipeline, each prediction
+// multicast as a FormationPrediction and printed as one readable line, the table followed as the
+// trainer replaces it, and the live field view (--http-port).
+
+#include <spdlog/spdlog.h>
+
+#include <boost/asio/io_context.hpp>
+#include <chrono>
+#include <iostream>
+#include <optional>
+
+#include "field_view_json.hpp"
+#include "field_view_server.hpp"
+#include "ssl_formation/app/daemon.hpp"
+#include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
+#include "ssl_formation/prediction_message.hpp"
+#include "ssl_formation/predictor/predictor_options.hpp"
+#include "ssl_formation/predictor/table_watcher.hpp"
+#include "ssl_formation/state.hpp"
+#include "team_robots.hpp"
+
+namespace ssl_formation::predictor {
+
+int list_states(const Grid& grid) {
+  const StateCodec codec(grid);
+  std::string out;
+  for (StateIndex index = 0; index < codec.state_count(); ++index) {
+    out += codec.describe(index);
+    out += '\n';
+    if (out.size() > (1 << 20)) {
+      std::cout << out;
+      out.clear();
+    }
+  }
+  std::cout << out << std::flush;
+  return std::cout ? 0 : 1;
+}
+
+namespace {
+
+std::string prediction_interface(const PredictorOptions& options) {
+  if (!options.prediction_interface.empty()) return options.prediction_interface;
+  return options.network.interface == "all" ? std::string(app::default_interface)
+                                            : options.network.interface;
+}
+
+// The daemon: vision in, predictions out.
+class PredictorDaemon {
+ public:
+  PredictorDaemon(boost::asio::io_context& io, const PredictorOptions& options,
+                  const PredictionConfig& config)
+      : options_(options),
+        config_(config.sampler),
+        watcher_(options.table, config.sampler.grid),
+        pipeline_(config, [this](const PredictedFormation& predicted) { on_prediction(predicted); }),
+        receiver_(io, app::parse_group_option("vision-address", options.network.vision_address),
+                  app::parse_interface_option(options.network.interface, true),
+                  options.receive_buffer_bytes),
+        sender_(io, app::parse_group_option("prediction-address", options.prediction_address),
+                app::parse_interface_option(prediction_interface(options), false).address,
+                options.ttl),
+        // Our robots are kept as long as the sampler keeps a camera live.
+        ours_(other_team(config.sampler.opponent_color),
+              std::max(config.sampler.camera_timeout_s, 1.5 * config.sampler.step_s),
+              config.sampler.clock_reset_s > 0.0 ? config.sampler.clock_reset_s
+                                                 : 2.0 * config.sampler.step_s),
+        field_log_(config.sampler.field, config.sampler.use_geometry) {
+    // Allocated now rather than wherever the first packet leaves it: every page the hot path
+    // touches costs after 16 ms asleep.
+    datagram_.reserve(2048);
+    if (options.http_port != 0) {
+      web::FieldViewOptions web_options;
+      web_options.address = options.http_address;
+      web_options.port = static_cast<std::uint16_t>(options.http_port);
+      web_options.max_clients = static_cast<std::size_t>(options.http_max_clients);
+      web_options.send_buffer_bytes = options.http_send_buffer_bytes;
+      web_.emplace(io, web_options);
+    }
+  }
+
+  void start() {
+    sender_.open();
+    if (web_) {
+      web_->start();  // before the receiver, so a busy port fails before anything else runs
+      spdlog::info("field view: open {}", web_->url());
+    }
+    receiver_.start([this](const VisionFrame& frame, const net::udp::endpoint&) {
+      if (web_) {
+        // Only the field view shows these; a clock read is not free in a cold process either.
+        last_packet_ = std::chrono::steady_clock::now();
+        // Ours first, so that a prediction this packet completes shows them as of this packet.
+        if (frame.has_detection) ours_.add(frame.detection);
+      }
+      pipeline_.add(frame);
+      if (frame.has_geometry) field_log_.update(pipeline_.sampler().field());
+    });
+    spdlog::info("predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s",
+                 options_.horizon, to_string(config_.opponent_color),
+                 to_string(config_.opponent_attacks), config_.grid.to_string(), config_.step_s);
+    check_table();
+    if (!watcher_.table()) {
+      spdlog::info("waiting for the table {}: start ssl-trainer with --table {} (or give --table)",
+                   options_.table, options_.table);
+    }
+  }
+
+  void stop() {
+    receiver_.stop();
+    if (web_) web_->stop();
+  }
+
+  bool serving_web() const { return web_.has_value(); }
+
+  // What the ready file says once the sockets are joined and the table there at start loaded.
+  std::vector<std::pair<std::string, std::string>> ready_facts() const {
+    std::vector<std::pair<std::string, std::string>> facts{
+        {"vision", options_.network.vision_address},
+        {"interface", options_.network.interface},
+        {"predictions", options_.prediction_address},
+        {"table", options_.table},
+        {"table_loaded", watcher_.table() ? "1" : "0"}};
+    if (web_) facts.emplace_back("http", web_->url());
+    return facts;
+  }
+
+  // The field view's status message: stream rates, the table and the viewers.
+  void publish_status() {
+    if (!web_) return;
+    const auto now = std::chrono::steady_clock::now();
+    const auto& net = receiver_.counters();
+    const std::uint64_t packets = net.datagrams.load();
+    web::FieldViewStatus status;
+    status.setup = view_setup();
+    status.packets = packets;
+    if (last_rate_time_) {
+      const double elapsed = std::chrono::duration<double>(now - *last_rate_time_).count();
+      if (elapsed > 0.0)
+        status.packets_per_s = static_cast<double>(packets - last_rate_packets_) / elapsed;
+    }
+    last_rate_time_ = now;
+    last_rate_packets_ = packets;
+    if (last_packet_)
+      status.since_packet_s = std::chrono::duration<double>(now - *last_packet_).count();
+    status.parse_errors = net.parse_errors.load();
+    status.kernel_drops = net.kernel_drops.load();
+    status.formations = pipeline_.sampler().counters().samples;
+    status.predictions = pipeline_.predictions();
+    if (const auto& table = watcher_.table()) {
+      const StoredTable& stored = *table;
+      status.table_loaded = true;
+      status.table_transitions = stored.table.transitions();
+      status.table_formations = stored.metadata.samples;
+      status.table_states_seen = stored.table.rows_seen();
+    }
+    status.table_reloads = watcher_.reloads();
+    status.table_loaded_unix_ms = table_loaded_unix_ms_;
+    status.table_error = table_error_;
+    const web::FieldViewCounters counters = web_->counters();
+    status.clients = counters.live_clients;
+    status.dropped_frames = counters.dropped_frames;
+    status.ours = ours_.current();
+    web_->broadcast(web::MessageKind::status, web::status_json(status));
+  }
+
+  void check_table() {
+    switch (watcher_.poll()) {
+      case TableWatcher::Change::loaded: {
+        const StoredTable& stored = *watcher_.table();
+        pipeline_.set_table(watcher_.table());
+        spdlog::info(
+            "loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
+            options_.table, watcher_.reloads(), stored.table.transitions(), stored.metadata.samples,
+            stored.table.rows_seen());
+        table_loaded_unix_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                    std::chrono::system_clock::now().time_since_epoch())
+                                    .count();
+        table_error_.clear();
+        if (stored.metadata.step_s != config_.step_s) {
+          spdlog::warn("the table was trained with --step {} but this predictor samples every {} s",
+                       stored.metadata.step_s, config_.step_s);
+        }
+        break;
+      }
+      case TableWatcher::Change::failed:
+        table_error_ = watcher_.last_error();
+        spdlog::error("{}; {}", watcher_.last_error(),
+                      watcher_.table() ? "keeping the table loaded before"
+                                       : "still waiting for a valid table");
+        break;
+      case TableWatcher::Change::none:
+        break;
+    }
+  }
+
+  void log_status() {
+    const auto& c = pipeline_.sampler().counters();
+    spdlog::info("status: {} formations={} predictions={} sent={} table_reloads={} | {}",
+                 app::describe_reception(receiver_), c.samples, pipeline_.predictions(),
+                 sender_.sent(), watcher_.reloads(), describe_rejections(c));
+    // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
+    for (const std::string& line : new_rejections(reported_, c))
+      spdlog::warn("input: {}", line);
+    reported_ = c;
+    if (web_) {
+      const web::FieldViewCounters w = web_->counters();
+      spdlog::info(
+          "field view: viewers={} connections={} refused={} dropped_frames={} stalled={} "
+          "bad_requests={}",
+          w.live_clients, w.connections, w.refused, w.dropped_frames, w.stalled_clients,
+          w.bad_requests);
+    }
+  }
+
+ private:
+  // The hot path, from the prediction to the datagram: no allocation once warmed up, and the
+  // wire format written directly (see encode_prediction).
+  void on_prediction(const PredictedFormation& predicted) {
+    encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram_);
+    sender_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
+    if (!options_.quiet) {
+      std::cout << describe_prediction(predicted.formation(), predicted.prediction) << '\n'
+                << std::flush;
+    }
+    // After the multicast: the view never delays the predictions.
+    if (web_) {
+      fill_prediction_message(predicted.formation(), predicted.prediction, predicted.context,
+                              message_);
+      web_->broadcast(web::MessageKind::prediction,
+                      web::prediction_json(message_, view_setup(), ours_.current()));
+    }
+  }
+
+  static TeamColor other_team(TeamColor color) {
+    return color == TeamColor::yellow ? TeamColor::blue : TeamColor::yellow;
+  }
+
+  web::FieldViewSetup view_setup() const {
+    return web::FieldViewSetup{pipeline_.sampler().field(), config_.grid, config_.opponent_attacks,
+                               config_.opponent_color};
+  }
+
+  const PredictorOptions& options_;
+  SamplerConfig config_;
+  TableWatcher watcher_;
+  PredictionPipeline pipeline_;
+  net::VisionReceiver receiver_;
+  net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction
+  std::string datagram_;
+  proto::FormationPrediction message_;  // for the field view only
+  SamplerCounters reported_;  // counters at the last status line
+  // The field view (--http-port), and what only it needs.
+  web::TeamRobots ours_;
+  app::FieldSizeLog field_log_;
+  std::optional<web::FieldViewServer> web_;
+  std::optional<std::chrono::steady_clock::time_point> last_packet_;
+  std::optional<std::chrono::steady_clock::time_point> last_rate_time_;
+  std::uint64_t last_rate_packets_ = 0;
+  std::optional<std::int64_t> table_loaded_unix_ms_;
+  std::string table_error_;
+};
+
+}  // namespace
+
+PredictionConfig prediction_config(const PredictorOptions& options) {
+  PredictionConfig config;
+  config.sampler = options.model.sampler_config();
+  if (options.horizon < 1 || options.horizon > PredictionConfig::max_horizon) {
+    throw app::UsageError("--horizon must be 1 to " +
+                          std::to_string(PredictionConfig::max_horizon));
+  }
+  config.horizon = options.horizon;
+  return config;
+}
+
+int run_daemon(const PredictorOptions& options) {
+  const PredictionConfig config = prediction_config(options);
+  if (options.ttl < 0 || options.ttl > 255) throw app::UsageError("--ttl must be 0 to 255");
+  const auto reload_period = app::seconds_option("reload-interval", options.reload_interval_s);
+  const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
+  if (options.http_port < 0 || options.http_port > 65535)
+    throw app::UsageError("--http-port must be 0 to 65535");
+  if (options.http_max_clients < 1 || options.http_max_clients > 10000) {
+    throw app::UsageError("--http-max-clients must be 1 to 10000");
+  }
+  if (options.http_send_buffer_bytes < 0)
+    throw app::UsageError("--http-send-buffer must be 0 or more");
+  const auto web_status_period =
+      app::seconds_option("http-status-interval", options.http_status_interval_s);
+
+  boost::asio::io_context io;
+  PredictorDaemon daemon(io, options, config);
+  // Signals are caught from before the first log line on, so a SIGTERM right after start-up
+  // stops the daemon cleanly; the handler runs inside io.run(), after everything below exists.
+  std::optional<app::RepeatingTimer> reload;
+  std::optional<app::RepeatingTimer> status;
+  std::optional<app::RepeatingTimer> web_status;
+  app::StopSignals signals(io, [&](int signal) {
+    spdlog::info("signal {}: stopping", signal);
+    daemon.stop();
+    reload->cancel();
+    status->cancel();
+    if (web_status) web_status->cancel();
+    io.stop();
+  });
+  daemon.start();
+  app::ReadyFile ready(options.daemon.ready_file);
+  ready.mark_ready("ssl-predictor", daemon.ready_facts());
+  reload.emplace(io, reload_period, [&] { daemon.check_table(); });
+  status.emplace(io, status_period, [&] { daemon.log_status(); });
+  if (daemon.serving_web())
+    web_status.emplace(io, web_status_period, [&] { daemon.publish_status(); });
+  io.run();
+  daemon.log_status();
+  return 0;
+}
+
+
+}  // namespace ssl_formation::predictor

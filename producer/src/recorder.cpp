@@ -1,0 +1,145 @@
+#include "ssl_formation/producer/recorder.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <filesystem>
+#include <optional>
+
+#include "ssl_formation/app/daemon.hpp"
+#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/net/multicast.hpp"
+#include "ssl_vision_wrapper.pb.h"
+
+namespace ssl_formation::producer {
+
+namespace {
+
+std::int64_t unix_time_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+class Recorder {
+ public:
+  Recorder(LogWriter& writer, const RecordOptions& options)
+      : writer_(writer), options_(options) {}
+
+  // Returns false when recording must end (--count reached or the file cannot be written).
+  bool add(std::span<const std::byte> data) {
+    const int size = static_cast<int>(data.size());  // <= kMaxUdpPayload
+    if (!packet_.ParsePartialFromArray(data.data(), size) || !packet_.IsInitialized()) {
+      if (skipped_++ == 0) {
+        spdlog::warn(
+            "a datagram of {} bytes is not an SSL_WrapperPacket: not recorded (the "
+            "status lines count them)",
+            data.size());
+      }
+      return true;
+    }
+    const std::string_view payload(reinterpret_cast<const char*>(data.data()), data.size());
+    if (!writer_.write(static_cast<std::int32_t>(LogMessageType::vision), unix_time_ns(),
+                       payload)) {
+      failed_ = true;
+      return false;
+    }
+    ++recorded_;
+    return options_.count == 0 || recorded_ < options_.count;
+  }
+
+  std::uint64_t recorded() const { return recorded_; }
+  std::uint64_t skipped() const { return skipped_; }
+  bool failed() const { return failed_; }
+
+ private:
+  LogWriter& writer_;
+  const RecordOptions& options_;
+  SSL_WrapperPacket packet_;  // reused
+  std::uint64_t recorded_ = 0;
+  std::uint64_t skipped_ = 0;
+  bool failed_ = false;
+};
+
+}  // namespace
+
+int run_record(const RecordOptions& options) {
+  const auto group = app::parse_group_option("vision-address", options.network.vision_address);
+  const auto interface = app::parse_interface_option(options.network.interface, true);
+  if (options.output.empty())
+    throw app::UsageError("--output FILE is required (.log or .log.gz)");
+  if (!(options.duration_s >= 0.0) || options.duration_s > 1e9) {
+    throw app::UsageError("--duration must be >= 0 seconds (0 = until a signal)");
+  }
+  if (options.receive_buffer_bytes < 0) throw app::UsageError("--receive-buffer must be >= 0");
+  const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
+  std::error_code ec;
+  if (!options.overwrite && std::filesystem::exists(options.output, ec)) {
+    throw app::UsageError(options.output + " exists; pass --overwrite to replace it");
+  }
+
+  std::string error;
+  std::optional<LogWriter> writer = LogWriter::create(options.output, &error);
+  if (!writer) throw std::runtime_error(error);
+  Recorder recorder(*writer, options);
+
+  boost::asio::io_context io;
+  net::MulticastReceiver receiver(io, group, interface, options.receive_buffer_bytes);
+  const auto started = std::chrono::steady_clock::now();
+  const auto log_status = [&](const char* what) {
+    const auto& net = receiver.counters();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    spdlog::info(
+        "{}: recorded={} bytes={} skipped={} kernel_drops={} receive_errors={} seconds={:.1f}",
+        what, recorder.recorded(), writer->offset(), recorder.skipped(), net.kernel_drops.load(),
+        net.receive_errors.load(), seconds);
+  };
+  bool by_signal = false;
+  const auto stop = [&] {
+    receiver.stop();
+    io.stop();
+  };
+  receiver.start([&](std::span<const std::byte> data, const net::udp::endpoint&) {
+    if (!recorder.add(data)) stop();
+  });
+  spdlog::info("recording {} (interface {}, receive buffer {} bytes) to {}{}{}", group.to_string(),
+               interface.to_string(), receiver.granted_receive_buffer(), options.output,
+               options.duration_s > 0.0 ? fmt::format(" for {} s", options.duration_s) : "",
+               options.count ? fmt::format(", at most {} packets", options.count) : "");
+
+  app::RepeatingTimer status(io, status_period, [&] { log_status("status"); });
+  boost::asio::steady_timer deadline(io);
+  if (options.duration_s > 0.0) {
+    deadline.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(options.duration_s)));
+    deadline.async_wait([&](const boost::system::error_code& e) {
+      if (!e) stop();
+    });
+  }
+  app::StopSignals signals(io, [&](int signal) {
+    spdlog::info("signal {}: closing {} and stopping", signal, options.output);
+    by_signal = true;
+    stop();
+  });
+  io.run();
+  receiver.stop();
+
+  if (recorder.failed()) {
+    spdlog::error("{}; the {} packets before it are in the file", writer->error(),
+                  recorder.recorded());
+    writer->close(options.index);
+    return 1;
+  }
+  if (!writer->close(options.index)) {
+    spdlog::error("{}", writer->error());
+    return 1;
+  }
+  log_status(by_signal ? "stopped" : "done");
+  return 0;
+}
+
+
+}  // namespace ssl_formation::producer

@@ -1,0 +1,40 @@
+#pragma once
+// ssl-trainer's three modes: live training from the vision feed, offline training from log
+// files, and merging tables. main.cpp parses the options; everything else is here, linkable by
+// the tests. All three count through the core's Training and save through table_store.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "ssl_formation/app/options.hpp"
+#include "ssl_formation/net/multicast.hpp"
+
+namespace ssl_formation::trainer {
+
+struct TrainerOptions {
+  app::ModelOptions model;
+  app::NetworkOptions network;
+  app::DaemonOptions daemon;
+  std::string table = app::default_table;
+  double flush_interval_s = 10.0;
+  double status_interval_s = 5.0;
+  int receive_buffer_bytes = net::kDefaultReceiveBufferBytes;
+  bool reset = false;
+  bool verbose = false;
+  std::vector<std::string> from_logs;
+  // --from-log: a log whose last record is cut off (a recorder killed mid-write) is used up to
+  // it with a warning; with strict, that also makes the exit status 1.
+  bool strict = false;
+};
+
+// Each returns the exit status. Throws app::UsageError for bad options and std::runtime_error
+// when the table cannot be resumed.
+int run_live(const TrainerOptions& options);     // live_trainer.cpp
+int run_offline(const TrainerOptions& options);  // offline_training.cpp
+
+// Adds up tables of the same grid and step into `output` (atomically). Throws
+// std::runtime_error naming the file and the reason when one cannot be read or added.
+void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output);
+
+}  // namespace ssl_formation::trainer

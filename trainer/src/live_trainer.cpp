@@ -1,0 +1,79 @@
+// ssl-trainer's live mode: the vision feed through Training into the table file, saved every
+// --flush-interval and on SIGINT/SIGTERM.
+
+#include <spdlog/spdlog.h>
+
+#include <boost/asio/io_context.hpp>
+
+#include "ssl_formation/app/daemon.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
+#include "ssl_formation/trainer/table_store.hpp"
+#include "ssl_formation/trainer/trainer.hpp"
+
+namespace ssl_formation::trainer {
+
+namespace {
+
+// One status line, then a warning for each kind of bad input that arrived since the last one.
+void log_status(const Training& training, const net::VisionReceiver& receiver,
+                SamplerCounters& reported) {
+  const SamplerCounters& c = training.sampler().counters();
+  spdlog::info(
+      "status: {} formations={} transitions={} table_transitions={} states_seen={} "
+      "rejected_robots={} late_frames={} | {}",
+      app::describe_reception(receiver), c.samples, c.transitions, training.table().transitions(),
+      training.table().rows_seen(), c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id,
+      c.frames_late, describe_rejections(c));
+  for (const std::string& line : new_rejections(reported, c)) spdlog::warn("input: {}", line);
+  reported = c;
+}
+
+}  // namespace
+
+int run_live(const TrainerOptions& options) {
+  const SamplerConfig config = options.model.sampler_config();
+  const auto group = app::parse_group_option("vision-address", options.network.vision_address);
+  const auto interface = app::parse_interface_option(options.network.interface, true);
+  const auto flush_period = app::seconds_option("flush-interval", options.flush_interval_s);
+  const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
+
+  const std::filesystem::path table_path = options.table;
+  std::unique_ptr<Training> training = open_training(table_path, config, options.reset);
+
+  boost::asio::io_context io;
+  app::ReadyFile ready(options.daemon.ready_file);
+  net::VisionReceiver receiver(io, group, interface, options.receive_buffer_bytes);
+  app::FieldSizeLog field_log(config.field, config.use_geometry);
+  receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
+    training->add(frame);
+    if (frame.has_geometry) field_log.update(training->sampler().field());
+  });
+  spdlog::info("training: opponent {} attacking {}; grid {}, step {} s; table {} saved every {} s",
+               to_string(config.opponent_color), to_string(config.opponent_attacks),
+               config.grid.to_string(), config.step_s, table_path.string(),
+               options.flush_interval_s);
+
+  app::RepeatingTimer flush(io, flush_period, [&] {
+    if (training->changed_since_save()) save_training(table_path, *training);
+  });
+  SamplerCounters reported;
+  app::RepeatingTimer status(io, status_period, [&] { log_status(*training, receiver, reported); });
+  bool saved_on_exit = true;
+  app::StopSignals signals(io, [&](int signal) {
+    spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)",
+                 signal);
+    receiver.stop();
+    flush.cancel();
+    status.cancel();
+    saved_on_exit = save_training(table_path, *training);
+    io.stop();
+  });
+  ready.mark_ready("ssl-trainer", {{"vision", group.to_string()},
+                                   {"interface", interface.to_string()},
+                                   {"table", table_path.string()}});
+  io.run();
+  log_status(*training, receiver, reported);
+  return saved_on_exit ? 0 : 1;
+}
+
+}  // namespace ssl_formation::trainer
