@@ -48,8 +48,7 @@
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/prediction_message.hpp"
-#include "ssl_formation/predictor.hpp"
-#include "ssl_formation/sampler.hpp"
+#include "ssl_formation/prediction_pipeline.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_formation/vision_frame.hpp"
@@ -400,47 +399,41 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
     std::cerr << "e2e_bench pipeline: " << loaded.message << '\n';
     return 1;
   }
-  const sf::StoredTable& stored = *loaded.stored;
+  sf::StoredTable& stored = *loaded.stored;
   LatencyOptions o;
   o.step_s = step_s;
   o.seed = seed;
   const std::vector<std::string> packets = latency_packets(o, 2 * count);
 
-  // The predictor's per-packet path, as in predictor/main.cpp (net::VisionReceiver's decode, the
-  // sampler, on_sample), with its buffers reused the same way.
-  sf::SamplerConfig config;
-  config.grid = stored.table.grid();
-  config.step_s = step_s;
-  sf::Prediction prediction;
-  std::vector<sf::RobotStateById> robot_states;
+  // The predictor's per-packet path: net::VisionReceiver's decode, then the PredictionPipeline
+  // and the encoding the daemon runs, with their buffers reused the same way.
+  sf::PredictionConfig config;
+  config.sampler.grid = stored.table.grid();
+  config.sampler.step_s = step_s;
   std::string encoded;
+  encoded.reserve(2048);
   std::uint64_t predictions = 0;
-  // Stage times of the current packet: decode, sample, predict, encode.
-  std::array<std::int64_t, 5> marks{};
-  sf::FormationSampler sampler(config, [&](const sf::FormationSample& sample) {
+  // Stage times of the current packet: decode, sample and predict, encode.
+  std::array<std::int64_t, 4> marks{};
+  sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& predicted) {
     marks[2] = now_ns();
-    robot_states.clear();
-    for (const sf::FormationRobot& robot : sample.formation.robots)
-      robot_states.push_back({robot.robot_id, robot.state});
-    sf::predict(stored.table, robot_states, 2, prediction);
+    sf::encode_prediction(predicted.formation(), predicted.prediction, predicted.context,
+                          encoded);
     marks[3] = now_ns();
-    const sf::PredictionContext context =
-        sf::prediction_context(stored.table, config, sampler.field());
-    sf::encode_prediction(sample.formation, prediction, context, encoded);
-    marks[4] = now_ns();
     ++predictions;
   });
+  pipeline.set_table(std::make_shared<const sf::StoredTable>(std::move(stored)));
   // As net::VisionReceiver: detection packets decoded straight from the bytes, anything else
   // by protobuf.
   sf::VisionFrame frame;
   SSL_WrapperPacket parsed;
-  std::array<std::vector<double>, 4> idle_stages;
+  std::array<std::vector<double>, 3> idle_stages;
   const auto one = [&](const std::string& bytes) {
     marks = {};
     marks[0] = now_ns();
     if (sf::read_vision_datagram(bytes_of(bytes), frame, parsed) != sf::VisionDatagram::invalid) {
       marks[1] = now_ns();
-      sampler.add(frame);
+      pipeline.add(frame);
     }
     return static_cast<double>(now_ns() - marks[0]) / 1000.0;
   };
@@ -450,7 +443,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   for (std::size_t i = 0; i < count; ++i) {
     std::this_thread::sleep_for(std::chrono::duration<double>(idle_s));
     idle.push_back(one(packets[i]));
-    if (marks[4] != 0) {
+    if (marks[3] != 0) {
       for (std::size_t k = 0; k < idle_stages.size(); ++k) {
         idle_stages[k].push_back(static_cast<double>(marks[k + 1] - marks[k]) / 1000.0);
       }
@@ -464,7 +457,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
       "idle_p50_us=%.2f idle_p99_us=%.2f idle_ms=%.1f\n",
       count, static_cast<unsigned long long>(predictions), encoded.size(), percentile(warm, 50),
       percentile(warm, 99), percentile(idle, 50), percentile(idle, 99), idle_s * 1000.0);
-  const char* names[] = {"decode", "sample", "predict", "encode"};
+  const char* names[] = {"decode", "sample+predict", "encode"};
   std::printf("pipeline stage medians after idling (us):");
   for (std::size_t k = 0; k < idle_stages.size(); ++k) {
     std::sort(idle_stages[k].begin(), idle_stages[k].end());

@@ -13,7 +13,7 @@
 #include "pipeline_support.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
-#include "ssl_formation/prediction_message.hpp"
+#include "ssl_formation/prediction_pipeline.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 
@@ -127,18 +127,17 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   // The same stream through the library.
   sim::SimulatedVision vision_stream(sim::SimulationConfig{.seed = 4});
   std::vector<std::string> expected;
-  SamplerConfig config;
-  FormationSampler sampler(config, [&](const FormationSample& sample) {
-    const Prediction prediction = predict(table, sample.formation, 3);
-    PredictionContext context;
-    context.codec = &table.codec();
-    context.table_transitions = table.transitions();
+  PredictionConfig config;
+  config.horizon = 3;
+  PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
     proto::FormationPrediction message;
-    fill_prediction_message(sample.formation, prediction, context, message);
+    fill_prediction_message(predicted.formation(), predicted.prediction, predicted.context,
+                            message);
     expected.push_back(message.SerializeAsString());
   });
+  pipeline.set_table(std::make_shared<const StoredTable>(StoredTable{table, {}}));
   for (int i = 0; i < 60; ++i) {
-    for (const auto& packet : vision_stream.next().packets) sampler.add(packet);
+    for (const auto& packet : vision_stream.next().packets) pipeline.add(packet);
   }
   ASSERT_EQ(expected.size(), 60u);
   for (std::size_t i = 0; i < expected.size(); ++i) {

@@ -24,7 +24,7 @@
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/prediction_message.hpp"
-#include "ssl_formation/predictor.hpp"
+#include "ssl_formation/prediction_pipeline.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 
@@ -68,20 +68,15 @@ inline std::unique_ptr<Training> train(const std::vector<SSL_WrapperPacket>& pac
 inline std::vector<std::string> library_predictions(const std::vector<SSL_WrapperPacket>& packets,
                                                     const TransitionTable& table, int horizon = 2) {
   std::vector<std::string> out;
-  SamplerConfig config;
-  FormationSampler* self = nullptr;
-  FormationSampler sampler(config, [&](const FormationSample& sample) {
-    const Prediction prediction = predict(table, sample.formation, horizon);
-    PredictionContext context;
-    context.codec = &table.codec();
-    context.field = self->field();
-    context.table_transitions = table.transitions();
-    proto::FormationPrediction message;
-    fill_prediction_message(sample.formation, prediction, context, message);
-    out.push_back(message.SerializeAsString());
+  PredictionConfig config;
+  config.horizon = horizon;
+  PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
+    std::string datagram;
+    encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram);
+    out.push_back(std::move(datagram));
   });
-  self = &sampler;
-  for (const auto& packet : packets) sampler.add(packet);
+  pipeline.set_table(std::make_shared<const StoredTable>(StoredTable{table, {}}));
+  for (const auto& packet : packets) pipeline.add(packet);
   return out;
 }
 
