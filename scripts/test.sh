@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Builds the project and runs every test (ctest), then runs the unit tests again under
-# AddressSanitizer and UndefinedBehaviorSanitizer in a second build folder. Installs missing
-# Debian packages first. Exit status is non-zero if anything fails.
+# Builds the project and runs every test (ctest), then runs the unit tests and the daemon tests
+# again under AddressSanitizer and UndefinedBehaviorSanitizer in a second build folder (the daemon
+# tests then start the sanitizer-built programs). Installs missing Debian packages first. Exit
+# status is non-zero if anything fails.
 #   SSLF_BUILD_DIR        build folder (default: build)
 #   SSLF_SKIP_SANITIZERS  set to 1 to skip the sanitizer pass
 set -euo pipefail
@@ -28,14 +29,18 @@ ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600
 
 if [ "${SSLF_SKIP_SANITIZERS:-0}" != 1 ]; then
   sanitize_dir="$build_dir-sanitize"
-  echo "== Unit tests under AddressSanitizer and UndefinedBehaviorSanitizer ($sanitize_dir)"
+  echo "== Unit and daemon tests under AddressSanitizer and UndefinedBehaviorSanitizer ($sanitize_dir)"
   cmake -S "$SSLF_ROOT" -B "$sanitize_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSSLF_SANITIZE=ON -DSSLF_BUILD_BENCHMARKS=OFF >"$sanitize_dir.configure.log" 2>&1 ||
     { cat "$sanitize_dir.configure.log" >&2; exit 1; }
-  cmake --build "$sanitize_dir" -j "$(nproc)" --target common_tests producer_tests net_tests
+  # The reliability (load, SIGKILL timing) and browser tests are left to the Release build.
+  sanitized=(common_tests app_tests simulation_tests producer_tests trainer_tests predictor_tests
+    net_tests daemon_tests)
+  cmake --build "$sanitize_dir" -j "$(nproc)" --target "${sanitized[@]}"
   export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-  for binary in common_tests producer_tests net_tests; do
+  for binary in "${sanitized[@]}"; do
+    echo "== $binary (sanitized)"
     "$sanitize_dir/tests/$binary" --gtest_brief=1
   done
 fi

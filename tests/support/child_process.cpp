@@ -31,8 +31,15 @@ std::string read_file(const std::filesystem::path& path) {
 }  // namespace
 
 ChildProcess::ChildProcess(const std::filesystem::path& program, std::vector<std::string> arguments,
-                           const std::filesystem::path& output_dir, const std::string& name)
+                           const std::filesystem::path& output_dir, const std::string& name,
+                           Readiness readiness)
     : stdout_path_(output_dir / (name + ".out")), stderr_path_(output_dir / (name + ".err")) {
+  if (readiness == Readiness::ready_file) {
+    ready_path_ = output_dir / (name + ".ready");
+    std::filesystem::remove(ready_path_);
+    arguments.push_back("--ready-file");
+    arguments.push_back(ready_path_.string());
+  }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
@@ -55,6 +62,27 @@ ChildProcess::~ChildProcess() {
     ::kill(pid_, SIGKILL);
     ::waitpid(pid_, &status_, 0);
   }
+}
+
+bool ChildProcess::wait_until_ready(std::chrono::milliseconds timeout) {
+  if (ready_path_.empty()) throw std::logic_error("started without Readiness::ready_file");
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (std::filesystem::exists(ready_path_)) return true;
+    if (!running()) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
+}
+
+std::string ChildProcess::ready_fact(const std::string& key) const {
+  if (ready_path_.empty()) return {};
+  std::istringstream lines(read_file(ready_path_));
+  const std::string prefix = key + "=";
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind(prefix, 0) == 0) return line.substr(prefix.size());
+  }
+  return {};
 }
 
 void ChildProcess::signal(int signal_number) const {

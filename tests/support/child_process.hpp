@@ -13,10 +13,15 @@
 
 namespace ssl_formation::testing {
 
+// Whether the program is one of our daemons, started with `--ready-file OUTPUT_DIR/NAME.ready`
+// so the test can wait for it to be ready (sockets joined, table loaded) instead of reading logs.
+enum class Readiness { none, ready_file };
+
 class ChildProcess {
  public:
   ChildProcess(const std::filesystem::path& program, std::vector<std::string> arguments,
-               const std::filesystem::path& output_dir, const std::string& name);
+               const std::filesystem::path& output_dir, const std::string& name,
+               Readiness readiness = Readiness::none);
   ~ChildProcess();
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
@@ -33,6 +38,11 @@ class ChildProcess {
   // Waits until stderr (or stdout) contains `text`; false on time-out or if the process ended.
   bool wait_for_stderr(const std::string& text, std::chrono::milliseconds timeout);
   bool wait_for_stdout(const std::string& text, std::chrono::milliseconds timeout);
+  // Waits until the daemon has written its ready file (Readiness::ready_file); false on
+  // time-out or if the process ended first.
+  bool wait_until_ready(std::chrono::milliseconds timeout);
+  // What the ready file says, key by key ("pid", "table_loaded", ...); empty before it exists.
+  std::string ready_fact(const std::string& key) const;
 
  private:
   pid_t pid_ = -1;
@@ -40,6 +50,7 @@ class ChildProcess {
   int status_ = 0;
   std::filesystem::path stdout_path_;
   std::filesystem::path stderr_path_;
+  std::filesystem::path ready_path_;  // empty without Readiness::ready_file
 };
 
 // Runs a program to completion (bounded by `timeout`), returning its exit code and output.
