@@ -1,0 +1,204 @@
+// ssl-predictor --from-log: logs through the same pipeline as the daemon, predictions as CSV.
+// The main check: the daemon, fed the same log by ssl-producer --replay, multicasts exactly the
+// predictions --from-log writes, line for line and number for number.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <charconv>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "child_process.hpp"
+#include "pipeline_support.hpp"
+
+namespace ssl_formation {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ChildProcess;
+using testing::new_group;
+using testing::Readiness;
+using testing::TempDir;
+
+const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
+const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
+
+std::vector<std::string> split(const std::string& text, char separator) {
+  std::vector<std::string> out;
+  std::string field;
+  std::istringstream in(text);
+  while (std::getline(in, field, separator)) out.push_back(field);
+  return out;
+}
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A number as the CSV must hold it: the shortest text that reads back as the same value.
+template <typename Number>
+std::string exact(Number value) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
+
+// What the CSV must say for one multicast prediction, written here from the message's fields.
+std::vector<std::string> rows_of(const proto::FormationPrediction& message) {
+  std::vector<std::string> rows;
+  for (const proto::PredictedStep& step : message.steps()) {
+    for (const proto::PredictedRobot& robot : step.robots()) {
+      rows.push_back(
+          exact(message.t_capture()) + ',' + exact(message.frame_number()) + ',' +
+          exact(robot.robot_id()) + ',' + exact(step.step()) + ',' +
+          exact(static_cast<double>(step.step()) * message.step_seconds()) + ',' +
+          exact(robot.state_index()) + ',' + exact(robot.position_cell().x()) + ',' +
+          exact(robot.position_cell().y()) + ',' + exact(robot.cell_centre().x()) + ',' +
+          exact(robot.cell_centre().y()) + ',' + exact(robot.probability()) + ',' +
+          (robot.unseen() ? "1" : "0") + ',' + exact(step.centroid_cell().x()) + ',' +
+          exact(step.centroid_cell().y()) + ',' + exact(step.centroid_probability()) + ',' +
+          exact(step.formation_probability()) + ',' + exact(step.confidence()));
+    }
+  }
+  return rows;
+}
+
+class PredictFromLog : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // Two cameras with overlap and noise, geometry inside: training on one seed, testing on
+    // another, as a team would with two recorded matches.
+    for (const auto& [name, seed, count] :
+         {std::tuple{"train.log.gz", "1", "400"}, std::tuple{"test.log", "9", "60"}}) {
+      const auto written = testing::run_to_end(
+          producer_program,
+          {"--write-log", (dir / name).string(), "--count", count, "--seed", seed, "--cameras",
+           "2", "--jitter-mm", "10"},
+          dir.path(), std::string("write-") + name, 30s);
+      ASSERT_EQ(written.exit_code, 0) << written.err;
+    }
+    const auto trained = testing::run_to_end(
+        trainer_program,
+        {"--from-log", (dir / "train.log.gz").string(), "--table", table.string()}, dir.path(),
+        "train", 30s);
+    ASSERT_EQ(trained.exit_code, 0) << trained.err;
+  }
+
+  TempDir dir;
+  std::filesystem::path table = dir / "table.bin";
+};
+
+TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
+  const auto csv_path = dir / "predictions.csv";
+  const auto offline = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--horizon", "3",
+       "--output", csv_path.string()},
+      dir.path(), "from-log", 30s);
+  ASSERT_EQ(offline.exit_code, 0) << offline.err;
+  std::vector<std::string> lines = split(read_text(csv_path), '\n');
+  ASSERT_GT(lines.size(), 1u);
+  EXPECT_EQ(lines.front(),
+            "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,"
+            "predicted_cell_y,predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,"
+            "centroid_cell_y,centroid_probability,formation_probability,confidence");
+  lines.erase(lines.begin());
+  std::set<std::string> instants;
+  for (const std::string& line : lines) instants.insert(split(line, ',').front());
+  // 60 formations on two cameras: every one sampled and predicted, 3 steps of 6 robots each.
+  ASSERT_EQ(instants.size(), 60u);
+  EXPECT_EQ(lines.size(), 60u * 3u * 6u);
+
+  const std::string vision = new_group();
+  const std::string predictions = new_group();
+  ChildProcess daemon(predictor_program,
+                      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+                       table.string(), "--horizon", "3", "--quiet"},
+                      dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(daemon.wait_until_ready(10s)) << daemon.stderr_text();
+  EXPECT_EQ(daemon.ready_fact("table_loaded"), "1");
+  testing::PredictionListener listener(predictions);
+  const auto replayed = testing::run_to_end(
+      producer_program,
+      {"--replay", (dir / "test.log").string(), "--vision-address", vision, "--speed", "50"},
+      dir.path(), "replay", 30s);
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.err;
+  const auto messages = listener.wait_for(instants.size(), 20s);
+  ASSERT_EQ(messages.size(), instants.size()) << daemon.stderr_text();
+
+  std::vector<std::string> multicast;
+  for (const auto& message : messages) {
+    const std::vector<std::string> rows = rows_of(message);
+    multicast.insert(multicast.end(), rows.begin(), rows.end());
+  }
+  ASSERT_EQ(multicast.size(), lines.size());
+  for (std::size_t i = 0; i < lines.size(); ++i) ASSERT_EQ(multicast[i], lines[i]) << "row " << i;
+
+  daemon.signal(SIGTERM);
+  EXPECT_EQ(daemon.wait(5s), 0) << daemon.stderr_text();
+  // No prediction beyond those: the daemon stopped with exactly as many as the CSV holds.
+  EXPECT_EQ(listener.wait_for(instants.size() + 1, 0ms).size(), instants.size());
+}
+
+TEST_F(PredictFromLog, WritesToStandardOutputAndKeepsEachFileItsOwnStream) {
+  const auto one = testing::run_to_end(
+      predictor_program, {"--from-log", (dir / "test.log").string(), "--table", table.string()},
+      dir.path(), "stdout-one");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const auto twice = testing::run_to_end(predictor_program,
+                                         {"--from-log", (dir / "test.log").string(),
+                                          (dir / "test.log").string(), "--table", table.string()},
+                                         dir.path(), "stdout-twice");
+  ASSERT_EQ(twice.exit_code, 0) << twice.err;
+  // The second file starts a stream of its own, so its predictions are exactly the first's.
+  const std::vector<std::string> single = split(one.out, '\n');
+  const std::vector<std::string> both = split(twice.out, '\n');
+  ASSERT_EQ(both.size(), 2 * single.size() - 1);  // one header
+  for (std::size_t i = 1; i < single.size(); ++i) {
+    ASSERT_EQ(both[i], single[i]);
+    ASSERT_EQ(both[single.size() - 1 + i], single[i]);
+  }
+}
+
+TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
+  const auto no_table = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "test.log").string(), "--table", (dir / "none.bin").string()},
+      dir.path(), "no-table");
+  EXPECT_EQ(no_table.exit_code, 1);
+  EXPECT_NE(no_table.err.find("none.bin"), std::string::npos) << no_table.err;
+  EXPECT_EQ(no_table.out, "");
+
+  const auto other_grid = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--grid", "6x4"},
+      dir.path(), "other-grid");
+  EXPECT_EQ(other_grid.exit_code, 1);
+  EXPECT_NE(other_grid.err.find("6x4"), std::string::npos) << other_grid.err;
+
+  // A missing log among good ones: the good ones are predicted, the exit status says it.
+  const auto csv_path = dir / "partial.csv";
+  const auto partial = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "missing.log").string(), (dir / "test.log").string(), "--table",
+       table.string(), "--output", csv_path.string()},
+      dir.path(), "partial");
+  EXPECT_EQ(partial.exit_code, 1);
+  EXPECT_NE(partial.err.find("missing.log"), std::string::npos) << partial.err;
+  EXPECT_EQ(split(read_text(csv_path), '\n').size(), 1u + 60u * 2u * 6u);
+
+  const auto bad_horizon = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--horizon", "0"},
+      dir.path(), "bad-horizon");
+  EXPECT_EQ(bad_horizon.exit_code, 2);
+}
+
+}  // namespace
+}  // namespace ssl_formation
