@@ -10,16 +10,14 @@ namespace ssl_formation {
 
 namespace {
 constexpr double time_epsilon_s = 1e-9;
-// Beyond this many steps from the anchor the clock is treated as restarted, which also keeps
-// the instant number far from int64 overflow whatever t_capture a packet claims.
-constexpr double max_instant_number = 1e12;
 }  // namespace
 
 FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample)
-    : config_(config), codec_(config.grid), on_sample_(std::move(on_sample)), field_(config.field) {
-  if (!std::isfinite(config_.step_s) || config_.step_s <= 0.0) {
-    throw std::invalid_argument("step must be a positive number of seconds");
-  }
+    : config_(config),
+      codec_(config.grid),
+      clock_(config),  // checks the step
+      on_sample_(std::move(on_sample)),
+      field_(config.field) {
   if (!field_.valid()) {
     throw std::invalid_argument("field length and width must be positive");
   }
@@ -30,7 +28,6 @@ FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample
   constexpr std::size_t usual_robots = 16;
   frame_scratch_.reserve(usual_robots);
   observed_ids_.reserve(2 * usual_robots);
-  camera_last_.reserve(8);
   robots_scratch_.reserve(usual_robots);
   sample_scratch_.formation.robots.reserve(usual_robots);
   sample_scratch_.transitions.reserve(usual_robots);
@@ -104,7 +101,7 @@ void FormationSampler::add_detection(const VisionDetection& frame) {
     // One camera may report two blobs with the same id: keep the more confident one.
     const auto same =
         std::find_if(frame_scratch_.begin(), frame_scratch_.end(),
-                     [&](const Detection& d) { return d.robot_id == robot.robot_id; });
+                     [&](const FrameDetection& d) { return d.robot_id == robot.robot_id; });
     if (same != frame_scratch_.end()) {
       ++counters_.robots_duplicate_in_frame;
       if (robot.confidence > same->confidence) *same = {robot.robot_id, x, y, robot.confidence};
@@ -114,146 +111,37 @@ void FormationSampler::add_detection(const VisionDetection& frame) {
   }
   counters_.robots_accepted += frame_scratch_.size();
   if (frame_scratch_.empty()) ++counters_.frames_without_opponent;
-  place_frame(frame.camera_id, frame.frame_number, t);
+  clock_.place(*this, ClockFrame{frame.camera_id, frame.frame_number, t}, frame_scratch_);
 }
 
-// Decides which clock the frame (its detections in frame_scratch_) belongs to, and uses it.
-void FormationSampler::place_frame(std::uint32_t camera_id, std::uint32_t frame_number, double t) {
-  const double clock_reset_s =
-      config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
-  if (anchored_ && std::abs(t - newest_s_) > clock_reset_s) {
-    set_aside(camera_id, frame_number, t);
-    return;
-  }
-  // A restarted clock passes through times near the old one: while its frames are being set
-  // aside, a frame that fits it and would be too old for the current clock is its too.
-  if (!pending_.empty() && std::abs(t - other_.newest_s) <= clock_reset_s && next_k_ > 0 &&
-      t < instant(next_k_ - 1) - time_epsilon_s) {
-    set_aside(camera_id, frame_number, t);
-    return;
-  }
-  if (!pending_.empty()) {
-    // The current clock goes on after frames of another one: two senders, unless the other
-    // clock never advanced (a stray old frame, a duplicate of one).
-    if (other_.advancing && !conflict_) {
-      conflict_ = true;
-      ++counters_.clock_conflicts;
-    }
-    pending_.clear();
-  }
-  if (!anchored_) {
-    anchored_ = true;
-    anchor_s_ = t;
-    newest_s_ = t;
-    next_k_ = 0;
-  }
-  const double hold_s =
-      config_.clock_conflict_hold_s > 0.0 ? config_.clock_conflict_hold_s : 4.0 * config_.step_s;
-  if (other_.active && std::max(newest_s_, t) - other_.seen_at_s > hold_s) {
-    other_ = OtherClock{};
-    conflict_ = false;
-  }
-
-  auto camera = std::find_if(camera_last_.begin(), camera_last_.end(),
-                             [&](const CameraClock& c) { return c.camera_id == camera_id; });
-  if (camera != camera_last_.end() && camera->last_s == t &&
-      camera->last_frame_number == frame_number) {
-    ++counters_.frames_duplicate;
-    return;
-  }
-
-  double instant_number = std::floor((t - anchor_s_) / config_.step_s + time_epsilon_s);
-  if (std::abs(instant_number) > max_instant_number) {
-    ++counters_.clock_resets;
-    restart();
-    anchored_ = true;
-    anchor_s_ = t;
-    newest_s_ = t;
-    instant_number = 0.0;
-  }
-  const auto k = static_cast<std::int64_t>(instant_number);
-
-  if (k < next_k_) {
-    // Between two sample instants (the normal case at 60 Hz), unless older than the last sample.
-    if (next_k_ > 0 && t < instant(next_k_ - 1) - time_epsilon_s) {
+void FormationSampler::on_event(ClockEvent event) {
+  switch (event) {
+    case ClockEvent::frame_late:
       ++counters_.frames_late;
-      return;
-    }
-  } else {
-    // This frame reaches a new instant. If an earlier one is still waiting for a camera that
-    // never delivered (a dropped frame), hand it on now, before the new data overwrites it.
-    if (open_k_ && k > *open_k_) emit(*open_k_, *open_k_ != 0);
-    if (!open_k_ || k > *open_k_) open_k_ = k;
-  }
-
-  apply_detections(camera_id, t);
-  camera = std::find_if(camera_last_.begin(), camera_last_.end(),
-                        [&](const CameraClock& c) { return c.camera_id == camera_id; });
-  camera->last_s = t;
-  camera->last_frame_number = frame_number;
-  last_frame_number_ = frame_number;
-  newest_s_ = std::max(newest_s_, t);
-  if (open_k_ && instant_complete(*open_k_)) emit(*open_k_, false);
-}
-
-void FormationSampler::set_aside(std::uint32_t camera_id, std::uint32_t frame_number, double t) {
-  ++counters_.frames_other_clock;
-  const double clock_reset_s =
-      config_.clock_reset_s > 0.0 ? config_.clock_reset_s : 2.0 * config_.step_s;
-  if (!other_.active || std::abs(t - other_.newest_s) > clock_reset_s) {
-    // Not the other clock seen before: a new one, and what was set aside is not its.
-    other_ = OtherClock{true, false, t, newest_s_};
-    pending_.clear();
-  } else {
-    if (t > other_.newest_s + time_epsilon_s) other_.advancing = true;
-    other_.newest_s = std::max(other_.newest_s, t);
-    other_.seen_at_s = newest_s_;
-  }
-  if (!pending_.empty() && std::abs(t - pending_.back().time_s) > clock_reset_s) pending_.clear();
-  pending_.push_back(PendingFrame{camera_id, frame_number, t, frame_scratch_});
-
-  int distinct_times = 0;
-  double last_s = std::nan("");
-  std::vector<double> times;
-  times.reserve(pending_.size());
-  for (const PendingFrame& f : pending_) times.push_back(f.time_s);
-  std::sort(times.begin(), times.end());
-  for (const double time_s : times) {
-    if (!(std::abs(time_s - last_s) <= time_epsilon_s)) ++distinct_times;
-    last_s = time_s;
-  }
-  if (distinct_times >= config_.clock_confirm_times ||
-      pending_.size() >= config_.max_pending_frames) {
-    switch_clock();
+      break;
+    case ClockEvent::frame_duplicate:
+      ++counters_.frames_duplicate;
+      break;
+    case ClockEvent::frame_set_aside:
+      ++counters_.frames_other_clock;
+      break;
+    case ClockEvent::conflict:
+      ++counters_.clock_conflicts;
+      break;
   }
 }
 
-// The set-aside frames' clock takes over: a new stream, then those frames in their order.
-void FormationSampler::switch_clock() {
+void FormationSampler::on_restart(ClockRestart /*why*/) {
   ++counters_.clock_resets;
-  std::vector<PendingFrame> frames = std::move(pending_);
-  // The clock left behind becomes the other clock: if it comes back, that is a conflict.
-  const OtherClock left{true, next_k_ > 1, newest_s_, frames.back().time_s};
-  const bool conflict = conflict_;
-  restart();
-  other_ = left;
-  conflict_ = conflict;
-  for (PendingFrame& f : frames) {
-    frame_scratch_ = std::move(f.detections);
-    place_frame(f.camera_id, f.frame_number, f.time_s);
-  }
+  forget_stream();
 }
 
-void FormationSampler::apply_detections(std::uint32_t camera_id, double time_s) {
-  auto camera = std::find_if(camera_last_.begin(), camera_last_.end(),
-                             [&](const CameraClock& c) { return c.camera_id == camera_id; });
-  if (camera == camera_last_.end()) {
-    camera_last_.push_back(CameraClock{camera_id, time_s, time_s, 0});
-  } else {
-    camera->newest_s = std::max(camera->newest_s, time_s);
-  }
-
-  for (const Detection& d : frame_scratch_) {
+// The frame is used: its robots become the newest observations.
+void FormationSampler::on_frame(const ClockFrame& frame,
+                                const std::vector<FrameDetection>& detections) {
+  const double time_s = frame.time_s;
+  const std::uint32_t camera_id = frame.camera_id;
+  for (const FrameDetection& d : detections) {
     Observation& obs = observations_[d.robot_id];
     if (!obs.seen) {
       observed_ids_.insert(std::upper_bound(observed_ids_.begin(), observed_ids_.end(), d.robot_id),
@@ -272,22 +160,7 @@ void FormationSampler::apply_detections(std::uint32_t camera_id, double time_s) 
     }
     // Older than what we have: an out-of-order frame, ignored for this robot.
   }
-}
-
-bool FormationSampler::instant_complete(std::int64_t k) const {
-  const double sample_s = instant(k);
-  // The first instant waits a little so that every camera has a chance to be discovered;
-  // otherwise the first sample would hold only the first camera's robots.
-  if (k == 0 && newest_s_ < anchor_s_ + std::min(config_.camera_timeout_s, config_.step_s)) {
-    return false;
-  }
-  const double live_window = std::max(config_.camera_timeout_s, 1.5 * config_.step_s);
-  for (const CameraClock& camera : camera_last_) {
-    if (camera.newest_s >= newest_s_ - live_window && camera.newest_s < sample_s - time_epsilon_s) {
-      return false;
-    }
-  }
-  return true;
+  last_frame_number_ = frame.frame_number;
 }
 
 Formation FormationSampler::build_formation(const StateCodec& codec, const FieldSize& field,
@@ -345,12 +218,11 @@ void FormationSampler::build_formation(const StateCodec& codec, const FieldSize&
   formation.robots.swap(robots);
 }
 
-void FormationSampler::emit(std::int64_t k, bool forced) {
-  const double sample_s = instant(k);
-  next_k_ = k + 1;
-  open_k_.reset();
-
-  const double fresh_s = std::min(config_.robot_timeout_s, config_.step_s);
+// The clock hands an instant on: its sample is built from the freshest observations.
+void FormationSampler::on_instant(const ClockInstant& instant) {
+  const std::int64_t k = instant.k;
+  const double sample_s = instant.time_s;
+  const double fresh_s = config_.robot_fresh_window_s();
   std::vector<FormationRobot>& robots = robots_scratch_;
   robots.clear();
   for (const std::uint32_t id : observed_ids_) {
@@ -371,9 +243,9 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
     return;
   }
 
-  const bool continues = previous_ && k - previous_k_ == 1 && !conflict_;
+  const bool continues = previous_ && k - previous_k_ == 1 && !instant.in_conflict;
   if (previous_ && !continues) ++counters_.chain_breaks;
-  if (conflict_) ++counters_.samples_in_conflict;
+  if (instant.in_conflict) ++counters_.samples_in_conflict;
   FormationSample& sample = sample_scratch_;
   build_formation(codec_, field_, robots, continues ? &*previous_ : nullptr, sample.formation);
   sample.formation.time_s = sample_s;
@@ -387,13 +259,13 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
     }
   }
   ++counters_.samples;
-  if (forced) ++counters_.samples_forced;
+  if (instant.forced) ++counters_.samples_forced;
   counters_.transitions += sample.transitions.size();
   previous_k_ = k;
   // This sample becomes the previous one after the handler has run (the predictor sends its
   // prediction from there, so nothing else should come first), by swapping buffers rather than
   // copying; also if the handler throws, or the next sample would follow a stale formation.
-  // A handler that starts a new stream (restart()) forgets this sample too.
+  // A handler that starts a new stream (forget_stream()) forgets this sample too.
   struct BecomesPrevious {
     FormationSampler& sampler;
     std::uint64_t restarts;
@@ -406,17 +278,15 @@ void FormationSampler::emit(std::int64_t k, bool forced) {
   if (on_sample_) on_sample_(sample);
 }
 
-void FormationSampler::restart() {
+void FormationSampler::start_new_stream() {
+  forget_stream();
+  clock_.reset();
+}
+
+void FormationSampler::forget_stream() {
   ++restarts_;
   if (previous_) ++counters_.chain_breaks;
   previous_.reset();
-  anchored_ = false;
-  open_k_.reset();
-  next_k_ = 0;
-  camera_last_.clear();
-  pending_.clear();
-  other_ = OtherClock{};
-  conflict_ = false;
   for (const std::uint32_t id : observed_ids_) observations_[id].seen = false;
   observed_ids_.clear();
 }
