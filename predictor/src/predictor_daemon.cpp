@@ -61,10 +61,8 @@ class PredictorDaemon {
                 app::parse_interface_option(prediction_interface(options), false).address,
                 options.ttl),
         // Our robots are kept as long as the sampler keeps a camera live.
-        ours_(other_team(config.sampler.opponent_color),
-              std::max(config.sampler.camera_timeout_s, 1.5 * config.sampler.step_s),
-              config.sampler.clock_reset_s > 0.0 ? config.sampler.clock_reset_s
-                                                 : 2.0 * config.sampler.step_s),
+        ours_(other_team(config.sampler.opponent_color), config.sampler.camera_live_window_s(),
+              config.sampler.clock_reset_window_s()),
         field_log_(config.sampler.field, config.sampler.use_geometry) {
     // Allocated now rather than wherever the first packet leaves it: every page the hot path
     // touches costs after 16 ms asleep.
