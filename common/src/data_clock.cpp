@@ -18,6 +18,9 @@ DataClock::DataClock(const DataClockConfig& config) : config_(config) {
   if (!std::isfinite(config_.step_s) || config_.step_s <= 0.0) {
     throw std::invalid_argument("step must be a positive number of seconds");
   }
+  if (!std::isfinite(config_.instant_interval_s) || config_.instant_interval_s < 0.0) {
+    throw std::invalid_argument("the instant interval must be 0 (one a step) or positive seconds");
+  }
   cameras_.reserve(8);
 }
 
@@ -66,7 +69,7 @@ void DataClock::place(DataClockListener& listener, const ClockFrame& frame,
     return;
   }
 
-  double instant_number = std::floor((t - anchor_s_) / config_.step_s + time_epsilon_s);
+  double instant_number = std::floor((t - anchor_s_) / config_.interval_s() + time_epsilon_s);
   if (std::abs(instant_number) > max_instant_number) {
     reset();
     listener.on_restart(ClockRestart::instant_overflow);

@@ -12,10 +12,20 @@ namespace {
 constexpr double time_epsilon_s = 1e-9;
 }  // namespace
 
+std::optional<Sampling> parse_sampling(std::string_view text) {
+  if (text == "step") return Sampling::step;
+  if (text == "frame") return Sampling::frame;
+  return std::nullopt;
+}
+
+std::string_view to_string(Sampling sampling) {
+  return sampling == Sampling::frame ? "frame" : "step";
+}
+
 FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample)
     : config_(config),
       codec_(config.grid),
-      clock_(config),  // checks the step
+      clock_(config.clock_config()),  // checks the step and the interval
       on_sample_(std::move(on_sample)),
       field_(config.field) {
   if (!field_.valid()) {
@@ -58,9 +68,15 @@ void FormationSampler::add_geometry(std::int32_t field_length, std::int32_t fiel
   field_ = field;
   ++counters_.field_changes;
   // Cells of the old and the new field do not compare: no transition spans the change.
-  if (previous_) {
-    previous_.reset();
-    ++counters_.chain_breaks;
+  break_chain();
+}
+
+void FormationSampler::break_chain() {
+  if (previous_ || !history_.empty()) ++counters_.chain_breaks;
+  previous_.reset();
+  while (!history_.empty()) {
+    spare_.push_back(std::move(history_.front()));
+    history_.pop_front();
   }
 }
 
@@ -236,10 +252,11 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   }
   if (robots.empty()) {
     ++counters_.samples_empty;
-    if (previous_) {
-      previous_.reset();
-      ++counters_.chain_breaks;
-    }
+    break_chain();
+    return;
+  }
+  if (config_.sampling == Sampling::frame) {
+    on_frame_instant(instant, robots);
     return;
   }
 
@@ -278,6 +295,74 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   if (on_sample_) on_sample_(sample);
 }
 
+// Frame sampling: the sample's previous formation is the one sampled step_s before it.
+void FormationSampler::on_frame_instant(const ClockInstant& instant,
+                                        std::vector<FormationRobot>& robots) {
+  const double sample_s = instant.time_s;
+  // A gap in the frames: nothing before it is anyone's previous.
+  if (!history_.empty() && sample_s - history_.back().time_s > config_.frame_gap_s) break_chain();
+  // Samples older than step_s (and the tolerance) can no longer be anyone's previous.
+  const double oldest_s = sample_s - config_.step_s - config_.history_tolerance_s;
+  while (!history_.empty() && history_.front().time_s < oldest_s - time_epsilon_s) {
+    spare_.push_back(std::move(history_.front()));
+    history_.pop_front();
+  }
+  // The sample nearest step_s earlier, within the tolerance; the earlier of two equally near.
+  const double wanted_s = sample_s - config_.step_s;
+  const Formation* before = nullptr;
+  double best_gap = config_.history_tolerance_s + time_epsilon_s;
+  for (const Formation& f : history_) {
+    const double gap = std::abs(f.time_s - wanted_s);
+    if (gap < best_gap) {
+      best_gap = gap;
+      before = &f;
+    }
+    if (f.time_s > wanted_s) break;
+  }
+  if (instant.in_conflict) {
+    ++counters_.samples_in_conflict;
+    before = nullptr;
+  }
+  FormationSample& sample = sample_scratch_;
+  build_formation(codec_, field_, robots, before, sample.formation);
+  sample.formation.time_s = sample_s;
+  sample.formation.frame_number = last_frame_number_;
+  sample.transitions.clear();
+  if (before) {
+    for (const FormationRobot& robot : sample.formation.robots) {
+      if (const FormationRobot* then = before->find(robot.robot_id)) {
+        sample.transitions.push_back({robot.robot_id, then->state, robot.state});
+      }
+    }
+  }
+  ++counters_.samples;
+  if (instant.forced) ++counters_.samples_forced;
+  counters_.transitions += sample.transitions.size();
+  // The sample joins the history after the handler has run (the predictor sends its prediction
+  // from there); a handler that starts a new stream forgets it too.
+  struct JoinsHistory {
+    FormationSampler& sampler;
+    std::uint64_t restarts;
+    ~JoinsHistory() {
+      if (sampler.restarts_ != restarts) return;
+      Formation entry;
+      if (!sampler.spare_.empty()) {
+        entry = std::move(sampler.spare_.back());
+        sampler.spare_.pop_back();
+      }
+      const Formation& sample = sampler.sample_scratch_.formation;
+      entry.time_s = sample.time_s;
+      entry.frame_number = sample.frame_number;
+      entry.centroid = sample.centroid;
+      entry.centroid_cell = sample.centroid_cell;
+      entry.continues_previous = sample.continues_previous;
+      entry.robots.assign(sample.robots.begin(), sample.robots.end());  // keeps its capacity
+      sampler.history_.push_back(std::move(entry));
+    }
+  } joins_history{*this, restarts_};
+  if (on_sample_) on_sample_(sample);
+}
+
 void FormationSampler::start_new_stream() {
   forget_stream();
   clock_.reset();
@@ -285,8 +370,7 @@ void FormationSampler::start_new_stream() {
 
 void FormationSampler::forget_stream() {
   ++restarts_;
-  if (previous_) ++counters_.chain_breaks;
-  previous_.reset();
+  break_chain();
   for (const std::uint32_t id : observed_ids_) observations_[id].seen = false;
   observed_ids_.clear();
 }

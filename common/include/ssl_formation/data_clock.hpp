@@ -17,13 +17,17 @@ namespace ssl_formation {
 // The clock's settings, each rule stated here once. SamplerConfig inherits them, so programs and
 // tests set them by these names on a SamplerConfig.
 struct DataClockConfig {
-  // Sample instants are this far apart on t_capture; the instant numbered 0 is the first frame's
-  // time (the anchor). Must be positive and finite.
+  // The model's step: the time between the two states of a transition, and the time scale of
+  // the windows below. Must be positive and finite.
   double step_s = 2.0;
+  // Sample instants are interval_s() apart on t_capture; the instant numbered 0 is the first
+  // frame's time (the anchor). 0 means one instant per step (the paper's sampling); a small
+  // interval makes every frame time an instant of its own (rolling sampling).
+  double instant_interval_s = 0.0;
   // A camera counts as live (an instant waits for it) if it sent a frame within
   // camera_live_window_s() = max(camera_timeout_s, 1.5 * step_s) of the newest frame: a camera of
   // a 2 s simulated feed is live, a dead one stops holding instants back after that. The first
-  // instant also waits until a frame first_instant_wait_s() = min(camera_timeout_s, step_s)
+  // instant also waits until a frame first_instant_wait_s() = min(camera_timeout_s, interval_s())
   // after the anchor, so that every camera has a chance to be discovered (otherwise the first
   // sample would hold only the first camera's robots).
   double camera_timeout_s = 1.0;
@@ -45,9 +49,10 @@ struct DataClockConfig {
   double clock_conflict_hold_s = 0.0;
 
   // The effective values of the rules above, defaults resolved.
+  double interval_s() const { return instant_interval_s > 0.0 ? instant_interval_s : step_s; }
   double clock_reset_window_s() const { return clock_reset_s > 0.0 ? clock_reset_s : 2.0 * step_s; }
   double camera_live_window_s() const { return std::max(camera_timeout_s, 1.5 * step_s); }
-  double first_instant_wait_s() const { return std::min(camera_timeout_s, step_s); }
+  double first_instant_wait_s() const { return std::min(camera_timeout_s, interval_s()); }
   double conflict_hold_s() const {
     return clock_conflict_hold_s > 0.0 ? clock_conflict_hold_s : 4.0 * step_s;
   }
@@ -146,7 +151,7 @@ class DataClock {
   const DataClockConfig& config() const { return config_; }
   bool anchored() const { return anchored_; }
   double instant_s(std::int64_t k) const {
-    return anchor_s_ + static_cast<double>(k) * config_.step_s;
+    return anchor_s_ + static_cast<double>(k) * config_.interval_s();
   }
   double newest_s() const { return newest_s_; }                         // of the frames used
   std::optional<std::int64_t> open_instant() const { return open_k_; }  // waiting for cameras

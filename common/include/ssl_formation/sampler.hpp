@@ -1,8 +1,10 @@
 #pragma once
 // Turns a stream of SSL-Vision packets into formations on the data's own clock (DESIGN.md §3):
-// one sample every `step` seconds of t_capture, robots merged across cameras, geometry packets
-// updating the field size, and the velocity-reset rules for new robots and gaps. Which frames
-// count and when a sample is complete is DataClock's to decide.
+// one sample every `step` seconds of t_capture (the paper's sampling), or one at every frame
+// instant with each robot's previous cell taken from `step` seconds earlier (rolling sampling);
+// robots merged across cameras, geometry packets updating the field size, and the
+// velocity-reset rules for new robots and gaps. Which frames count and when a sample is complete
+// is DataClock's to decide.
 //
 // Pure: no sockets, clocks or threads. The daemons, log replay and tests all drive this class.
 
@@ -11,7 +13,9 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <deque>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ssl_formation/data_clock.hpp"
@@ -23,6 +27,16 @@
 class SSL_WrapperPacket;
 
 namespace ssl_formation {
+
+// How often formations are sampled.
+//   step   one every step_s of the data clock; a transition joins two consecutive samples. The
+//          paper's protocol: a prediction every step, and few samples to learn from.
+//   frame  one at every frame instant; a robot's previous cell is its cell step_s earlier, from
+//          the sample nearest that time, and a transition joins each sample to the one step_s
+//          before it. Sixty times the samples at 60 Hz, and a prediction at every frame.
+enum class Sampling { step, frame };
+std::optional<Sampling> parse_sampling(std::string_view text);  // "step" or "frame"
+std::string_view to_string(Sampling sampling);
 
 // The sampler's settings. The data clock's (step_s, camera_timeout_s, clock_reset_s,
 // clock_confirm_times, max_pending_frames, clock_conflict_hold_s) and their rules are
@@ -43,7 +57,25 @@ struct SamplerConfig : DataClockConfig {
   // Detections of one robot by overlapping cameras this close in time are averaged.
   double same_instant_s = 0.001;
 
-  double robot_fresh_window_s() const { return std::min(robot_timeout_s, step_s); }
+  Sampling sampling = Sampling::step;
+  // Frame sampling: instants are frame_resolution_s apart (so every frame time is one); the
+  // sample standing for "step_s earlier" is the one nearest that time within
+  // history_tolerance_s; a robot is in a sample if seen within frame_robot_timeout_s; frame
+  // instants more than frame_gap_s apart are a gap, and nothing before it is anyone's previous.
+  double frame_resolution_s = 0.001;
+  double history_tolerance_s = 0.05;
+  double frame_robot_timeout_s = 0.1;
+  double frame_gap_s = 0.5;
+
+  double robot_fresh_window_s() const {
+    return std::min(robot_timeout_s, sampling == Sampling::frame ? frame_robot_timeout_s : step_s);
+  }
+  // The clock's settings, with the instant interval the sampling implies.
+  DataClockConfig clock_config() const {
+    DataClockConfig clock = *this;
+    clock.instant_interval_s = sampling == Sampling::frame ? frame_resolution_s : 0.0;
+    return clock;
+  }
 };
 
 // Every packet, frame or robot the sampler refused, by reason, and what it produced.
@@ -135,6 +167,9 @@ class FormationSampler : private DataClockListener {
   void on_event(ClockEvent event) override;
   // Forgets the robots and the previous formation (the clock forgets its own part).
   void forget_stream();
+  // Forgets the formations a later one could take its previous cells from (a chain break).
+  void break_chain();
+  void on_frame_instant(const ClockInstant& instant, std::vector<FormationRobot>& robots);
 
   SamplerConfig config_;
   StateCodec codec_;
@@ -149,8 +184,13 @@ class FormationSampler : private DataClockListener {
   std::vector<std::uint32_t> observed_ids_;  // ids with an observation, sorted
   std::uint32_t last_frame_number_ = 0;      // of the last frame used
 
+  // Step sampling: the last sample and its instant number.
   std::optional<Formation> previous_;
   std::int64_t previous_k_ = 0;
+  // Frame sampling: the samples of the last step (and the tolerance), oldest first, and the
+  // storage of those that fell out, reused.
+  std::deque<Formation> history_;
+  std::vector<Formation> spare_;
   std::uint64_t restarts_ = 0;  // calls of forget_stream(), so a sample sees one by its handler
   // Reused from sample to sample, so that a steady stream allocates nothing.
   std::vector<FormationRobot> robots_scratch_;
