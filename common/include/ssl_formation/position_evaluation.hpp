@@ -1,0 +1,125 @@
+#pragma once
+// Predictions judged as the field judges them: the distance in millimetres between where a
+// method said a robot would be `horizon_s` seconds later and where it was, against the robot's
+// own observed positions, and the calibration of every probability stated. Pure: formations,
+// predictions and numbers in, numbers out.
+//
+// The baselines SSL teams use today, computed from each robot's own observed positions at the
+// same instants:
+//   persistence                 it stays where it is;
+//   constant velocity           it goes on at its velocity over the last `velocity_window_s`;
+//   damped constant velocity    the same velocity scaled by one factor per horizon, fitted on
+//                               the training part by least squares (DampingFit).
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "ssl_formation/evaluation.hpp"
+#include "ssl_formation/formation.hpp"
+#include "ssl_formation/grid.hpp"
+#include "ssl_formation/predictor.hpp"
+
+namespace ssl_formation::evaluation {
+
+// Where each robot was seen in one stream, on the data clock, in the feed's coordinates: every
+// sampled formation's robots by id. Formations must come in time order.
+class RobotTracks {
+ public:
+  void add(const Formation& formation);
+  // The position recorded nearest to `time_s`, if one lies within `tolerance_s` of it; with the
+  // time it was recorded at.
+  struct Seen {
+    double time_s = 0.0;
+    Point position;
+  };
+  std::optional<Seen> nearest(std::uint32_t robot_id, double time_s, double tolerance_s) const;
+  // The robot's velocity at `time_s` over the last `window_s` (mm/s): the displacement from the
+  // position nearest `time_s - window_s` (within `tolerance_s`) to the one at `time_s`, over the
+  // time between them. Nothing when either is missing or no time passed.
+  std::optional<Point> velocity(std::uint32_t robot_id, double time_s, double window_s,
+                                double tolerance_s) const;
+
+ private:
+  std::vector<std::vector<Seen>> by_id_;  // indexed by robot id, each in time order
+};
+
+// Errors in millimetres: mean, median and 90th percentile (linear interpolation between order
+// statistics, as numpy's default).
+class ErrorStats {
+ public:
+  void add(double error_mm) { errors_.push_back(error_mm); }
+  std::size_t count() const { return errors_.size(); }
+  double mean() const;
+  double percentile(double p) const;  // p in [0, 100]; 0 without errors
+  double median() const { return percentile(50.0); }
+
+ private:
+  mutable std::vector<double> errors_;
+  mutable bool sorted_ = true;
+};
+
+// The least-squares damping factor k of `position + k * velocity * horizon`: the k minimising
+// the squared distance to where the robots really were, over the training part.
+class DampingFit {
+ public:
+  // `displacement`: where the robot went minus where it was; `extrapolated`: velocity x horizon.
+  void add(Point displacement, Point extrapolated);
+  // 1 (plain constant velocity) when nothing moved in training.
+  double factor() const;
+
+ private:
+  double dot_ = 0.0;
+  double norm_ = 0.0;
+};
+
+enum class PositionMethod { model, persistence, constant_velocity, damped_constant_velocity };
+inline constexpr std::array<PositionMethod, 4> all_position_methods{
+    PositionMethod::model, PositionMethod::persistence, PositionMethod::constant_velocity,
+    PositionMethod::damped_constant_velocity};
+std::string_view to_string(PositionMethod method);
+
+// Every method's score at one horizon in seconds.
+struct HorizonScore {
+  double horizon_s = 0.0;
+  std::array<ErrorStats, 4> error;  // by PositionMethod
+  std::array<Accuracy, 4> cells;    // predicted state, cell and cell distance against the truth
+  Calibration robot;                // the model's per-robot probability that its cell is right
+  Calibration formation;            // the model's formation probability that every cell is right
+};
+
+// How to read positions: the grid, field and attack direction the formations were sampled with.
+struct PositionSetup {
+  const StateCodec* codec = nullptr;
+  FieldSize field;
+  AttackDirection opponent_attacks = AttackDirection::positive_x;
+  double velocity_window_s = 0.1;
+  double tolerance_s = 0.05;  // how far from an instant a position may be recorded to stand for it
+};
+
+// Scores one test instant: `now` (sampled at t), the model's step predicting t + horizon_s, and
+// `truth`, the formation sampled nearest t + horizon_s. Each robot of `now` that `truth` holds is
+// scored, every method on the same robots: its position error against the truth's position, its
+// predicted cell and state against the truth's. A baseline's predicted state is (the cell of the
+// mean of its predicted positions, the cell of its predicted position, the robot's cell now).
+// Velocities come from `tracks` (the stream's recorded positions).
+void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotTracks& tracks,
+                   const Formation& now, const PredictedStep& model, const Formation& truth,
+                   double damping);
+
+// The formation of `formations` (in time order) sampled nearest `time_s`, within `tolerance_s`.
+const Formation* formation_near(const std::vector<Formation>& formations, double time_s,
+                                double tolerance_s);
+
+// Adds one stream of the training part to `fit`: for every formation and robot with a velocity,
+// the displacement to the robot's position in the formation nearest horizon_s later.
+void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks& tracks,
+                 const std::vector<Formation>& formations, double horizon_s);
+
+// Expected calibration error over the 10 equal-width bins: sum over bins of
+// (bin count / n) x |observed frequency - mean confidence|.
+double expected_calibration_error(const Calibration& calibration);
+
+}  // namespace ssl_formation::evaluation
