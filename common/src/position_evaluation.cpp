@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numeric>
+
+#include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/training.hpp"
+#include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::evaluation {
 
@@ -193,6 +198,75 @@ void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks&
               {v->x * horizon_s, v->y * horizon_s});
     }
   }
+}
+
+PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
+                                      const std::vector<std::vector<SSL_WrapperPacket>>& train,
+                                      const std::vector<std::vector<SSL_WrapperPacket>>& test) {
+  PositionEvaluation result;
+  const double step_s = config.sampler.step_s;
+  const auto horizon_s = [&](int k) { return static_cast<double>(k) * step_s; };
+  PositionSetup setup;
+  setup.opponent_attacks = config.sampler.opponent_attacks;
+  setup.velocity_window_s = config.velocity_window_s;
+  setup.tolerance_s = config.tolerance_s;
+
+  // Training: the table, and the training streams' own formations for the damping fit.
+  Training training(config.sampler, TransitionTable(config.sampler.grid));
+  std::vector<DampingFit> fits(static_cast<std::size_t>(config.steps));
+  for (const auto& stream : train) {
+    training.start_new_stream();
+    for (const SSL_WrapperPacket& packet : stream) training.add(packet);
+    std::vector<Formation> formations;
+    RobotTracks tracks;
+    FormationSampler sampler(config.sampler, [&](const FormationSample& sample) {
+      formations.push_back(sample.formation);
+      tracks.add(sample.formation);
+    });
+    for (const SSL_WrapperPacket& packet : stream) sampler.add(packet);
+    for (int k = 1; k <= config.steps; ++k) {
+      fit_damping(fits[static_cast<std::size_t>(k - 1)], setup, tracks, formations, horizon_s(k));
+    }
+  }
+  for (const DampingFit& fit : fits) result.damping.push_back(fit.factor());
+  result.train_formations = training.samples();
+  result.transitions = training.table().transitions();
+  result.table_memory_bytes = training.table().memory_bytes();
+  const auto table = std::make_shared<const StoredTable>(StoredTable{training.table(), {}});
+  setup.codec = &table->table.codec();
+
+  for (int k = 1; k <= config.steps; ++k) {
+    result.horizons.emplace_back();
+    result.horizons.back().horizon_s = horizon_s(k);
+  }
+  PredictionConfig prediction;
+  prediction.sampler = config.sampler;
+  prediction.horizon = config.steps;
+  for (const auto& stream : test) {
+    std::vector<Formation> formations;
+    std::vector<std::vector<PredictedStep>> predicted;
+    RobotTracks tracks;
+    PredictionPipeline pipeline(prediction, [&](const PredictedFormation& p) {
+      formations.push_back(p.formation());
+      predicted.push_back(p.prediction.steps);
+      tracks.add(p.formation());
+    });
+    pipeline.set_table(table);
+    for (const SSL_WrapperPacket& packet : stream) pipeline.add(packet);
+    setup.field = pipeline.sampler().field();
+    result.test_formations += formations.size();
+    for (std::size_t i = 0; i < formations.size(); ++i) {
+      for (int k = 1; k <= config.steps; ++k) {
+        const auto h = static_cast<std::size_t>(k - 1);
+        const Formation* truth =
+            formation_near(formations, formations[i].time_s + horizon_s(k), config.tolerance_s);
+        if (!truth || h >= predicted[i].size()) continue;
+        score_instant(result.horizons[h], setup, tracks, formations[i], predicted[i][h], *truth,
+                      result.damping[h]);
+      }
+    }
+  }
+  return result;
 }
 
 double expected_calibration_error(const Calibration& calibration) {

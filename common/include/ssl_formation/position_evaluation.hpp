@@ -21,6 +21,9 @@
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/predictor.hpp"
+#include "ssl_formation/sampler.hpp"
+
+class SSL_WrapperPacket;
 
 namespace ssl_formation::evaluation {
 
@@ -117,6 +120,32 @@ const Formation* formation_near(const std::vector<Formation>& formations, double
 // the displacement to the robot's position in the formation nearest horizon_s later.
 void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks& tracks,
                  const std::vector<Formation>& formations, double horizon_s);
+
+// ---- The held-out evaluation in millimetres --------------------------------------------------
+
+struct PositionEvaluationConfig {
+  SamplerConfig sampler;  // the model's step, grid and sampling, for training and testing alike
+  int steps = 1;          // horizons 1..steps, step k being k x step_s ahead
+  double velocity_window_s = 0.1;
+  // How far from t + horizon the truth may be sampled (and from t - window the velocity's start).
+  double tolerance_s = 0.05;
+};
+
+struct PositionEvaluation {
+  std::vector<HorizonScore> horizons;  // [k - 1]
+  std::vector<double> damping;         // the damped baseline's factor per horizon, from training
+  std::uint64_t train_formations = 0;
+  std::uint64_t transitions = 0;
+  std::size_t table_memory_bytes = 0;
+  std::uint64_t test_formations = 0;
+};
+
+// Trains the model on the training streams (each its own stream: nothing spans two), fits the
+// damping on them, then predicts every formation of the test streams through the
+// PredictionPipeline and scores every method at every horizon on the same robots.
+PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
+                                      const std::vector<std::vector<SSL_WrapperPacket>>& train,
+                                      const std::vector<std::vector<SSL_WrapperPacket>>& test);
 
 // Expected calibration error over the 10 equal-width bins: sum over bins of
 // (bin count / n) x |observed frequency - mean confidence|.
