@@ -113,8 +113,9 @@ void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotT
                    const Formation& now, const PredictedStep& model, const Formation& truth,
                    double damping) {
   const Grid& grid = setup.codec->grid();
+  const AttackDirection attacks = now.opponent_attacks;
   const auto cell_of_feed = [&](Point feed) {
-    return grid.cell_of(normalise(feed, setup.opponent_attacks), setup.field);
+    return grid.cell_of(normalise(feed, attacks), setup.field);
   };
   // Each method's predicted feed position per robot of `now`, on the robots the truth holds.
   struct Guess {
@@ -134,7 +135,7 @@ void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotT
     Guess guess{&robot, actual, &*model_robot, {}};
     // The model predicts a cell: its position is that cell's centre, in feed coordinates.
     guess.position[0] =
-        normalise(grid.centre_of(model_robot->position, setup.field), setup.opponent_attacks);
+        normalise(grid.centre_of(model_robot->position, setup.field), attacks);
     guess.position[1] = robot.feed_position;
     const std::optional<Point> v =
         tracks.velocity(robot.robot_id, now.time_s, setup.velocity_window_s, setup.tolerance_s);
@@ -151,7 +152,7 @@ void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotT
     // The baselines' predicted centroid: the cell of the mean of their predicted positions.
     Point sum{};
     for (const Guess& g : guesses) {
-      const Point p = normalise(g.position[m], setup.opponent_attacks);
+      const Point p = normalise(g.position[m], attacks);
       sum.x += p.x;
       sum.y += p.y;
     }
@@ -207,7 +208,6 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   const double step_s = config.sampler.step_s;
   const auto horizon_s = [&](int k) { return static_cast<double>(k) * step_s; };
   PositionSetup setup;
-  setup.opponent_attacks = config.sampler.opponent_attacks;
   setup.velocity_window_s = config.velocity_window_s;
   setup.tolerance_s = config.tolerance_s;
 

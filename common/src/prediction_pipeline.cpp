@@ -42,8 +42,9 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
     robot_states_.push_back({robot.robot_id, robot.state});
   }
   predict(stored->table, robot_states_, config_.horizon, prediction_);
-  const PredictionContext context =
-      prediction_context(stored->table, config_.sampler, sampler_.field());
+  PredictionContext context = prediction_context(stored->table, config_.sampler, sampler_.field());
+  // The direction may be inferred (--opponent-attacks auto): the one this sample was taken with.
+  context.opponent_attacks = sampler_.attacks().value_or(config_.sampler.opponent_attacks);
   ++predictions_;
   if (on_prediction_) on_prediction_(PredictedFormation{sample, prediction_, context});
 }

@@ -27,7 +27,9 @@ FormationSampler::FormationSampler(SamplerConfig config, SampleHandler on_sample
       codec_(config.grid),
       clock_(config.clock_config()),  // checks the step and the interval
       on_sample_(std::move(on_sample)),
-      field_(config.field) {
+      field_(config.field),
+      attack_inference_(config.attack_window_s) {
+  if (!config_.infer_attacks) attacks_ = config_.opponent_attacks;
   if (!field_.valid()) {
     throw std::invalid_argument("field length and width must be positive");
   }
@@ -255,6 +257,25 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
     break_chain();
     return;
   }
+  if (config_.infer_attacks) {
+    inference_scratch_.clear();
+    for (const FormationRobot& robot : robots) {
+      inference_scratch_.push_back({robot.robot_id, robot.feed_position});
+    }
+    if (attack_inference_.add(sample_s, inference_scratch_, field_)) {
+      // Cells on either side of a change of ends do not compare: no transition spans it.
+      if (attacks_) {
+        ++counters_.attack_switches;
+        break_chain();
+      }
+      attacks_ = attack_inference_.direction();
+    }
+    if (!attacks_) {
+      ++counters_.samples_undirected;
+      return;
+    }
+    for (FormationRobot& robot : robots) robot.position = normalise(robot.feed_position, *attacks_);
+  }
   if (config_.sampling == Sampling::frame) {
     on_frame_instant(instant, robots);
     return;
@@ -267,6 +288,7 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   build_formation(codec_, field_, robots, continues ? &*previous_ : nullptr, sample.formation);
   sample.formation.time_s = sample_s;
   sample.formation.frame_number = last_frame_number_;
+  sample.formation.opponent_attacks = attacks_.value_or(config_.opponent_attacks);
   sample.transitions.clear();
   if (continues) {
     for (const FormationRobot& robot : sample.formation.robots) {
@@ -327,6 +349,7 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
   build_formation(codec_, field_, robots, before, sample.formation);
   sample.formation.time_s = sample_s;
   sample.formation.frame_number = last_frame_number_;
+  sample.formation.opponent_attacks = attacks_.value_or(config_.opponent_attacks);
   sample.transitions.clear();
   if (before) {
     for (const FormationRobot& robot : sample.formation.robots) {
@@ -356,6 +379,7 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
       entry.centroid = sample.centroid;
       entry.centroid_cell = sample.centroid_cell;
       entry.continues_previous = sample.continues_previous;
+      entry.opponent_attacks = sample.opponent_attacks;
       entry.robots.assign(sample.robots.begin(), sample.robots.end());  // keeps its capacity
       sampler.history_.push_back(std::move(entry));
     }
@@ -366,6 +390,11 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
 void FormationSampler::start_new_stream() {
   forget_stream();
   clock_.reset();
+  // Another file may be another match: the attack direction is inferred anew.
+  if (config_.infer_attacks) {
+    attack_inference_.reset();
+    attacks_.reset();
+  }
 }
 
 void FormationSampler::forget_stream() {

@@ -34,6 +34,8 @@ struct Formation {
   std::vector<FormationRobot> robots;  // sorted by robot id, each id once
   // False when this formation starts a chain: the first sample, or one after a gap.
   bool continues_previous = false;
+  // The direction the positions were normalised with (the opponent attacks it in the feed).
+  AttackDirection opponent_attacks = AttackDirection::positive_x;
 
   const FormationRobot* find(std::uint32_t robot_id) const {
     const auto it = std::lower_bound(

@@ -93,11 +93,11 @@ struct HorizonScore {
   Calibration formation;            // the model's formation probability that every cell is right
 };
 
-// How to read positions: the grid, field and attack direction the formations were sampled with.
+// How to read positions: the grid and field the formations were sampled with (each formation
+// carries its own attack direction).
 struct PositionSetup {
   const StateCodec* codec = nullptr;
   FieldSize field;
-  AttackDirection opponent_attacks = AttackDirection::positive_x;
   double velocity_window_s = 0.1;
   double tolerance_s = 0.05;  // how far from an instant a position may be recorded to stand for it
 };

@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ssl_formation/attack_inference.hpp"
 #include "ssl_formation/data_clock.hpp"
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
@@ -58,6 +59,12 @@ struct SamplerConfig : DataClockConfig {
   double same_instant_s = 0.001;
 
   Sampling sampling = Sampling::step;
+  // --opponent-attacks auto: the direction is inferred from where the opponent's goalkeeper
+  // stands (AttackInference, over attack_window_s), opponent_attacks is only its first guess
+  // never used, and no sample is handed on until the direction is known. A switch (the teams
+  // changed ends) breaks the chain: cells before and after do not compare.
+  bool infer_attacks = false;
+  double attack_window_s = 10.0;
   // Frame sampling: instants are frame_resolution_s apart (so every frame time is one); the
   // sample standing for "step_s earlier" is the one nearest that time within
   // history_tolerance_s; a robot is in a sample if seen within frame_robot_timeout_s; frame
@@ -105,6 +112,8 @@ struct SamplerCounters {
   std::uint64_t samples_empty = 0;   // no opponent robot in the sample: not handed on
   std::uint64_t samples_forced = 0;  // handed on without every live camera (a dropped frame)
   std::uint64_t chain_breaks = 0;    // gaps, field changes and clock resets
+  std::uint64_t samples_undirected = 0;  // not handed on: the attack direction is not known yet
+  std::uint64_t attack_switches = 0;     // the inferred attack direction changed (ends changed)
   std::uint64_t transitions = 0;
 };
 
@@ -133,6 +142,9 @@ class FormationSampler : private DataClockListener {
   const SamplerConfig& config() const { return config_; }
   const StateCodec& codec() const { return codec_; }
   const FieldSize& field() const { return field_; }
+  // The direction the opponent attacks now: the configured one, or the inferred one (see
+  // infer_attacks; nothing before the first inference).
+  std::optional<AttackDirection> attacks() const { return attacks_; }
   const SamplerCounters& counters() const { return counters_; }
 
   // Encodes a formation's robots as states from their positions, for callers that build
@@ -177,6 +189,9 @@ class FormationSampler : private DataClockListener {
   SampleHandler on_sample_;
   FieldSize field_;
   SamplerCounters counters_;
+  std::optional<AttackDirection> attacks_;
+  AttackInference attack_inference_;
+  std::vector<AttackInference::Robot> inference_scratch_;
 
   VisionFrame packet_scratch_;  // add(SSL_WrapperPacket) converts into this
   std::vector<FrameDetection> frame_scratch_;
