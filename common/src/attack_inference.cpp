@@ -14,8 +14,9 @@ void AttackInference::reset() {
 
 bool AttackInference::add(double time_s, const std::vector<Robot>& robots,
                           const FieldSize& field) {
-  // Each robot's mean position, weighted over the last window (an exponential average: O(1) a
-  // robot and sample, and old positions fade instead of dropping out at once).
+  // Each robot's recent mean position: an exponential average over a quarter of the window
+  // (O(1) a robot and sample; it follows a keeper to the other goal within seconds, and the
+  // window-long hold below keeps a corner from flipping the direction).
   for (const Robot& robot : robots) {
     if (robot.robot_id >= tracks_.size()) tracks_.resize(robot.robot_id + 1);
     Track& track = tracks_[robot.robot_id];
@@ -23,7 +24,7 @@ bool AttackInference::add(double time_s, const std::vector<Robot>& robots,
       track = Track{true, time_s, time_s, robot.position.x, robot.position.y};
       continue;
     }
-    const double weight = 1.0 - std::exp(-(time_s - track.last_s) / window_s_);
+    const double weight = 1.0 - std::exp(-4.0 * (time_s - track.last_s) / window_s_);
     track.mean_x += weight * (robot.position.x - track.mean_x);
     track.mean_y += weight * (robot.position.y - track.mean_y);
     track.last_s = time_s;
