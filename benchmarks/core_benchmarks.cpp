@@ -3,9 +3,14 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+#include <memory>
 #include <random>
 
+#include "ssl_formation/prediction_pipeline.hpp"
 #include "ssl_formation/predictor.hpp"
+#include "ssl_formation/training.hpp"
+#include "ssl_formation/vision_frame.hpp"
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/transition_table.hpp"
 #include "ssl_formation/vision_packet.hpp"
@@ -141,6 +146,70 @@ void BM_SamplerPerPacket(benchmark::State& state) {
   benchmark::DoNotOptimize(samples);
 }
 BENCHMARK(BM_SamplerPerPacket)->ArgName("cameras")->Arg(1)->Arg(4);
+
+// Rolling prediction, as the predictor runs it with --sampling frame: 11 robots moving smoothly,
+// one camera at 60 Hz, a formation and a prediction `horizon` steps of 0.5 s ahead at every
+// frame, from a table trained on the same kind of motion. Frames are VisionFrames (decoded), so
+// the time is the pipeline's: sampling, the state history, prediction and the context.
+void BM_RollingPrediction(benchmark::State& state) {
+  const sf::Grid grid = state.range(0) == 0 ? sf::Grid(3, 2) : sf::Grid(12, 9);
+  const int horizon = static_cast<int>(state.range(1));
+  constexpr int robots = 11;
+  constexpr double frame_s = 1.0 / 60.0;
+  // Every robot circles its own spot; two minutes of frames.
+  const auto frame_at = [&](int i, double offset_s) {
+    sf::DetectionFrameSpec spec;
+    spec.frame_number = static_cast<std::uint32_t>(i);
+    spec.t_capture = offset_s + i * frame_s;
+    const double t = i * frame_s;
+    for (std::uint32_t id = 0; id < robots; ++id) {
+      const double phase = 0.4 * t + id;
+      spec.yellow.push_back({id,
+                             {-4000.0 + 800.0 * id + 1200.0 * std::cos(phase),
+                              2000.0 * std::sin(phase + 0.5 * id)}});
+    }
+    sf::VisionFrame frame;
+    sf::to_vision_frame(sf::make_detection_packet(spec), frame);
+    return frame;
+  };
+  sf::PredictionConfig config;
+  config.sampler.grid = grid;
+  config.sampler.step_s = 0.5;
+  config.sampler.sampling = sf::Sampling::frame;
+  config.horizon = horizon;
+  sf::Training training(config.sampler, sf::TransitionTable(grid));
+  for (int i = 0; i < 120 * 60; ++i) training.add(frame_at(i, 0.0));
+  std::vector<sf::VisionFrame> frames;
+  for (int i = 0; i < 60 * 60; ++i) frames.push_back(frame_at(i, 0.0));
+
+  std::uint64_t predictions = 0;
+  sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& p) {
+    predictions += p.prediction.steps.size();
+  });
+  pipeline.set_table(std::make_shared<const sf::StoredTable>(sf::StoredTable{training.table(), {}}));
+  std::size_t i = 0;
+  double offset_s = 1000.0;
+  for (auto _ : state) {
+    sf::VisionFrame& frame = frames[i];
+    // Keep the data clock moving forward across passes over the frames.
+    frame.detection.t_capture = offset_s + static_cast<double>(i) * frame_s;
+    pipeline.add(frame);
+    if (++i == frames.size()) {
+      i = 0;
+      offset_s += 100.0;
+    }
+  }
+  state.SetLabel(grid.to_string() + ", " + std::to_string(training.table().transitions()) +
+                 " transitions");
+  benchmark::DoNotOptimize(predictions);
+}
+// Args: grid (0 = 3x2, 1 = 12x9), horizon in steps.
+BENCHMARK(BM_RollingPrediction)
+    ->ArgNames({"grid12x9", "horizon"})
+    ->Args({0, 1})
+    ->Args({0, 3})
+    ->Args({1, 1})
+    ->Args({1, 3});
 
 }  // namespace
 
