@@ -43,12 +43,12 @@
 #include <vector>
 
 #include "formation_prediction.pb.h"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/prediction_message.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_formation/vision_frame.hpp"
@@ -125,9 +125,9 @@ int make_table(const std::string& path, std::uint64_t formations, std::uint64_t 
   metadata.field = training.sampler().field();
   metadata.step_s = step_s;
   metadata.samples = training.samples();
-  const sf::TableSaveResult saved = sf::save_table(path, training.table(), metadata);
+  const auto saved = sf::save_table(path, training.table(), metadata);
   if (!saved) {
-    std::cerr << "e2e_bench make-table: " << saved.message << '\n';
+    std::cerr << "e2e_bench make-table: " << saved.error().message << '\n';
     return 1;
   }
   std::cout << "make-table path=" << path << " formations=" << training.samples()
@@ -394,12 +394,12 @@ int run_latency(const LatencyOptions& o) {
 
 int run_pipeline(const std::string& table_path, std::size_t count, double step_s,
                  std::uint64_t seed, double idle_s) {
-  sf::TableLoadResult loaded = sf::load_table(table_path);
+  auto loaded = sf::load_table(table_path);
   if (!loaded) {
-    std::cerr << "e2e_bench pipeline: " << loaded.message << '\n';
+    std::cerr << "e2e_bench pipeline: " << loaded.error().message << '\n';
     return 1;
   }
-  sf::StoredTable& stored = *loaded.stored;
+  sf::StoredTable& stored = *loaded;
   LatencyOptions o;
   o.step_s = step_s;
   o.seed = seed;
@@ -417,8 +417,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   std::array<std::int64_t, 4> marks{};
   sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& predicted) {
     marks[2] = now_ns();
-    sf::encode_prediction(predicted.formation(), predicted.prediction, predicted.context,
-                          encoded);
+    sf::encode_prediction(predicted.formation(), predicted.prediction, predicted.context, encoded);
     marks[3] = now_ns();
     ++predictions;
   });

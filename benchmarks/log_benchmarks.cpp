@@ -34,9 +34,8 @@ const std::filesystem::path& log_path(bool gzip) {
       blue[static_cast<std::size_t>(i)] = {-3000.0 + 1000 * i, 1000.0};
     }
     for (const auto& path : {plain, compressed}) {
-      std::string error;
-      auto writer = sf::LogWriter::create(path, &error);
-      if (!writer) throw std::runtime_error(error);
+      auto writer = sf::LogWriter::create(path);
+      if (!writer) throw std::runtime_error(writer.error().message);
       std::mt19937 frame_random(6);
       for (int frame = 0; frame < frames_in_log; ++frame) {
         sf::DetectionFrameSpec spec;
@@ -81,9 +80,8 @@ void BM_ReadAndParse(benchmark::State& state) {
   std::int64_t frames = 0;
   SSL_WrapperPacket packet;
   for (auto _ : state) {
-    std::string error;
-    auto reader = sf::LogReader::open(path, &error);
-    while (reader->next_vision(packet)) {
+    auto reader = sf::LogReader::open(path).value();  // throws with the reason
+    while (reader.next_vision(packet)) {
       benchmark::DoNotOptimize(packet.detection().frame_number());
       ++frames;
     }
@@ -107,9 +105,8 @@ void BM_OfflineTraining(benchmark::State& state) {
     sf::SamplerConfig config;
     config.step_s = 2.0;
     sf::Training training(config, sf::TransitionTable(config.grid));
-    std::string error;
-    auto reader = sf::LogReader::open(path, &error);
-    while (reader->next_vision(packet)) {
+    auto reader = sf::LogReader::open(path).value();  // throws with the reason
+    while (reader.next_vision(packet)) {
       training.add(packet);
       ++frames;
     }

@@ -2,13 +2,12 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
-
 #include <unistd.h>
 
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
-#include <csignal>
 #include <sstream>
 
 #include "ssl_formation/app/options.hpp"
@@ -24,16 +23,14 @@ void init_logging(const std::string& program, bool verbose) {
 }
 
 net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text) {
-  std::string error;
-  const auto endpoint = net::parse_multicast_endpoint(text, &error);
-  if (!endpoint) throw UsageError("--" + option + ": " + error);
+  const auto endpoint = net::parse_multicast_endpoint(text);
+  if (!endpoint) throw UsageError("--" + option + ": " + endpoint.error().message);
   return *endpoint;
 }
 
 net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_all) {
-  std::string error;
-  const auto choice = net::parse_interface(text, allow_all, &error);
-  if (!choice) throw UsageError("--interface: " + error);
+  const auto choice = net::parse_interface(text, allow_all);
+  if (!choice) throw UsageError("--interface: " + choice.error().message);
   return *choice;
 }
 

@@ -7,9 +7,8 @@
 namespace ssl_formation::app {
 
 Grid ModelOptions::parsed_grid() const {
-  std::string error;
-  const auto parsed = Grid::parse(grid, &error);
-  if (!parsed) throw UsageError("--grid: " + error);
+  const auto parsed = Grid::parse(grid);
+  if (!parsed) throw UsageError("--grid: " + parsed.error().message);
   return *parsed;
 }
 

@@ -90,11 +90,9 @@ std::ostream& operator<<(std::ostream& out, const MulticastEndpoint& endpoint) {
   return out << endpoint.to_string();
 }
 
-std::optional<MulticastEndpoint> parse_multicast_endpoint(std::string_view text,
-                                                          std::string* error) {
-  auto fail = [&](const std::string& why) -> std::optional<MulticastEndpoint> {
-    if (error) *error = quoted(text) + ": " + why;
-    return std::nullopt;
+Result<MulticastEndpoint> parse_multicast_endpoint(std::string_view text) {
+  const auto fail = [&](const std::string& why) {
+    return ssl_formation::fail(quoted(text) + ": " + why);
   };
   const auto colon = text.rfind(':');
   if (colon == std::string_view::npos) {
@@ -130,11 +128,9 @@ std::ostream& operator<<(std::ostream& out, const InterfaceChoice& choice) {
   return out << choice.to_string();
 }
 
-std::optional<InterfaceChoice> parse_interface(std::string_view text, bool allow_all,
-                                               std::string* error) {
-  auto fail = [&](const std::string& why) -> std::optional<InterfaceChoice> {
-    if (error) *error = "interface " + quoted(text) + ": " + why;
-    return std::nullopt;
+Result<InterfaceChoice> parse_interface(std::string_view text, bool allow_all) {
+  const auto fail = [&](const std::string& why) {
+    return ssl_formation::fail("interface " + quoted(text) + ": " + why);
   };
   if (text == "all") {
     if (!allow_all) return fail("'all' is only accepted for receiving; give one IPv4 address");
@@ -151,13 +147,11 @@ std::optional<InterfaceChoice> parse_interface(std::string_view text, bool allow
   return InterfaceChoice{false, *address};
 }
 
-std::vector<InterfaceAddress> ipv4_interfaces(std::string* error) {
+Result<std::vector<InterfaceAddress>> ipv4_interfaces() {
   std::vector<InterfaceAddress> result;
   ifaddrs* list = nullptr;
-  if (::getifaddrs(&list) != 0) {
-    if (error) *error = std::string("getifaddrs failed: ") + std::strerror(errno);
-    return result;
-  }
+  if (::getifaddrs(&list) != 0)
+    return fail(std::string("getifaddrs failed: ") + std::strerror(errno));
   for (const ifaddrs* entry = list; entry != nullptr; entry = entry->ifa_next) {
     if (entry->ifa_addr == nullptr || entry->ifa_addr->sa_family != AF_INET) continue;
     sockaddr_in address{};
@@ -332,11 +326,14 @@ void MulticastReceiver::State::join(const address_v4& on) {
 }
 
 void MulticastReceiver::State::join_all() {
-  std::string error;
-  const auto interfaces = ipv4_interfaces(&error);
+  const std::string cannot_join = "cannot join " + endpoint.group.to_string() + " (port " +
+                                  std::to_string(endpoint.port) +
+                                  ") on any interface (--interface all): ";
+  const auto interfaces = ipv4_interfaces();
+  if (!interfaces) fail(cannot_join + interfaces.error().message);
   std::vector<std::string> devices;
   std::string failures;
-  for (const auto& item : interfaces) {
+  for (const auto& item : *interfaces) {
     if (!item.up) continue;
     // One membership per device: a second address of the same device would only repeat it.
     const std::string device = device_of(item.name);
@@ -354,12 +351,8 @@ void MulticastReceiver::State::join_all() {
     joined.push_back(item.address);
   }
   if (joined.empty()) {
-    const std::string why =
-        !error.empty()
-            ? error
-            : (failures.empty() ? std::string("no IPv4 interface is up") : failures.substr(2));
-    fail("cannot join " + endpoint.group.to_string() + " (port " + std::to_string(endpoint.port) +
-         ") on any interface (--interface all): " + why);
+    fail(cannot_join +
+         (failures.empty() ? std::string("no IPv4 interface is up") : failures.substr(2)));
   }
 }
 

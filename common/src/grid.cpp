@@ -38,11 +38,7 @@ Grid::Grid(int length_cells, int width_cells) : length_(length_cells), width_(wi
   }
 }
 
-std::optional<Grid> Grid::parse(std::string_view text, std::string* error) {
-  auto fail = [&](std::string reason) -> std::optional<Grid> {
-    if (error) *error = std::move(reason);
-    return std::nullopt;
-  };
+Result<Grid> Grid::parse(std::string_view text) {
   const auto separator = text.find_first_of("xX");
   if (separator == std::string_view::npos) {
     return fail("grid '" + std::string(text) + "' is not of the form LxW, for example 3x2");

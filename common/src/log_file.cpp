@@ -98,16 +98,13 @@ LogReader::LogReader(std::filesystem::path path, detail::GzFilePtr file)
       file_(std::move(file)),
       buffer_(std::make_unique<char[]>(kReadBufferSize)) {}
 
-std::optional<LogReader> LogReader::open(const std::filesystem::path& path, std::string* error) {
-  const auto set_error = [&](const std::string& message) {
-    if (error != nullptr) *error = path.string() + ": " + message;
+Result<LogReader> LogReader::open(const std::filesystem::path& path) {
+  const auto failure = [&](const std::string& message) {
+    return ssl_formation::fail(path.string() + ": " + message);
   };
   errno = 0;
   gzFile file = gzopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    set_error("cannot open: " + errno_text(errno));
-    return std::nullopt;
-  }
+  if (file == nullptr) return failure("cannot open: " + errno_text(errno));
   gzbuffer(file, kGzBufferSize);  // before the first read, as zlib requires
   LogReader reader(path, detail::GzFilePtr(file));
   std::error_code ec;
@@ -118,30 +115,23 @@ std::optional<LogReader> LogReader::open(const std::filesystem::path& path, std:
   int gz_error = Z_OK;
   const char* gz_message = gzerror(file, &gz_error);
   if (gz_error != Z_OK && gz_error != Z_BUF_ERROR) {
-    set_error("cannot read: " + strip_path(gz_message, path));
-    return std::nullopt;
+    return failure("cannot read: " + strip_path(gz_message, path));
   }
   const char* data = reader.buffer_.get() + reader.begin_;
-  if (reader.available() == 0) {
-    set_error("not an SSL log file (empty)");
-    return std::nullopt;
-  }
+  if (reader.available() == 0) return failure("not an SSL log file (empty)");
   if (reader.available() < kLogFileMagic.size() ||
       std::string_view(data, kLogFileMagic.size()) != kLogFileMagic) {
-    set_error("not an SSL log file (bad header at byte 0)");
-    return std::nullopt;
+    return failure("not an SSL log file (bad header at byte 0)");
   }
   if (reader.available() < kLogFileHeaderSize) {
-    set_error("truncated header at byte " + std::to_string(kLogFileMagic.size()) +
-              ": the version needs 4 bytes, " +
-              std::to_string(reader.available() - kLogFileMagic.size()) + " remain");
-    return std::nullopt;
+    return failure("truncated header at byte " + std::to_string(kLogFileMagic.size()) +
+                   ": the version needs 4 bytes, " +
+                   std::to_string(reader.available() - kLogFileMagic.size()) + " remain");
   }
   const std::int32_t version = load_be32(data + kLogFileMagic.size());
   if (version != kLogFileVersion) {
-    set_error("unsupported log version " + std::to_string(version) + " at byte " +
-              std::to_string(kLogFileMagic.size()));
-    return std::nullopt;
+    return failure("unsupported log version " + std::to_string(version) + " at byte " +
+                   std::to_string(kLogFileMagic.size()));
   }
   reader.consume(kLogFileHeaderSize);
   reader.counters_.bytes = reader.offset_;
@@ -349,23 +339,17 @@ std::uint64_t LogReader::compressed_offset() const {
 LogWriter::LogWriter(std::filesystem::path path, detail::GzFilePtr file)
     : path_(std::move(path)), file_(std::move(file)) {}
 
-std::optional<LogWriter> LogWriter::create(const std::filesystem::path& path, std::string* error) {
+Result<LogWriter> LogWriter::create(const std::filesystem::path& path) {
   errno = 0;
   // "T": zlib writes the bytes through uncompressed, so both kinds share one code path.
   gzFile file = gzopen(path.c_str(), ends_with_gz(path) ? "wb6" : "wbT");
-  if (file == nullptr) {
-    if (error != nullptr) *error = path.string() + ": cannot create: " + errno_text(errno);
-    return std::nullopt;
-  }
+  if (file == nullptr) return fail(path.string() + ": cannot create: " + errno_text(errno));
   gzbuffer(file, kGzBufferSize);
   LogWriter writer(path, detail::GzFilePtr(file));
   char header[kLogFileHeaderSize];
   std::memcpy(header, kLogFileMagic.data(), kLogFileMagic.size());
   store_be32(header + kLogFileMagic.size(), kLogFileVersion);
-  if (!writer.put(header, sizeof header)) {
-    if (error != nullptr) *error = writer.error_;
-    return std::nullopt;
-  }
+  if (!writer.put(header, sizeof header)) return fail(writer.error_);
   return writer;
 }
 
@@ -460,10 +444,10 @@ bool LogWriter::close(bool indexed) {
 
 // ---------------------------------------------------------------------------------------------
 
-LogVisionPackets read_vision_log(const std::filesystem::path& path) {
+Result<LogVisionPackets> read_vision_log(const std::filesystem::path& path) {
+  Result<LogReader> reader = LogReader::open(path);
+  if (!reader) return Unexpected(std::move(reader).error());
   LogVisionPackets out;
-  std::optional<LogReader> reader = LogReader::open(path, &out.error);
-  if (!reader) return out;
   SSL_WrapperPacket packet;
   std::int64_t receive_time_ns = 0;
   while (reader->next_vision(packet, &receive_time_ns)) {
@@ -471,7 +455,8 @@ LogVisionPackets read_vision_log(const std::filesystem::path& path) {
     out.receive_times_ns.push_back(receive_time_ns);
     packet.Clear();
   }
-  out.error = reader->error();
+  if (reader->ending() != LogReader::Ending::none) out.stopped_early = Error{reader->error()};
+  out.ending = reader->ending();
   out.counters = reader->counters();
   return out;
 }

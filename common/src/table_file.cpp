@@ -213,15 +213,12 @@ class ChunkReader {
   std::size_t filled_ = 0;
 };
 
-TableLoadResult load_failure(TableFileError error, const std::filesystem::path& path,
-                             const std::string& what) {
-  TableLoadResult result;
-  result.error = error;
-  result.message = path.string() + ": " + what;
-  return result;
+Unexpected<TableLoadError> load_failure(TableFileError kind, const std::filesystem::path& path,
+                                        const std::string& what) {
+  return Unexpected(TableLoadError{kind, path.string() + ": " + what});
 }
 
-TableLoadResult read_failure(const std::filesystem::path& path, int error) {
+Unexpected<TableLoadError> read_failure(const std::filesystem::path& path, int error) {
   if (error == ENODATA) {
     return load_failure(TableFileError::truncated, path,
                         "truncated: the file ended while it was being read");
@@ -411,16 +408,14 @@ std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
   return temp;
 }
 
-TableSaveResult save_failure(const std::filesystem::path& path, const std::string& what) {
-  return TableSaveResult{false, "cannot save table " + path.string() + ": " + what};
+Unexpected<Error> save_failure(const std::filesystem::path& path, const std::string& what) {
+  return fail("cannot save table " + path.string() + ": " + what);
 }
 
 }  // namespace
 
 std::string_view to_string(TableFileError error) {
   switch (error) {
-    case TableFileError::none:
-      return "none";
     case TableFileError::cannot_open:
       return "cannot_open";
     case TableFileError::not_a_table:
@@ -439,8 +434,9 @@ std::string_view to_string(TableFileError error) {
   return "unknown";
 }
 
-TableLoadResult load_table(const std::filesystem::path& path, std::optional<Grid> expected_grid,
-                           TableStorage storage) {
+Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path,
+                                               std::optional<Grid> expected_grid,
+                                               TableStorage storage) {
   int fd_value = -1;
   do {
     fd_value = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY);
@@ -511,11 +507,9 @@ TableLoadResult load_table(const std::filesystem::path& path, std::optional<Grid
   }
   const Grid grid(static_cast<int>(header.length), static_cast<int>(header.width));
   if (expected_grid && *expected_grid != grid) {
-    TableLoadResult result;
-    result.error = TableFileError::wrong_grid;
-    result.message = path.string() + " holds a " + grid.to_string() + " grid, expected " +
-                     expected_grid->to_string();
-    return result;
+    return fail(TableLoadError{TableFileError::wrong_grid,
+                               path.string() + " holds a " + grid.to_string() + " grid, expected " +
+                                   expected_grid->to_string()});
   }
 
   // Length.
@@ -568,13 +562,11 @@ TableLoadResult load_table(const std::filesystem::path& path, std::optional<Grid
                             " transitions, the header says " + std::to_string(header.transitions));
   }
 
-  TableLoadResult result;
-  result.stored.emplace(std::move(stored));
-  return result;
+  return stored;
 }
 
-TableSaveResult save_table(const std::filesystem::path& path, const TransitionTable& table,
-                           const TableMetadata& metadata, const SaveHooks& hooks) {
+Result<void> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                        const TableMetadata& metadata, const SaveHooks& hooks) {
   // Never write a file that load_table would reject.
   if (!metadata.field.valid()) return save_failure(path, "invalid field size");
   if (!valid_step(metadata.step_s)) return save_failure(path, "invalid step");
@@ -686,7 +678,7 @@ TableSaveResult save_table(const std::filesystem::path& path, const TransitionTa
     return save_failure(path, "written, but cannot sync its folder " + folder.string() + ": " +
                                   errno_text(errno) + "; a crash now may restore the old file");
   }
-  return TableSaveResult{true, {}};
+  return {};
 }
 
 }  // namespace ssl_formation

@@ -6,10 +6,10 @@
 #include <cstdio>
 #include <fstream>
 
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/evaluation.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/training.hpp"
 
 namespace ssl_formation::evaluate {
@@ -23,12 +23,15 @@ class PacketSource {
  public:
   static PacketSource from_log(const std::string& path) {
     PacketSource source;
-    LogVisionPackets log = read_vision_log(path);
-    if (!log.error.empty()) {
-      if (log.packets.empty()) throw std::runtime_error(log.error);
-      spdlog::warn("{}; using the {} packets before it", log.error, log.packets.size());
+    Result<LogVisionPackets> log = read_vision_log(path);
+    if (!log) throw std::runtime_error(log.error().message);
+    if (log->stopped_early) {
+      // Everything before the damage is kept; a file with nothing before it is no data.
+      if (log->packets.empty()) throw std::runtime_error(log->stopped_early->message);
+      spdlog::warn("{}; using the {} packets before it", log->stopped_early->message,
+                   log->packets.size());
     }
-    source.packets_ = std::move(log.packets);
+    source.packets_ = std::move(log->packets);
     return source;
   }
   static PacketSource simulated(std::uint64_t seed, int formations, double jitter_mm, int cameras) {
@@ -59,7 +62,7 @@ class PacketSource {
 };
 
 TransitionTable train(const SamplerConfig& config, const PacketSource& source,
-                          FieldSize* field = nullptr, std::uint64_t* samples = nullptr) {
+                      FieldSize* field = nullptr, std::uint64_t* samples = nullptr) {
   Training training(config, TransitionTable(config.grid));
   for (const auto& packet : source.packets()) training.add(packet);
   if (field) *field = training.sampler().field();
@@ -319,6 +322,5 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   }
   return 0;
 }
-
 
 }  // namespace ssl_formation::evaluate

@@ -26,11 +26,11 @@ constexpr std::size_t flush_bytes = 1 << 20;
 
 int run_from_log(const PredictorOptions& options) {
   const PredictionConfig config = prediction_config(options);
-  TableLoadResult loaded = load_table(options.table, config.sampler.grid);
-  if (!loaded) throw std::runtime_error(loaded.message);
-  if (loaded.stored->metadata.step_s != config.sampler.step_s) {
+  auto loaded = load_table(options.table, config.sampler.grid);
+  if (!loaded) throw std::runtime_error(loaded.error().message);
+  if (loaded->metadata.step_s != config.sampler.step_s) {
     spdlog::warn("the table was trained with --step {} but the logs are sampled every {} s",
-                 loaded.stored->metadata.step_s, config.sampler.step_s);
+                 loaded->metadata.step_s, config.sampler.step_s);
   }
 
   const bool to_stdout = options.output.empty() || options.output == "-";
@@ -50,15 +50,14 @@ int run_from_log(const PredictorOptions& options) {
     append_prediction_csv(predicted, text);
     if (text.size() >= flush_bytes) flush();
   });
-  pipeline.set_table(std::make_shared<const StoredTable>(std::move(*loaded.stored)));
+  pipeline.set_table(std::make_shared<const StoredTable>(std::move(*loaded)));
 
   bool every_file_whole = true;
   SSL_WrapperPacket packet;
   for (const std::string& path : options.from_logs) {
-    std::string error;
-    std::optional<LogReader> reader = LogReader::open(path, &error);
+    Result<LogReader> reader = LogReader::open(path);
     if (!reader) {
-      spdlog::error("{}", error);
+      spdlog::error("{}", reader.error().message);
       every_file_whole = false;
       continue;
     }
@@ -80,14 +79,16 @@ int run_from_log(const PredictorOptions& options) {
       spdlog::error("{}; the {} vision packets before it were used", reader->error(), frames);
       every_file_whole = false;
     } else if (reader->ending() == LogReader::Ending::cut_off) {
-      spdlog::warn("{}: the file ends inside its last message; the {} vision packets before it "
-                   "were used",
-                   reader->error(), frames);
+      spdlog::warn(
+          "{}: the file ends inside its last message; the {} vision packets before it "
+          "were used",
+          reader->error(), frames);
     }
   }
   flush();
   out.flush();
-  if (!out) throw std::runtime_error("cannot write " + (to_stdout ? "standard output" : options.output));
+  if (!out)
+    throw std::runtime_error("cannot write " + (to_stdout ? "standard output" : options.output));
   spdlog::info("{} predictions from {} formations{}", pipeline.predictions(),
                pipeline.sampler().counters().samples,
                to_stdout ? std::string() : " written to " + options.output);

@@ -20,12 +20,12 @@ TableWatcher::Change TableWatcher::poll() {
   const std::optional<Identity> now = identify();
   if (!now || (seen_ && *now == *seen_)) return Change::none;
   seen_ = now;
-  TableLoadResult loaded = load_table(path_, expected_grid_);
+  auto loaded = load_table(path_, expected_grid_);
   if (!loaded) {
-    last_error_ = loaded.message;
+    last_error_ = std::move(loaded).error().message;
     return Change::failed;
   }
-  table_ = std::make_shared<const StoredTable>(std::move(*loaded.stored));
+  table_ = std::make_shared<const StoredTable>(std::move(*loaded));
   last_error_.clear();
   ++reloads_;
   return Change::loaded;

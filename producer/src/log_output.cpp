@@ -9,9 +9,9 @@
 #include <chrono>
 #include <cmath>
 
-#include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/log_file.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
 
 namespace ssl_formation::producer {
 
@@ -39,9 +39,8 @@ int run_write_log(const ProducerOptions& options) {
   }
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
 
-  std::string error;
-  std::optional<LogWriter> writer = LogWriter::create(options.write_log, &error);
-  if (!writer) throw std::runtime_error(error);
+  Result<LogWriter> writer = LogWriter::create(options.write_log);
+  if (!writer) throw std::runtime_error(writer.error().message);
   spdlog::info("writing simulated vision to {}: {} formations, step {} s, {} camera(s), seed {}",
                options.write_log, options.count, options.step_s, options.cameras, options.seed);
 

@@ -25,8 +25,7 @@ std::int64_t unix_time_ns() {
 
 class Recorder {
  public:
-  Recorder(LogWriter& writer, const RecordOptions& options)
-      : writer_(writer), options_(options) {}
+  Recorder(LogWriter& writer, const RecordOptions& options) : writer_(writer), options_(options) {}
 
   // Returns false when recording must end (--count reached or the file cannot be written).
   bool add(std::span<const std::byte> data) {
@@ -68,8 +67,7 @@ class Recorder {
 int run_record(const RecordOptions& options) {
   const auto group = app::parse_group_option("vision-address", options.network.vision_address);
   const auto interface = app::parse_interface_option(options.network.interface, true);
-  if (options.output.empty())
-    throw app::UsageError("--output FILE is required (.log or .log.gz)");
+  if (options.output.empty()) throw app::UsageError("--output FILE is required (.log or .log.gz)");
   if (!(options.duration_s >= 0.0) || options.duration_s > 1e9) {
     throw app::UsageError("--duration must be >= 0 seconds (0 = until a signal)");
   }
@@ -80,9 +78,8 @@ int run_record(const RecordOptions& options) {
     throw app::UsageError(options.output + " exists; pass --overwrite to replace it");
   }
 
-  std::string error;
-  std::optional<LogWriter> writer = LogWriter::create(options.output, &error);
-  if (!writer) throw std::runtime_error(error);
+  Result<LogWriter> writer = LogWriter::create(options.output);
+  if (!writer) throw std::runtime_error(writer.error().message);
   Recorder recorder(*writer, options);
 
   boost::asio::io_context io;
@@ -140,6 +137,5 @@ int run_record(const RecordOptions& options) {
   log_status(by_signal ? "stopped" : "done");
   return 0;
 }
-
 
 }  // namespace ssl_formation::producer

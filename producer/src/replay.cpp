@@ -11,11 +11,11 @@
 #include <cmath>
 #include <deque>
 
-#include "ssl_formation/producer/producer_options.hpp"
-#include "ssl_formation/producer/replay_clock.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
+#include "ssl_formation/producer/replay_clock.hpp"
 
 namespace ssl_formation::producer {
 
@@ -51,8 +51,7 @@ class LogReplay {
 
   // Opens the file and chooses the clock; throws std::runtime_error if it cannot be read.
   void open() {
-    std::string error;
-    if (!open_pass(&error)) throw std::runtime_error(error);
+    if (const auto opened = open_pass(); !opened) throw std::runtime_error(opened.error().message);
     std::vector<ClockSample> samples;
     SSL_WrapperPacket packet;
     std::int64_t receive_time = 0;
@@ -119,15 +118,17 @@ class LogReplay {
   };
   enum class Fetch { packet, end, error };
 
-  bool open_pass(std::string* error) {
+  Result<void> open_pass() {
     if (reader_) add_counters(totals_, reader_->counters());
-    reader_ = LogReader::open(options_.replay, error);
-    if (!reader_) return false;
+    reader_.reset();  // its counters are in totals_ now
+    Result<LogReader> opened = LogReader::open(options_.replay);
+    if (!opened) return Unexpected(std::move(opened).error());
+    reader_.emplace(std::move(*opened));
     ++passes_;
     pass_ended_ = false;
     anchored_ = false;
     timeline_.restart();
-    return true;
+    return {};
   }
 
   Fetch fetch() {
@@ -174,9 +175,8 @@ class LogReplay {
             return finish(1);
           }
           if (!options_.loop) return finish(0);
-          std::string error;
-          if (!open_pass(&error)) {
-            spdlog::error("{}", error);
+          if (const auto opened = open_pass(); !opened) {
+            spdlog::error("{}", opened.error().message);
             return finish(1);
           }
           continue;

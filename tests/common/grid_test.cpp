@@ -49,11 +49,11 @@ TEST(Grid, CellCentresMapBackToTheirCell) {
 TEST(Grid, ParseAndLimits) {
   EXPECT_EQ(Grid::parse("3x2"), Grid(3, 2));
   EXPECT_EQ(Grid::parse("16x12"), Grid(16, 12));
-  std::string error;
-  EXPECT_FALSE(Grid::parse("3by2", &error));
-  EXPECT_NE(error.find("LxW"), std::string::npos);
-  EXPECT_FALSE(Grid::parse("0x2", &error));
-  EXPECT_FALSE(Grid::parse("20x20", &error));
+  const auto not_a_grid = Grid::parse("3by2");
+  ASSERT_FALSE(not_a_grid);
+  EXPECT_NE(not_a_grid.error().message.find("LxW"), std::string::npos);
+  EXPECT_FALSE(Grid::parse("0x2"));
+  EXPECT_FALSE(Grid::parse("20x20"));
   EXPECT_THROW(Grid(0, 1), std::invalid_argument);
 }
 

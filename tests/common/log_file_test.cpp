@@ -20,6 +20,16 @@ static_assert(std::is_nothrow_move_constructible_v<LogReader>);
 static_assert(std::is_nothrow_move_constructible_v<LogWriter>);
 static_assert(!std::is_copy_constructible_v<LogReader>);
 
+// The error of a failed open or create, or "(opened)" when it did not fail.
+template <typename T>
+std::string error_of(const Result<T>& result) {
+  return result ? "(opened)" : result.error().message;
+}
+// Why reading stopped before the end of the file, or "" for a file read to its end.
+std::string stop_of(const LogVisionPackets& log) {
+  return log.stopped_early ? log.stopped_early->message : "";
+}
+
 // A fresh directory per test, removed afterwards.
 class LogFileTest : public ::testing::Test {
  protected:
@@ -158,9 +168,8 @@ TEST_P(LogFileRoundTrip, EveryMessageTypeComesBackWithItsTimeOffsetAndPayload) {
   const fs::path file = path(std::string("round") + GetParam());
   const std::vector<Written> written = every_type();
   {
-    std::string error;
-    std::optional<LogWriter> writer = LogWriter::create(file, &error);
-    ASSERT_TRUE(writer) << error;
+    Result<LogWriter> writer = LogWriter::create(file);
+    ASSERT_TRUE(writer) << error_of(writer);
     for (const Written& w : written) ASSERT_TRUE(writer->write(w.type, w.time_ns, w.payload));
     ASSERT_TRUE(writer->write_vision(detection_packet(3, 4), 42));
     ASSERT_TRUE(writer->close()) << writer->error();
@@ -172,9 +181,8 @@ TEST_P(LogFileRoundTrip, EveryMessageTypeComesBackWithItsTimeOffsetAndPayload) {
   EXPECT_EQ(on_disk.rfind("\x1f\x8b", 0) == 0, gzip);
   EXPECT_EQ(on_disk.rfind("SSL_LOG_FILE", 0) == 0, !gzip);
 
-  std::string error;
-  std::optional<LogReader> reader = LogReader::open(file, &error);
-  ASSERT_TRUE(reader) << error;
+  Result<LogReader> reader = LogReader::open(file);
+  ASSERT_TRUE(reader) << error_of(reader);
   EXPECT_EQ(reader->offset(), 16u);
   EXPECT_EQ(reader->compressed_size(), on_disk.size());
   LogMessage message;
@@ -217,7 +225,7 @@ TEST_P(LogFileRoundTrip, IndexedFileEndsWithTheOfficialIndexAndReadsCleanly) {
   const fs::path file = path(std::string("indexed") + GetParam());
   const std::vector<Written> written = every_type();
   {
-    std::optional<LogWriter> writer = LogWriter::create(file, nullptr);
+    Result<LogWriter> writer = LogWriter::create(file);
     ASSERT_TRUE(writer);
     for (const Written& w : written) ASSERT_TRUE(writer->write(w.type, w.time_ns, w.payload));
     ASSERT_TRUE(writer->close(true)) << writer->error();
@@ -236,7 +244,7 @@ TEST_P(LogFileRoundTrip, IndexedFileEndsWithTheOfficialIndexAndReadsCleanly) {
             written.size() * 8 + 15)
       << "size of the index message";
 
-  std::optional<LogReader> reader = LogReader::open(file, nullptr);
+  Result<LogReader> reader = LogReader::open(file);
   ASSERT_TRUE(reader);
   LogMessage message;
   std::size_t i = 0;
@@ -291,7 +299,7 @@ TEST_P(LogFileRoundTrip, NextVisionReturnsVisionAndCompatibleLegacyPacketsAndCou
   bytes += vision_message(11, 1, 12);
   write_file(file, bytes);
 
-  std::optional<LogReader> reader = LogReader::open(file, nullptr);
+  Result<LogReader> reader = LogReader::open(file);
   ASSERT_TRUE(reader);
   SSL_WrapperPacket packet;
   std::int64_t time_ns = 0;
@@ -332,8 +340,9 @@ TEST_P(LogFileRoundTrip, NextVisionReturnsVisionAndCompatibleLegacyPacketsAndCou
 
 TEST(LogFileGrSim, ReadsAllVisionPacketsOfTheRecording) {
   const fs::path file = fs::path(SSLF_TEST_DATA_DIR) / "grsim-4cam-11v11-idle.log.gz";
-  const LogVisionPackets log = read_vision_log(file);
-  EXPECT_EQ(log.error, "");
+  const LogVisionPackets log = read_vision_log(file).value();
+  EXPECT_EQ(stop_of(log), "");
+  EXPECT_EQ(log.ending, LogReader::Ending::none);
   ASSERT_EQ(log.packets.size(), 2353u);
   ASSERT_EQ(log.receive_times_ns.size(), log.packets.size());
   std::set<std::uint32_t> cameras;
@@ -350,7 +359,7 @@ TEST(LogFileGrSim, ReadsAllVisionPacketsOfTheRecording) {
   EXPECT_GT(span, 9'000'000'000);
   EXPECT_LT(span, 11'000'000'000);
 
-  std::optional<LogReader> reader = LogReader::open(file, nullptr);
+  Result<LogReader> reader = LogReader::open(file);
   ASSERT_TRUE(reader);
   EXPECT_EQ(reader->compressed_size(), fs::file_size(file));
   SSL_WrapperPacket packet;
@@ -382,50 +391,51 @@ TEST_P(LogFileDamaged, BadHeader) {
   std::string bytes = good_prefix();
   bytes[3] = 'X';
   write_file(file(), bytes);
-  std::string error;
-  EXPECT_FALSE(LogReader::open(file(), &error));
-  EXPECT_EQ(error, file().string() + ": not an SSL log file (bad header at byte 0)");
-  const LogVisionPackets log = read_vision_log(file());
-  EXPECT_EQ(log.error, error);
-  EXPECT_TRUE(log.packets.empty());
+  const auto opened = LogReader::open(file());
+  EXPECT_FALSE(opened);
+  EXPECT_EQ(error_of(opened), file().string() + ": not an SSL log file (bad header at byte 0)");
+  const auto log = read_vision_log(file());
+  EXPECT_FALSE(log) << "no packets from a file without a header";
+  EXPECT_EQ(error_of(log), error_of(opened));
 }
 
 TEST_P(LogFileDamaged, TextFileIsNotALog) {
   write_file(file(), "hello\n");
-  std::string error;
-  EXPECT_FALSE(LogReader::open(file(), &error));
-  EXPECT_EQ(error, file().string() + ": not an SSL log file (bad header at byte 0)");
+  const auto opened = LogReader::open(file());
+  EXPECT_FALSE(opened);
+  EXPECT_EQ(error_of(opened), file().string() + ": not an SSL log file (bad header at byte 0)");
 }
 
 TEST_P(LogFileDamaged, EmptyFile) {
   write_file(file(), "");
-  std::string error;
-  EXPECT_FALSE(LogReader::open(file(), &error));
-  EXPECT_EQ(error, file().string() + ": not an SSL log file (empty)");
+  const auto opened = LogReader::open(file());
+  EXPECT_FALSE(opened);
+  EXPECT_EQ(error_of(opened), file().string() + ": not an SSL log file (empty)");
 }
 
 TEST_P(LogFileDamaged, HeaderCutInsideTheVersion) {
   write_file(file(), "SSL_LOG_FILE\0\0"s);
-  std::string error;
-  EXPECT_FALSE(LogReader::open(file(), &error));
-  EXPECT_EQ(error,
+  const auto opened = LogReader::open(file());
+  EXPECT_FALSE(opened);
+  EXPECT_EQ(error_of(opened),
             file().string() + ": truncated header at byte 12: the version needs 4 bytes, 2 remain");
 }
 
 TEST_P(LogFileDamaged, WrongVersion) {
   write_file(file(), file_header(2) + vision_message(1, 0, 1));
-  std::string error;
-  EXPECT_FALSE(LogReader::open(file(), &error));
-  EXPECT_EQ(error, file().string() + ": unsupported log version 2 at byte 12");
+  const auto opened = LogReader::open(file());
+  EXPECT_FALSE(opened);
+  EXPECT_EQ(error_of(opened), file().string() + ": unsupported log version 2 at byte 12");
 }
 
 TEST_P(LogFileDamaged, NegativeSize) {
   const std::string prefix = good_prefix();
   write_file(file(), prefix + message_bytes(4, 4, -5, "") + vision_message(5, 3, 4));
-  const LogVisionPackets log = read_vision_log(file());
-  EXPECT_EQ(log.error,
+  const LogVisionPackets log = read_vision_log(file()).value();
+  EXPECT_EQ(stop_of(log),
             file().string() + ": absurd message size -5 at byte " + std::to_string(prefix.size()));
   ASSERT_EQ(log.packets.size(), 3u) << "the packets before the bad message are kept";
+  EXPECT_EQ(log.ending, LogReader::Ending::damaged);
   EXPECT_EQ(log.packets[2].detection().frame_number(), 3u);
   EXPECT_EQ(log.receive_times_ns, (std::vector<std::int64_t>{1, 2, 3}));
 }
@@ -433,7 +443,7 @@ TEST_P(LogFileDamaged, NegativeSize) {
 TEST_P(LogFileDamaged, AbsurdSize) {
   const std::string prefix = good_prefix();
   write_file(file(), prefix + message_bytes(4, 4, 16 * 1024 * 1024 + 1, "abc"));
-  std::optional<LogReader> reader = LogReader::open(file(), nullptr);
+  Result<LogReader> reader = LogReader::open(file());
   ASSERT_TRUE(reader);
   LogMessage message;
   int read = 0;
@@ -447,10 +457,10 @@ TEST_P(LogFileDamaged, AbsurdSize) {
 TEST_P(LogFileDamaged, SixteenMebibytesIsNotAbsurdButTruncated) {
   const std::string prefix = good_prefix();
   write_file(file(), prefix + message_bytes(4, 1, 16 * 1024 * 1024, std::string(300'000, 'x')));
-  const LogVisionPackets log = read_vision_log(file());
-  EXPECT_EQ(log.error, file().string() + ": truncated message at byte " +
-                           std::to_string(prefix.size()) +
-                           ": header says 16777216 bytes, 300000 remain");
+  const LogVisionPackets log = read_vision_log(file()).value();
+  EXPECT_EQ(stop_of(log), file().string() + ": truncated message at byte " +
+                              std::to_string(prefix.size()) +
+                              ": header says 16777216 bytes, 300000 remain");
   EXPECT_EQ(log.packets.size(), 3u);
 }
 
@@ -458,27 +468,28 @@ TEST_P(LogFileDamaged, TruncatedLastMessage) {
   const std::string prefix = good_prefix();
   const std::string last = vision_message(4, 3, 4);
   write_file(file(), prefix + last.substr(0, 16 + 10));
-  const LogVisionPackets log = read_vision_log(file());
-  EXPECT_EQ(log.error, file().string() + ": truncated message at byte " +
-                           std::to_string(prefix.size()) + ": header says " +
-                           std::to_string(last.size() - 16) + " bytes, 10 remain");
+  const LogVisionPackets log = read_vision_log(file()).value();
+  EXPECT_EQ(stop_of(log), file().string() + ": truncated message at byte " +
+                              std::to_string(prefix.size()) + ": header says " +
+                              std::to_string(last.size() - 16) + " bytes, 10 remain");
   EXPECT_EQ(log.packets.size(), 3u);
+  EXPECT_EQ(log.ending, LogReader::Ending::cut_off);
   EXPECT_EQ(log.counters.vision, 3u);
 }
 
 TEST_P(LogFileDamaged, TruncatedInsideAMessageHeader) {
   const std::string prefix = good_prefix();
   write_file(file(), prefix + vision_message(4, 3, 4).substr(0, 5));
-  const LogVisionPackets log = read_vision_log(file());
-  EXPECT_EQ(log.error, file().string() + ": truncated message header at byte " +
-                           std::to_string(prefix.size()) + ": 16 bytes needed, 5 remain");
+  const LogVisionPackets log = read_vision_log(file()).value();
+  EXPECT_EQ(stop_of(log), file().string() + ": truncated message header at byte " +
+                              std::to_string(prefix.size()) + ": 16 bytes needed, 5 remain");
   EXPECT_EQ(log.packets.size(), 3u);
 }
 
 TEST_F(LogFileTest, CutOffGzipStreamIsAnErrorAndKeepsWhatCameBefore) {
   const fs::path whole = path("whole.log.gz");
   {
-    std::optional<LogWriter> writer = LogWriter::create(whole, nullptr);
+    Result<LogWriter> writer = LogWriter::create(whole);
     ASSERT_TRUE(writer);
     for (std::uint32_t i = 0; i < 2000; ++i)
       ASSERT_TRUE(writer->write_vision(detection_packet(i % 4, i), i));
@@ -490,9 +501,10 @@ TEST_F(LogFileTest, CutOffGzipStreamIsAnErrorAndKeepsWhatCameBefore) {
     std::ofstream out(cut, std::ios::binary);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
   }
-  const LogVisionPackets log = read_vision_log(cut);
-  EXPECT_NE(log.error.find(cut.string() + ": truncated message"), std::string::npos) << log.error;
-  EXPECT_NE(log.error.find("gzip stream is cut off"), std::string::npos) << log.error;
+  const LogVisionPackets log = read_vision_log(cut).value();
+  EXPECT_NE(stop_of(log).find(cut.string() + ": truncated message"), std::string::npos)
+      << stop_of(log);
+  EXPECT_NE(stop_of(log).find("gzip stream is cut off"), std::string::npos) << stop_of(log);
   EXPECT_GT(log.packets.size(), 100u);
   EXPECT_LT(log.packets.size(), 2000u);
   for (std::size_t i = 0; i < log.packets.size(); ++i)
@@ -500,9 +512,10 @@ TEST_F(LogFileTest, CutOffGzipStreamIsAnErrorAndKeepsWhatCameBefore) {
 }
 
 TEST_F(LogFileTest, MissingFileNamesThePathAndTheCause) {
-  std::string error;
-  EXPECT_FALSE(LogReader::open(path("nope.log"), &error));
-  EXPECT_EQ(error, path("nope.log").string() + ": cannot open: No such file or directory");
+  const auto opened = LogReader::open(path("nope.log"));
+  EXPECT_FALSE(opened);
+  EXPECT_EQ(error_of(opened),
+            path("nope.log").string() + ": cannot open: No such file or directory");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -513,7 +526,7 @@ TEST_F(LogFileTest, NextReusesThePayloadStorageAndAMovedReaderCarriesOn) {
   write_file(file, file_header() + message_bytes(1, 3, std::string(1000, 'a')) +
                        message_bytes(2, 3, std::string(500, 'b')) +
                        message_bytes(3, 3, std::string(700, 'c')));
-  std::optional<LogReader> reader = LogReader::open(file, nullptr);
+  Result<LogReader> reader = LogReader::open(file);
   ASSERT_TRUE(reader);
   LogMessage message;
   ASSERT_TRUE(reader->next(message));
@@ -536,14 +549,14 @@ TEST_F(LogFileTest, NextReusesThePayloadStorageAndAMovedReaderCarriesOn) {
 
 TEST_F(LogFileTest, WriterReportsUncreatableFiles) {
   const fs::path file = path("no/such/dir/x.log");
-  std::string error;
-  EXPECT_FALSE(LogWriter::create(file, &error));
-  EXPECT_EQ(error, file.string() + ": cannot create: No such file or directory");
+  const auto created = LogWriter::create(file);
+  EXPECT_FALSE(created);
+  EXPECT_EQ(error_of(created), file.string() + ": cannot create: No such file or directory");
 }
 
 TEST_F(LogFileTest, WriterRefusesWhatNoReaderWouldAccept) {
   const fs::path file = path("refuse.log");
-  std::optional<LogWriter> writer = LogWriter::create(file, nullptr);
+  Result<LogWriter> writer = LogWriter::create(file);
   ASSERT_TRUE(writer);
   EXPECT_FALSE(writer->write(6, 0, "index"));
   EXPECT_NE(writer->error().find("close(true)"), std::string::npos) << writer->error();
@@ -561,7 +574,7 @@ TEST_F(LogFileTest, WriterRefusesWhatNoReaderWouldAccept) {
   EXPECT_EQ(writer->error(), file.string() + ": already closed");
   EXPECT_FALSE(writer->close());
 
-  std::optional<LogReader> reader = LogReader::open(file, nullptr);
+  Result<LogReader> reader = LogReader::open(file);
   ASSERT_TRUE(reader);
   LogMessage message;
   ASSERT_TRUE(reader->next(message));
@@ -572,7 +585,7 @@ TEST_F(LogFileTest, WriterRefusesWhatNoReaderWouldAccept) {
 
 TEST_F(LogFileTest, WriterReportsAFullDisk) {
   if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
-  std::optional<LogWriter> writer = LogWriter::create("/dev/full", nullptr);
+  Result<LogWriter> writer = LogWriter::create("/dev/full");
   ASSERT_TRUE(writer);
   // Small writes sit in zlib's buffer, so the failure may show at write or at close.
   bool ok = true;

@@ -19,8 +19,10 @@ class GrsimSampling : public ::testing::TestWithParam<TeamColor> {};
 
 TEST_P(GrsimSampling, EverySampleHoldsElevenRobotsAtTheirReportedPositions) {
   const TeamColor color = GetParam();
-  const LogVisionPackets log = read_vision_log(grsim_log);
-  ASSERT_TRUE(log.error.empty()) << log.error;
+  const auto read = read_vision_log(grsim_log);
+  ASSERT_TRUE(read) << read.error().message;
+  const LogVisionPackets& log = *read;
+  ASSERT_FALSE(log.stopped_early) << log.stopped_early->message;
   ASSERT_EQ(log.packets.size(), 2353u);
 
   // Where grSim puts each robot (they stand still; a robot in an overlap is in two cameras).

@@ -22,6 +22,21 @@ namespace {
 
 namespace fs = std::filesystem;
 using Bytes = std::vector<std::uint8_t>;
+using LoadResult = Result<StoredTable, TableLoadError>;
+
+// The kind and message of a failed load or save. A load that succeeded has no kind and the
+// message "(loaded)", so an expected failure that did not happen fails its expectation instead
+// of reading an error that is not there.
+std::optional<TableFileError> kind_of(const LoadResult& result) {
+  if (result) return std::nullopt;
+  return result.error().kind;
+}
+std::string message_of(const LoadResult& result) {
+  return result ? "(loaded)" : result.error().message;
+}
+std::string message_of(const Result<void>& result) {
+  return result ? "(saved)" : result.error().message;
+}
 
 // Offsets of the layout documented in table_file.hpp; the tests patch fields through them.
 constexpr std::size_t version_offset = 8;
@@ -146,13 +161,13 @@ class TableFile : public ::testing::Test {
   }
 
   // Writes `bytes` as a table file, loads it and checks that loading left it untouched.
-  TableLoadResult load_bytes(const Bytes& bytes, std::optional<Grid> expected = std::nullopt) {
+  LoadResult load_bytes(const Bytes& bytes, std::optional<Grid> expected = std::nullopt) {
     const fs::path path = dir_ / "damaged.bin";
     write_bytes(path, bytes);
-    TableLoadResult result = load_table(path, expected);
+    LoadResult result = load_table(path, expected);
     EXPECT_EQ(read_bytes(path), bytes) << "loading changed the file";
     if (!result) {
-      EXPECT_NE(result.message.find(path.string()), std::string::npos) << result.message;
+      EXPECT_NE(message_of(result).find(path.string()), std::string::npos) << message_of(result);
     }
     return result;
   }
@@ -167,19 +182,16 @@ TEST_F(TableFile, RoundTripDense3x2) {
   const TableMetadata metadata = make_metadata();
   const fs::path path = dir_ / "table.bin";
 
-  const TableSaveResult saved = save_table(path, table, metadata);
-  ASSERT_TRUE(saved.ok) << saved.message;
-  EXPECT_TRUE(saved.message.empty());
+  const auto saved = save_table(path, table, metadata);
+  ASSERT_TRUE(saved) << message_of(saved);
   const std::uint64_t states = table.codec().state_count();
   EXPECT_EQ(fs::file_size(path), header_size + states * states * 4 + 4);  // dense encoding
 
-  const TableLoadResult loaded = load_table(path, grid);
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_EQ(loaded.error, TableFileError::none);
-  EXPECT_TRUE(loaded.message.empty());
-  EXPECT_TRUE(loaded.stored->table.is_dense());
-  EXPECT_EQ(loaded.stored->metadata, metadata);
-  expect_same_table(loaded.stored->table, table);
+  const LoadResult loaded = load_table(path, grid);
+  ASSERT_TRUE(loaded) << message_of(loaded);
+  EXPECT_TRUE(loaded->table.is_dense());
+  EXPECT_EQ(loaded->metadata, metadata);
+  expect_same_table(loaded->table, table);
   EXPECT_EQ(files_in_dir(), std::vector<std::string>{"table.bin"});
 }
 
@@ -190,47 +202,47 @@ TEST_F(TableFile, RoundTripSparse12x9WithoutAllocatingSSquared) {
   const TableMetadata metadata = make_metadata();
   const fs::path path = dir_ / "table.bin";
 
-  const TableSaveResult saved = save_table(path, table, metadata);
-  ASSERT_TRUE(saved.ok) << saved.message;
+  const auto saved = save_table(path, table, metadata);
+  ASSERT_TRUE(saved) << message_of(saved);
   EXPECT_EQ(fs::file_size(path),
             header_size + (table.rows_seen() + table.nonzero_entries()) * 8 + 4);  // sparse rows
 
-  const TableLoadResult loaded = load_table(path, grid);
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_FALSE(loaded.stored->table.is_dense());
+  const LoadResult loaded = load_table(path, grid);
+  ASSERT_TRUE(loaded) << message_of(loaded);
+  EXPECT_FALSE(loaded->table.is_dense());
   // S*S counts would be terabytes; the loaded table costs what it learned.
-  EXPECT_LT(loaded.stored->table.memory_bytes(), std::size_t{64} << 20);
-  EXPECT_EQ(loaded.stored->metadata, metadata);
-  expect_same_table(loaded.stored->table, table);
+  EXPECT_LT(loaded->table.memory_bytes(), std::size_t{64} << 20);
+  EXPECT_EQ(loaded->metadata, metadata);
+  expect_same_table(loaded->table, table);
 }
 
 TEST_F(TableFile, SparseFileOfASmallGridLoadsIntoEitherStorage) {
   const Grid grid(3, 2);
   const TransitionTable table = make_table(grid, 300, TableStorage::sparse);
   const fs::path path = dir_ / "table.bin";
-  ASSERT_TRUE(save_table(path, table, make_metadata()).ok);
+  ASSERT_TRUE(save_table(path, table, make_metadata()));
   EXPECT_LT(fs::file_size(path), 216u * 216u * 4u);  // written as rows, not densely
 
-  const TableLoadResult as_dense = load_table(path, grid, TableStorage::dense);
-  ASSERT_TRUE(as_dense) << as_dense.message;
-  EXPECT_TRUE(as_dense.stored->table.is_dense());
-  expect_same_table(as_dense.stored->table, table);
-  const TableLoadResult as_sparse = load_table(path, grid, TableStorage::sparse);
-  ASSERT_TRUE(as_sparse) << as_sparse.message;
-  EXPECT_FALSE(as_sparse.stored->table.is_dense());
-  expect_same_table(as_sparse.stored->table, table);
+  const LoadResult as_dense = load_table(path, grid, TableStorage::dense);
+  ASSERT_TRUE(as_dense) << message_of(as_dense);
+  EXPECT_TRUE(as_dense->table.is_dense());
+  expect_same_table(as_dense->table, table);
+  const LoadResult as_sparse = load_table(path, grid, TableStorage::sparse);
+  ASSERT_TRUE(as_sparse) << message_of(as_sparse);
+  EXPECT_FALSE(as_sparse->table.is_dense());
+  expect_same_table(as_sparse->table, table);
 }
 
 TEST_F(TableFile, EmptyTablesRoundTrip) {
   for (const TableStorage storage : {TableStorage::dense, TableStorage::sparse}) {
     const TransitionTable table(Grid(3, 2), storage);
     const fs::path path = dir_ / "empty.bin";
-    ASSERT_TRUE(save_table(path, table, TableMetadata{}).ok);
-    const TableLoadResult loaded = load_table(path, Grid(3, 2));
-    ASSERT_TRUE(loaded) << loaded.message;
-    EXPECT_EQ(loaded.stored->table.transitions(), 0u);
-    EXPECT_EQ(loaded.stored->table.nonzero_entries(), 0u);
-    EXPECT_EQ(loaded.stored->metadata, TableMetadata{});
+    ASSERT_TRUE(save_table(path, table, TableMetadata{}));
+    const LoadResult loaded = load_table(path, Grid(3, 2));
+    ASSERT_TRUE(loaded) << message_of(loaded);
+    EXPECT_EQ(loaded->table.transitions(), 0u);
+    EXPECT_EQ(loaded->table.nonzero_entries(), 0u);
+    EXPECT_EQ(loaded->metadata, TableMetadata{});
   }
 }
 
@@ -238,8 +250,7 @@ TEST_F(TableFile, FlippedByteIsDetectedAndTheFileIsLeftAlone) {
   for (const Grid grid : {Grid(3, 2), Grid(12, 9)}) {
     SCOPED_TRACE(grid.to_string());
     const fs::path path = dir_ / "table.bin";
-    ASSERT_TRUE(
-        save_table(path, make_table(grid, 400, TableStorage::automatic), make_metadata()).ok);
+    ASSERT_TRUE(save_table(path, make_table(grid, 400, TableStorage::automatic), make_metadata()));
     const Bytes original = read_bytes(path);
     const std::size_t size = original.size();
     // Each header field, including grid and size fields whose flip would still look valid
@@ -255,23 +266,22 @@ TEST_F(TableFile, FlippedByteIsDetectedAndTheFileIsLeftAlone) {
       SCOPED_TRACE("offset " + std::to_string(offset));
       Bytes damaged = original;
       damaged[offset] ^= 0x10;
-      const TableLoadResult result = load_bytes(damaged, grid);
-      EXPECT_FALSE(result);
-      EXPECT_FALSE(result.stored.has_value());
-      EXPECT_NE(result.error, TableFileError::none);
-      EXPECT_FALSE(result.message.empty());
+      const LoadResult result = load_bytes(damaged, grid);
+      ASSERT_FALSE(result);  // neither a table nor an error without a kind
+      EXPECT_FALSE(result.error().message.empty());
       if (offset < 8) {
-        EXPECT_EQ(result.error, TableFileError::not_a_table) << result.message;
+        EXPECT_EQ(kind_of(result), TableFileError::not_a_table) << message_of(result);
       } else if (offset < 12) {
-        EXPECT_EQ(result.error, TableFileError::wrong_version) << result.message;
+        EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
       } else {
         // The header checksum catches a flipped header field (grid and sizes included) before
         // it can pose as another grid or a truncation; the file checksum catches the rest.
-        EXPECT_EQ(result.error, TableFileError::corrupt) << result.message;
+        EXPECT_EQ(kind_of(result), TableFileError::corrupt) << message_of(result);
       }
       if (offset >= header_size) {
-        EXPECT_NE(result.message.find("checksum mismatch: the file is corrupt"), std::string::npos)
-            << result.message;
+        EXPECT_NE(message_of(result).find("checksum mismatch: the file is corrupt"),
+                  std::string::npos)
+            << message_of(result);
       }
     }
   }
@@ -281,8 +291,7 @@ TEST_F(TableFile, TruncatedFileIsDetectedAndTheFileIsLeftAlone) {
   for (const Grid grid : {Grid(3, 2), Grid(12, 9)}) {
     SCOPED_TRACE(grid.to_string());
     const fs::path path = dir_ / "table.bin";
-    ASSERT_TRUE(
-        save_table(path, make_table(grid, 400, TableStorage::automatic), make_metadata()).ok);
+    ASSERT_TRUE(save_table(path, make_table(grid, 400, TableStorage::automatic), make_metadata()));
     const Bytes original = read_bytes(path);
     const std::size_t size = original.size();
     // Empty, mid-magic, mid-version, mid-header, header only, mid-counts, no checksum, part of it.
@@ -291,45 +300,45 @@ TEST_F(TableFile, TruncatedFileIsDetectedAndTheFileIsLeftAlone) {
     for (const std::size_t length : lengths) {
       SCOPED_TRACE("length " + std::to_string(length));
       const Bytes cut(original.begin(), original.begin() + static_cast<std::ptrdiff_t>(length));
-      const TableLoadResult result = load_bytes(cut, grid);
-      EXPECT_EQ(result.error, TableFileError::truncated) << result.message;
-      EXPECT_NE(result.message.find("truncated: " + std::to_string(length) + " bytes"),
+      const LoadResult result = load_bytes(cut, grid);
+      EXPECT_EQ(kind_of(result), TableFileError::truncated) << message_of(result);
+      EXPECT_NE(message_of(result).find("truncated: " + std::to_string(length) + " bytes"),
                 std::string::npos)
-          << result.message;
+          << message_of(result);
     }
   }
 }
 
 TEST_F(TableFile, ShortOrForeignFileIsNotATable) {
   const Bytes foreign = {'S', 'S', 'X'};
-  EXPECT_EQ(load_bytes(foreign).error, TableFileError::not_a_table);
+  EXPECT_EQ(kind_of(load_bytes(foreign)), TableFileError::not_a_table);
   const std::string text =
       "grid 3x2\nthis is a text file, not a table, but long enough for a header"
       " and then some more bytes\n";
-  const TableLoadResult result = load_bytes(Bytes(text.begin(), text.end()));
-  EXPECT_EQ(result.error, TableFileError::not_a_table);
-  EXPECT_NE(result.message.find("not a table file"), std::string::npos) << result.message;
+  const LoadResult result = load_bytes(Bytes(text.begin(), text.end()));
+  EXPECT_EQ(kind_of(result), TableFileError::not_a_table);
+  EXPECT_NE(message_of(result).find("not a table file"), std::string::npos) << message_of(result);
 }
 
 TEST_F(TableFile, TrailingBytesAreCorrupt) {
   const fs::path path = dir_ / "table.bin";
-  ASSERT_TRUE(save_table(path, make_table(Grid(3, 2), 50, TableStorage::automatic), {}).ok);
+  ASSERT_TRUE(save_table(path, make_table(Grid(3, 2), 50, TableStorage::automatic), {}));
   Bytes bytes = read_bytes(path);
   bytes.push_back(0);
-  const TableLoadResult result = load_bytes(bytes);
-  EXPECT_EQ(result.error, TableFileError::corrupt);
-  EXPECT_NE(result.message.find("1 trailing bytes"), std::string::npos) << result.message;
+  const LoadResult result = load_bytes(bytes);
+  EXPECT_EQ(kind_of(result), TableFileError::corrupt);
+  EXPECT_NE(message_of(result).find("1 trailing bytes"), std::string::npos) << message_of(result);
 }
 
 TEST_F(TableFile, WrongGridNamesBothGrids) {
   const fs::path path = dir_ / "table.bin";
-  ASSERT_TRUE(save_table(path, make_table(Grid(6, 4), 50, TableStorage::automatic), {}).ok);
+  ASSERT_TRUE(save_table(path, make_table(Grid(6, 4), 50, TableStorage::automatic), {}));
   const Bytes before = read_bytes(path);
 
-  const TableLoadResult result = load_table(path, Grid(3, 2));
+  const LoadResult result = load_table(path, Grid(3, 2));
   EXPECT_FALSE(result);
-  EXPECT_EQ(result.error, TableFileError::wrong_grid);
-  EXPECT_EQ(result.message, path.string() + " holds a 6x4 grid, expected 3x2");
+  EXPECT_EQ(kind_of(result), TableFileError::wrong_grid);
+  EXPECT_EQ(message_of(result), path.string() + " holds a 6x4 grid, expected 3x2");
   EXPECT_EQ(read_bytes(path), before);
   EXPECT_TRUE(load_table(path, Grid(6, 4)));
   EXPECT_TRUE(load_table(path));  // no expectation: any grid
@@ -337,22 +346,22 @@ TEST_F(TableFile, WrongGridNamesBothGrids) {
 
 TEST_F(TableFile, WrongVersionNamesBothVersions) {
   const fs::path path = dir_ / "table.bin";
-  ASSERT_TRUE(save_table(path, make_table(Grid(3, 2), 50, TableStorage::automatic), {}).ok);
+  ASSERT_TRUE(save_table(path, make_table(Grid(3, 2), 50, TableStorage::automatic), {}));
   Bytes bytes = read_bytes(path);
   ASSERT_EQ(get_u32(bytes, version_offset), table_file_version);
   // The checksums are left stale on purpose: load_table checks the version before any checksum,
   // since another version may lay out or checksum its header differently.
   put_u32(bytes, version_offset, 2);
-  const TableLoadResult result = load_bytes(bytes);
-  EXPECT_EQ(result.error, TableFileError::wrong_version) << result.message;
-  EXPECT_NE(result.message.find("version 2"), std::string::npos) << result.message;
-  EXPECT_NE(result.message.find("version 1"), std::string::npos) << result.message;
+  const LoadResult result = load_bytes(bytes);
+  EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 2"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 1"), std::string::npos) << message_of(result);
 }
 
 TEST_F(TableFile, InconsistentContentUnderValidChecksumsIsCorrupt) {
   const fs::path path = dir_ / "table.bin";
   const TransitionTable table = make_table(Grid(12, 9), 50, TableStorage::automatic);
-  ASSERT_TRUE(save_table(path, table, {}).ok);
+  ASSERT_TRUE(save_table(path, table, {}));
   const Bytes original = read_bytes(path);
   const std::size_t first_row = header_size;  // u32 from, u32 n, then (u32 to, u32 count) pairs
   const std::uint32_t states = table.codec().state_count();
@@ -361,9 +370,9 @@ TEST_F(TableFile, InconsistentContentUnderValidChecksumsIsCorrupt) {
   const auto expect_corrupt = [&](Bytes bytes, const std::string& reason) {
     SCOPED_TRACE(reason);
     reseal(bytes);
-    const TableLoadResult result = load_bytes(bytes);
-    EXPECT_EQ(result.error, TableFileError::corrupt) << result.message;
-    EXPECT_NE(result.message.find(reason), std::string::npos) << result.message;
+    const LoadResult result = load_bytes(bytes);
+    EXPECT_EQ(kind_of(result), TableFileError::corrupt) << message_of(result);
+    EXPECT_NE(message_of(result).find(reason), std::string::npos) << message_of(result);
   };
   {
     Bytes bytes = original;
@@ -398,7 +407,7 @@ TEST_F(TableFile, InconsistentContentUnderValidChecksumsIsCorrupt) {
   {
     // A dense file whose row count disagrees with its grid, though its length still fits.
     const fs::path dense_path = dir_ / "dense.bin";
-    ASSERT_TRUE(save_table(dense_path, make_table(Grid(3, 2), 50, TableStorage::dense), {}).ok);
+    ASSERT_TRUE(save_table(dense_path, make_table(Grid(3, 2), 50, TableStorage::dense), {}));
     Bytes bytes = read_bytes(dense_path);
     bytes[rows_offset] ^= 1;
     expect_corrupt(bytes, "dense row and entry counts");
@@ -412,14 +421,15 @@ TEST_F(TableFile, InconsistentContentUnderValidChecksumsIsCorrupt) {
 
 TEST_F(TableFile, MissingFileCannotBeOpened) {
   const fs::path path = dir_ / "nothing-here.bin";
-  const TableLoadResult result = load_table(path);
-  EXPECT_EQ(result.error, TableFileError::cannot_open);
-  EXPECT_NE(result.message.find(path.string()), std::string::npos) << result.message;
-  EXPECT_NE(result.message.find(std::strerror(ENOENT)), std::string::npos) << result.message;
+  const LoadResult result = load_table(path);
+  EXPECT_EQ(kind_of(result), TableFileError::cannot_open);
+  EXPECT_NE(message_of(result).find(path.string()), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find(std::strerror(ENOENT)), std::string::npos)
+      << message_of(result);
   EXPECT_FALSE(fs::exists(path));
 
-  const TableLoadResult folder = load_table(dir_);
-  EXPECT_EQ(folder.error, TableFileError::cannot_open) << folder.message;
+  const LoadResult folder = load_table(dir_);
+  EXPECT_EQ(kind_of(folder), TableFileError::cannot_open) << message_of(folder);
 }
 
 TEST_F(TableFile, SaveInterruptedBeforeRenameLeavesTheOldFile) {
@@ -428,7 +438,7 @@ TEST_F(TableFile, SaveInterruptedBeforeRenameLeavesTheOldFile) {
   const TransitionTable old_table = make_table(grid, 100, TableStorage::automatic, 1);
   const TransitionTable new_table = make_table(grid, 200, TableStorage::automatic, 2);
   ASSERT_NE(entries_of(old_table), entries_of(new_table));
-  ASSERT_TRUE(save_table(path, old_table, make_metadata()).ok);
+  ASSERT_TRUE(save_table(path, old_table, make_metadata()));
   const Bytes before = read_bytes(path);
 
   bool hook_ran = false;
@@ -441,34 +451,35 @@ TEST_F(TableFile, SaveInterruptedBeforeRenameLeavesTheOldFile) {
     for (const auto& name : names) {
       if (name == "table.bin") continue;
       EXPECT_EQ(name.rfind("table.bin.tmp-", 0), 0u) << name;
-      const TableLoadResult temp = load_table(dir_ / name, grid);
-      EXPECT_TRUE(temp) << temp.message;
-      if (temp) expect_same_table(temp.stored->table, new_table);
+      const LoadResult temp = load_table(dir_ / name, grid);
+      EXPECT_TRUE(temp) << message_of(temp);
+      if (temp) expect_same_table(temp->table, new_table);
     }
     return false;
   };
-  const TableSaveResult aborted = save_table(path, new_table, make_metadata(), hooks);
+  const auto aborted = save_table(path, new_table, make_metadata(), hooks);
   EXPECT_TRUE(hook_ran);
-  EXPECT_FALSE(aborted.ok);
-  EXPECT_NE(aborted.message.find(path.string()), std::string::npos) << aborted.message;
+  EXPECT_FALSE(aborted);
+  EXPECT_NE(message_of(aborted).find(path.string()), std::string::npos) << message_of(aborted);
   EXPECT_EQ(read_bytes(path), before);
   EXPECT_EQ(files_in_dir(), std::vector<std::string>{"table.bin"});
 
   // The same save without the interruption replaces the file.
-  ASSERT_TRUE(save_table(path, new_table, make_metadata()).ok);
-  const TableLoadResult loaded = load_table(path, grid);
-  ASSERT_TRUE(loaded) << loaded.message;
-  expect_same_table(loaded.stored->table, new_table);
+  ASSERT_TRUE(save_table(path, new_table, make_metadata()));
+  const LoadResult loaded = load_table(path, grid);
+  ASSERT_TRUE(loaded) << message_of(loaded);
+  expect_same_table(loaded->table, new_table);
   EXPECT_EQ(files_in_dir(), std::vector<std::string>{"table.bin"});
 }
 
 TEST_F(TableFile, SaveIntoMissingFolderFailsCleanly) {
   const fs::path path = dir_ / "missing" / "table.bin";
-  const TableSaveResult result =
+  const auto result =
       save_table(path, make_table(Grid(3, 2), 10, TableStorage::automatic), make_metadata());
-  EXPECT_FALSE(result.ok);
-  EXPECT_NE(result.message.find(path.string()), std::string::npos) << result.message;
-  EXPECT_NE(result.message.find(std::strerror(ENOENT)), std::string::npos) << result.message;
+  EXPECT_FALSE(result);
+  EXPECT_NE(message_of(result).find(path.string()), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find(std::strerror(ENOENT)), std::string::npos)
+      << message_of(result);
   EXPECT_FALSE(fs::exists(dir_ / "missing"));
   EXPECT_TRUE(files_in_dir().empty());
 }
@@ -481,9 +492,9 @@ TEST_F(TableFile, SaveRefusesMetadataThatCouldNotBeLoaded) {
   TableMetadata no_field;
   no_field.field.width_mm = -1.0;
   for (const TableMetadata& metadata : {no_step, no_field}) {
-    const TableSaveResult result = save_table(path, table, metadata);
-    EXPECT_FALSE(result.ok);
-    EXPECT_NE(result.message.find(path.string()), std::string::npos) << result.message;
+    const auto result = save_table(path, table, metadata);
+    EXPECT_FALSE(result);
+    EXPECT_NE(message_of(result).find(path.string()), std::string::npos) << message_of(result);
   }
   EXPECT_TRUE(files_in_dir().empty());
 }

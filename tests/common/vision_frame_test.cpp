@@ -860,11 +860,10 @@ TEST(VisionFrameConversion, AReusedFrameGetsExactlyTheNewRobots) {
 // The vision datagrams of a log file as they came off the network: the payloads of its type 4
 // messages, unparsed.
 std::vector<std::string> vision_datagrams(const fs::path& path, std::string* error = nullptr) {
-  std::string open_error;
-  std::optional<LogReader> reader = LogReader::open(path, &open_error);
+  Result<LogReader> reader = LogReader::open(path);
   std::vector<std::string> datagrams;
   if (!reader) {
-    ADD_FAILURE() << open_error;
+    ADD_FAILURE() << reader.error().message;
     return datagrams;
   }
   LogMessage message;

@@ -11,9 +11,9 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 
@@ -85,13 +85,13 @@ TEST(Daemons, TrainerTableHoldsExactlyTheLibrarysTransitions) {
   produce(dir, group, 11, 300);
   stop_trainer_after(trainer, 300);
 
-  const TableLoadResult loaded = load_table(dir / "table.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
+  const auto loaded = load_table(dir / "table.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.error().message;
   std::uint64_t samples = 0;
   const TransitionTable expected = reference_table(11, 300, 1, &samples);
   EXPECT_GT(expected.transitions(), 1000u);
-  EXPECT_EQ(entries(loaded.stored->table), entries(expected));
-  EXPECT_EQ(loaded.stored->metadata.samples, samples);
+  EXPECT_EQ(entries(loaded->table), entries(expected));
+  EXPECT_EQ(loaded->metadata.samples, samples);
 }
 
 TEST(Daemons, FourCameraFeedTrainsTheSameTableAsOneCamera) {
@@ -102,9 +102,9 @@ TEST(Daemons, FourCameraFeedTrainsTheSameTableAsOneCamera) {
   ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
   produce(dir, group, 21, 200, {"--cameras", "4", "--camera-overlap", "400"});
   stop_trainer_after(trainer, 200);
-  const TableLoadResult loaded = load_table(dir / "table.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_EQ(entries(loaded.stored->table), entries(reference_table(21, 200, 1)));
+  const auto loaded = load_table(dir / "table.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(entries(loaded->table), entries(reference_table(21, 200, 1)));
 }
 
 TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
@@ -171,8 +171,7 @@ TEST(Daemons, ProducerPacketsRoundTripThroughOurSchema) {
   TempDir dir;
   const std::string group = new_group();
   boost::asio::io_context io;
-  std::string error;
-  net::MulticastReceiver receiver(io, *net::parse_multicast_endpoint(group, &error));
+  net::MulticastReceiver receiver(io, net::parse_multicast_endpoint(group).value());
   std::vector<std::string> datagrams;
   receiver.start([&](std::span<const std::byte> data, const net::udp::endpoint&) {
     datagrams.emplace_back(reinterpret_cast<const char*>(data.data()), data.size());
@@ -211,9 +210,9 @@ TEST(Daemons, TrainerSavesOnSigtermAndResumesItsCounts) {
     produce(dir, group, 5, 100);
     stop_trainer_after(trainer, 100);
     const auto loaded = load_table(table_path, Grid(3, 2));
-    ASSERT_TRUE(loaded) << loaded.message;
-    first_transitions = loaded.stored->table.transitions();
-    EXPECT_EQ(entries(loaded.stored->table), entries(reference_table(5, 100)));
+    ASSERT_TRUE(loaded) << loaded.error().message;
+    first_transitions = loaded->table.transitions();
+    EXPECT_EQ(entries(loaded->table), entries(reference_table(5, 100)));
   }
   {
     ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer2");
@@ -223,9 +222,9 @@ TEST(Daemons, TrainerSavesOnSigtermAndResumesItsCounts) {
     stop_trainer_after(trainer, 100);
   }
   const auto loaded = load_table(table_path, Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_EQ(loaded.stored->table.transitions(), 2 * first_transitions);
-  EXPECT_EQ(loaded.stored->metadata.samples, 200u);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(loaded->table.transitions(), 2 * first_transitions);
+  EXPECT_EQ(loaded->metadata.samples, 200u);
 }
 
 TEST(Daemons, TrainerRefusesATableOfAnotherGridUnlessReset) {
@@ -319,8 +318,8 @@ TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
   const auto a = load_table(dir / "a.bin", Grid(3, 2));
   const auto b = load_table(dir / "b.bin", Grid(3, 2));
   ASSERT_TRUE(a && b);
-  EXPECT_EQ(entries(a.stored->table), entries(reference_table(6, 40)));
-  EXPECT_EQ(b.stored->table.transitions(), 0u);
+  EXPECT_EQ(entries(a->table), entries(reference_table(6, 40)));
+  EXPECT_EQ(b->table.transitions(), 0u);
   EXPECT_NE(trainer_b.stderr_text().find("packets=0 "), std::string::npos);
 }
 

@@ -13,10 +13,10 @@
 #include <thread>
 
 #include "child_process.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/sampler.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -40,7 +40,7 @@ class Listener {
   };
 
   explicit Listener(const std::string& group)
-      : receiver_(io_, *net::parse_multicast_endpoint(group)) {
+      : receiver_(io_, net::parse_multicast_endpoint(group).value()) {
     receiver_.start([this](std::span<const std::byte> data, const net::udp::endpoint&) {
       std::lock_guard lock(mutex_);
       datagrams_.push_back(
@@ -95,9 +95,8 @@ SSL_WrapperPacket detection_packet(std::uint32_t frame_number, double t_capture)
 // receive_time(i). Returns the offset of each message header.
 std::vector<std::uint64_t> write_paced_log(const std::filesystem::path& path, int n,
                                            const std::function<std::int64_t(int)>& receive_time) {
-  std::string error;
-  auto writer = LogWriter::create(path, &error);
-  EXPECT_TRUE(writer) << error;
+  auto writer = LogWriter::create(path);
+  EXPECT_TRUE(writer) << writer.error().message;
   std::vector<std::uint64_t> offsets;
   for (int i = 0; i < n; ++i) {
     offsets.push_back(writer->offset());
@@ -180,9 +179,8 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
       }
     }
 
-    std::string error;
-    auto reader = LogReader::open(path, &error);
-    ASSERT_TRUE(reader) << error;
+    auto reader = LogReader::open(path);
+    ASSERT_TRUE(reader) << reader.error().message;
     LogMessage message;
     std::size_t i = 0;
     while (reader->next(message)) {
@@ -233,8 +231,8 @@ TEST(Logs, ReplaySendsExactlyTheFilesPackets) {
                 dir.path(), "write-log", 20s)
                 .exit_code,
             0);
-  const LogVisionPackets file = read_vision_log(path);
-  ASSERT_EQ(file.error, "");
+  const LogVisionPackets file = read_vision_log(path).value();
+  ASSERT_FALSE(file.stopped_early) << file.stopped_early->message;
   const std::string group = new_group();
   Listener listener(group);
   const auto result = replay(dir, path, group, {"--speed", "0"});
@@ -253,9 +251,8 @@ TEST(Logs, ReplaySendsLegacyVisionAndCountsWhatItSkips) {
   TempDir dir;
   const auto path = dir / "mixed.log";
   {
-    std::string error;
-    auto writer = LogWriter::create(path, &error);
-    ASSERT_TRUE(writer) << error;
+    auto writer = LogWriter::create(path);
+    ASSERT_TRUE(writer) << writer.error().message;
     const auto vision = static_cast<std::int32_t>(LogMessageType::vision);
     const auto legacy = static_cast<std::int32_t>(LogMessageType::legacy_vision);
     ASSERT_TRUE(writer->write(static_cast<std::int32_t>(LogMessageType::referee), unix_ns_paced(0),
@@ -488,8 +485,9 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
                             std::chrono::system_clock::now().time_since_epoch())
                             .count();
 
-  const LogVisionPackets recorded = read_vision_log(path);
-  ASSERT_EQ(recorded.error, "");  // complete: the gzip stream was closed properly
+  const LogVisionPackets recorded = read_vision_log(path).value();
+  ASSERT_FALSE(recorded.stopped_early)
+      << recorded.stopped_early->message;  // complete: the gzip stream was closed properly
   EXPECT_EQ(recorded.counters.messages, expected.size());
   ASSERT_EQ(recorded.packets.size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {
@@ -547,7 +545,7 @@ TEST(Logs, RecordCountsButSkipsDatagramsThatAreNotVisionAndStopsAtItsCount) {
                         dir.path(), "record");
   ASSERT_TRUE(recorder.wait_for_stderr("recording", 5s)) << recorder.stderr_text();
   boost::asio::io_context io;
-  net::MulticastSender sender(io, *net::parse_multicast_endpoint(group));
+  net::MulticastSender sender(io, net::parse_multicast_endpoint(group).value());
   sender.open();
   const std::string garbage = "\xff\xff\xff garbage";
   ASSERT_TRUE(sender.send(std::as_bytes(std::span(garbage))));
@@ -562,8 +560,8 @@ TEST(Logs, RecordCountsButSkipsDatagramsThatAreNotVisionAndStopsAtItsCount) {
   EXPECT_NE(recorder.stderr_text().find("done: recorded=5 "), std::string::npos)
       << recorder.stderr_text();
   EXPECT_NE(recorder.stderr_text().find("skipped=1 "), std::string::npos) << recorder.stderr_text();
-  const LogVisionPackets recorded = read_vision_log(path);
-  EXPECT_EQ(recorded.error, "");
+  const LogVisionPackets recorded = read_vision_log(path).value();
+  EXPECT_FALSE(recorded.stopped_early) << recorded.stopped_early->message;
   EXPECT_EQ(recorded.counters.index, 1u);  // --index
   ASSERT_EQ(recorded.packets.size(), 5u);
   for (std::uint32_t i = 0; i < 5; ++i)
@@ -580,8 +578,8 @@ TEST(Logs, RecordStopsAfterItsDurationWithAValidFile) {
       "record", 5s);
   EXPECT_EQ(result.exit_code, 0) << result.err;
   EXPECT_GE(Clock::now() - started, 300ms);
-  const LogVisionPackets recorded = read_vision_log(path);
-  EXPECT_EQ(recorded.error, "");
+  const LogVisionPackets recorded = read_vision_log(path).value();
+  EXPECT_FALSE(recorded.stopped_early) << recorded.stopped_early->message;
   EXPECT_TRUE(recorded.packets.empty());
 
   // An existing recording is not overwritten by accident.

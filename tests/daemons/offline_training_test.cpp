@@ -5,8 +5,8 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/log_file.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 
@@ -26,9 +26,8 @@ void write_simulated_log(const std::filesystem::path& path, std::uint64_t seed, 
   config.seed = seed;
   config.cameras = cameras;
   sim::SimulatedVision vision(config);
-  std::string error;
-  auto writer = LogWriter::create(path, &error);
-  ASSERT_TRUE(writer) << error;
+  auto writer = LogWriter::create(path);
+  ASSERT_TRUE(writer) << writer.error().message;
   for (int i = 0; i < formations; ++i) {
     const sim::SimulatedFormation f = vision.next();
     for (const auto& packet : f.packets) {
@@ -47,7 +46,8 @@ TransitionTable library_table(const std::vector<std::filesystem::path>& logs,
   Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
   for (const auto& log : logs) {
     training.start_new_stream();
-    for (const auto& packet : read_vision_log(log).packets) training.add(packet);
+    const LogVisionPackets read = read_vision_log(log).value();
+    for (const auto& packet : read.packets) training.add(packet);
   }
   if (samples) *samples = training.samples();
   return training.table();
@@ -69,12 +69,12 @@ TEST(OfflineTraining, FromLogTrainsWhatTheLibraryComputes) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find("skipped 400 referee, 400 tracker"), std::string::npos) << run.err;
   const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
+  ASSERT_TRUE(loaded) << loaded.error().message;
   std::uint64_t samples = 0;
   const TransitionTable expected = library_table({dir / "a.log.gz"}, &samples);
   EXPECT_EQ(samples, 400u);
-  EXPECT_EQ(entries(loaded.stored->table), entries(expected));
-  EXPECT_EQ(loaded.stored->metadata.samples, 400u);
+  EXPECT_EQ(entries(loaded->table), entries(expected));
+  EXPECT_EQ(loaded->metadata.samples, 400u);
 }
 
 TEST(OfflineTraining, MergeEqualsTrainingOnBothLogsTogether) {
@@ -106,11 +106,10 @@ TEST(OfflineTraining, MergeEqualsTrainingOnBothLogsTogether) {
   const auto merged = load_table(dir / "merged.bin", Grid(3, 2));
   const auto together = load_table(dir / "tab.bin", Grid(3, 2));
   ASSERT_TRUE(merged && together);
-  EXPECT_EQ(entries(merged.stored->table), entries(together.stored->table));
-  EXPECT_EQ(merged.stored->metadata.samples, 800u);
-  EXPECT_EQ(together.stored->metadata.samples, 800u);
-  EXPECT_EQ(entries(together.stored->table),
-            entries(library_table({dir / "a.log", dir / "b.log.gz"})));
+  EXPECT_EQ(entries(merged->table), entries(together->table));
+  EXPECT_EQ(merged->metadata.samples, 800u);
+  EXPECT_EQ(together->metadata.samples, 800u);
+  EXPECT_EQ(entries(together->table), entries(library_table({dir / "a.log", dir / "b.log.gz"})));
 }
 
 TEST(OfflineTraining, MergeRefusesDifferentGridsClearly) {
@@ -153,9 +152,9 @@ TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
   EXPECT_NE(run.err.find("truncated message at byte"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("missing.log: cannot open"), std::string::npos) << run.err;
   const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_EQ(entries(loaded.stored->table), entries(library_table({dir / "a.log"})));
-  EXPECT_GT(loaded.stored->table.transitions(), 300u);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(entries(loaded->table), entries(library_table({dir / "a.log"})));
+  EXPECT_GT(loaded->table.transitions(), 300u);
 }
 
 // The live path and the offline path are the same code: a paced replay of a log into a live
@@ -188,9 +187,9 @@ TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
   const auto a = load_table(dir / "offline.bin", Grid(3, 2));
   const auto b = load_table(dir / "live.bin", Grid(3, 2));
   ASSERT_TRUE(a && b);
-  EXPECT_GT(a.stored->table.transitions(), 1500u);
-  EXPECT_EQ(entries(a.stored->table), entries(b.stored->table));
-  EXPECT_EQ(a.stored->metadata.samples, b.stored->metadata.samples);
+  EXPECT_GT(a->table.transitions(), 1500u);
+  EXPECT_EQ(entries(a->table), entries(b->table));
+  EXPECT_EQ(a->metadata.samples, b->metadata.samples);
 }
 
 TEST(OfflineTraining, ResumesAnExistingTable) {
@@ -205,7 +204,7 @@ TEST(OfflineTraining, ResumesAnExistingTable) {
   }
   const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
   ASSERT_TRUE(loaded);
-  EXPECT_EQ(loaded.stored->table.transitions(), 2 * library_table({dir / "a.log"}).transitions());
+  EXPECT_EQ(loaded->table.transitions(), 2 * library_table({dir / "a.log"}).transitions());
 }
 
 }  // namespace

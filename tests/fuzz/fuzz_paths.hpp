@@ -402,15 +402,15 @@ struct RawRead {
 
 inline RawRead read_raw_log(const std::filesystem::path& path, Violations& v) {
   RawRead out;
-  std::optional<LogReader> reader = LogReader::open(path, &out.error);
+  Result<LogReader> reader = LogReader::open(path);
   if (!reader) {
+    out.error = reader.error().message;
     if (out.error.empty() || !starts_with(out.error, path.string() + ": ")) {
       v.fail("open failed without an error naming the path");
     }
     return out;
   }
   out.opened = true;
-  if (!out.error.empty()) v.fail("open succeeded but set an error");
   std::uint64_t expected_offset = kLogFileHeaderSize;
   LogMessage message;
   while (reader->next(message)) {
@@ -455,10 +455,9 @@ inline LogOutcome run_log_path(const std::uint8_t* data, std::size_t size,
 
   if (raw.opened) {
     // The replay path: next_vision into the sampler, as ssl-trainer --replay and ssl-evaluate do.
-    std::string error;
-    std::optional<LogReader> reader = LogReader::open(path, &error);
+    Result<LogReader> reader = LogReader::open(path);
     if (!reader) {
-      v.fail("the second open of the same file failed: " + error);
+      v.fail("the second open of the same file failed: " + reader.error().message);
     } else {
       SamplerConfig config;
       config.step_s = 0.1;
@@ -519,8 +518,8 @@ inline LogOutcome run_log_path(const std::uint8_t* data, std::size_t size,
 // ---- Path 3: table files
 
 struct TableOutcome {
-  TableFileError error = TableFileError::none;        // the bytes as given
-  TableFileError fixed_error = TableFileError::none;  // with both checksums fixed
+  std::optional<TableFileError> error;        // the bytes as given; nullopt if they loaded
+  std::optional<TableFileError> fixed_error;  // with both checksums fixed
   bool fixed_tried = false;
   std::string violation;
 };
@@ -528,26 +527,21 @@ struct TableOutcome {
 inline constexpr std::size_t table_header_size = 84;
 
 // A load's result against the file it read: failures name the path, successes match the header.
-inline void check_load(const TableLoadResult& r, const std::filesystem::path& path,
-                       const std::string& bytes, Violations& v, const std::string& where) {
-  if (r.error != TableFileError::none) {
-    if (r.stored) v.fail(where + ": failed load returned a table");
-    if (!starts_with(r.message, path.string()))
+inline void check_load(const Result<StoredTable, TableLoadError>& r,
+                       const std::filesystem::path& path, const std::string& bytes, Violations& v,
+                       const std::string& where) {
+  if (!r) {
+    if (!starts_with(r.error().message, path.string()))
       v.fail(where + ": error message does not name the path");
     return;
   }
-  if (!r.stored) {
-    v.fail(where + ": no error but no table");
-    return;
-  }
-  if (!r.message.empty()) v.fail(where + ": success with a message");
   if (bytes.size() < table_header_size + 4) {
     v.fail(where + ": loaded a file shorter than header and checksum");
     return;
   }
   const auto* h = reinterpret_cast<const std::uint8_t*>(bytes.data());
-  const TransitionTable& table = r.stored->table;
-  const TableMetadata& m = r.stored->metadata;
+  const TransitionTable& table = r->table;
+  const TableMetadata& m = r->metadata;
   if (table.grid().length() != static_cast<int>(le32(h + 12)) ||
       table.grid().width() != static_cast<int>(le32(h + 16))) {
     v.fail(where + ": grid differs from the header");
@@ -577,28 +571,30 @@ inline TableOutcome run_table_path(const std::uint8_t* data, std::size_t size,
 
   // Loads `bytes` and checks the result; the table if it loaded.
   const auto load = [&](const std::string& bytes, const std::string& where,
-                        TableFileError& error) -> std::optional<StoredTable> {
+                        std::optional<TableFileError>& error) -> std::optional<StoredTable> {
     if (!write_bytes(path, reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size())) {
       v.fail("cannot write " + path.string());
       return std::nullopt;
     }
-    TableLoadResult r = load_table(path);
-    error = r.error;
+    Result<StoredTable, TableLoadError> r = load_table(path);
+    error = r ? std::nullopt : std::optional(r.error().kind);
     check_load(r, path, bytes, v, where);
     if (read_bytes(path) != bytes) v.fail(where + ": loading changed the file");
-    if (!r.stored) return std::nullopt;
+    if (!r) return std::nullopt;
     // Other storage and an expected grid: same counts, or wrong_grid for another grid.
-    const TransitionTable& table = r.stored->table;
-    TableLoadResult sparse = load_table(path, table.grid(), TableStorage::sparse);
+    const TransitionTable& table = r->table;
+    const auto sparse = load_table(path, table.grid(), TableStorage::sparse);
     if (!sparse) {
-      v.fail(where + ": loads automatically but not sparse with its own grid: " + sparse.message);
-    } else if (entries_of(sparse.stored->table) != entries_of(table)) {
+      v.fail(where +
+             ": loads automatically but not sparse with its own grid: " + sparse.error().message);
+    } else if (entries_of(sparse->table) != entries_of(table)) {
       v.fail(where + ": sparse storage loaded other counts");
     }
     const Grid other = table.grid() == Grid(3, 2) ? Grid(2, 3) : Grid(3, 2);
-    if (load_table(path, other).error != TableFileError::wrong_grid)
+    const auto wrong = load_table(path, other);
+    if (wrong || wrong.error().kind != TableFileError::wrong_grid)
       v.fail(where + ": another grid was accepted");
-    return std::move(r.stored);
+    return std::move(*r);
   };
 
   std::optional<StoredTable> loaded = load(input, "as given", out.error);
@@ -623,15 +619,15 @@ inline TableOutcome run_table_path(const std::uint8_t* data, std::size_t size,
   if (loaded) {
     const std::filesystem::path copy = dir / "roundtrip.sslft";
     remove_file(copy);
-    const TableSaveResult saved = save_table(copy, loaded->table, loaded->metadata);
+    const auto saved = save_table(copy, loaded->table, loaded->metadata);
     if (!saved) {
-      v.fail("a loaded table does not save: " + saved.message);
+      v.fail("a loaded table does not save: " + saved.error().message);
     } else {
-      const TableLoadResult again = load_table(copy, loaded->table.grid());
+      const auto again = load_table(copy, loaded->table.grid());
       if (!again) {
-        v.fail("a saved table does not load: " + again.message);
-      } else if (!(again.stored->metadata == loaded->metadata) ||
-                 entries_of(again.stored->table) != entries_of(loaded->table)) {
+        v.fail("a saved table does not load: " + again.error().message);
+      } else if (!(again->metadata == loaded->metadata) ||
+                 entries_of(again->table) != entries_of(loaded->table)) {
         v.fail("a saved table loads back different");
       }
     }

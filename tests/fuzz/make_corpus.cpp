@@ -159,9 +159,8 @@ void write_sampler_corpus(const fs::path& dir, const std::vector<SSL_WrapperPack
 
 void write_log_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket>& grsim) {
   const auto write_log = [&](const fs::path& path, bool indexed) {
-    std::string error;
-    auto writer = LogWriter::create(path, &error);
-    if (!writer) throw std::runtime_error(error);
+    auto writer = LogWriter::create(path);
+    if (!writer) throw std::runtime_error(writer.error().message);
     std::int64_t t = 1'000'000'000;
     for (std::size_t i = 0; i < 4; ++i) writer->write_vision(grsim[i], t += 16'000'000);
     for (const auto& packet : simulated_stream(1.0, 0.5, 2))
@@ -190,8 +189,8 @@ void write_log_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket>&
 }
 
 void save(const fs::path& path, const TransitionTable& table, std::uint64_t samples) {
-  const TableSaveResult result = save_table(path, table, TableMetadata{FieldSize{}, 2.0, samples});
-  if (!result) throw std::runtime_error(result.message);
+  const auto result = save_table(path, table, TableMetadata{FieldSize{}, 2.0, samples});
+  if (!result) throw std::runtime_error(result.error().message);
 }
 
 void write_table_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket>& grsim) {
@@ -235,9 +234,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const LogVisionPackets log = read_vision_log(argv[1]);
-    if (!log.error.empty() || log.packets.size() < 8) {
-      std::fprintf(stderr, "cannot read %s: %s\n", argv[1], log.error.c_str());
+    const auto read = read_vision_log(argv[1]);
+    if (!read) {
+      std::fprintf(stderr, "cannot read %s: %s\n", argv[1], read.error().message.c_str());
+      return 1;
+    }
+    const LogVisionPackets& log = *read;
+    if (log.stopped_early || log.packets.size() < 8) {
+      std::fprintf(stderr, "cannot read %s: %s\n", argv[1],
+                   log.stopped_early ? log.stopped_early->message.c_str() : "too few packets");
       return 1;
     }
     const fs::path out = argv[2];

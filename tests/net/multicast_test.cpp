@@ -93,10 +93,16 @@ std::vector<std::byte> pattern(std::size_t size) {
 }
 
 bool is_local_address(const address_v4& address) {
-  for (const auto& item : ipv4_interfaces()) {
+  for (const auto& item : ipv4_interfaces().value()) {
     if (item.address == address) return true;
   }
   return false;
+}
+
+// The message of a parse that failed, or "" for one that succeeded.
+template <typename T>
+std::string error_of(const Result<T>& result) {
+  return result ? std::string() : result.error().message;
 }
 
 SSL_WrapperPacket detection_packet(std::uint32_t frame_number) {
@@ -120,9 +126,8 @@ SSL_WrapperPacket detection_packet(std::uint32_t frame_number) {
 // Parsing
 
 TEST(ParseMulticastEndpoint, AcceptsGroupAndPort) {
-  std::string error;
-  const auto endpoint = parse_multicast_endpoint("224.5.23.2:10006", &error);
-  ASSERT_TRUE(endpoint) << error;
+  const auto endpoint = parse_multicast_endpoint("224.5.23.2:10006");
+  ASSERT_TRUE(endpoint) << error_of(endpoint);
   EXPECT_EQ(endpoint->group, address_v4({224, 5, 23, 2}));
   EXPECT_EQ(endpoint->port, 10006);
   EXPECT_EQ(endpoint->to_string(), "224.5.23.2:10006");
@@ -131,70 +136,72 @@ TEST(ParseMulticastEndpoint, AcceptsGroupAndPort) {
 }
 
 TEST(ParseMulticastEndpoint, RejectsUnicastAddress) {
-  std::string error;
-  EXPECT_FALSE(parse_multicast_endpoint("10.0.0.1:10006", &error));
+  const auto unicast = parse_multicast_endpoint("10.0.0.1:10006");
+  EXPECT_FALSE(unicast);
+  const std::string error = error_of(unicast);
   EXPECT_NE(error.find("10.0.0.1"), std::string::npos) << error;
   EXPECT_NE(error.find("multicast"), std::string::npos) << error;
-  EXPECT_FALSE(parse_multicast_endpoint("127.0.0.1:10006", &error));
-  EXPECT_FALSE(parse_multicast_endpoint("240.0.0.1:10006", &error));
+  EXPECT_FALSE(parse_multicast_endpoint("127.0.0.1:10006"));
+  EXPECT_FALSE(parse_multicast_endpoint("240.0.0.1:10006"));
 }
 
 TEST(ParseMulticastEndpoint, RejectsMissingPort) {
-  std::string error;
-  EXPECT_FALSE(parse_multicast_endpoint("224.5.23.2", &error));
-  EXPECT_NE(error.find("no port"), std::string::npos) << error;
-  EXPECT_FALSE(parse_multicast_endpoint("224.5.23.2:", &error));
-  EXPECT_NE(error.find("port"), std::string::npos) << error;
+  const auto no_port = parse_multicast_endpoint("224.5.23.2");
+  EXPECT_FALSE(no_port);
+  EXPECT_NE(error_of(no_port).find("no port"), std::string::npos) << error_of(no_port);
+  const auto empty_port = parse_multicast_endpoint("224.5.23.2:");
+  EXPECT_FALSE(empty_port);
+  EXPECT_NE(error_of(empty_port).find("port"), std::string::npos) << error_of(empty_port);
 }
 
 TEST(ParseMulticastEndpoint, RejectsPortOutOfRange) {
-  std::string error;
-  EXPECT_FALSE(parse_multicast_endpoint("224.5.23.2:99999", &error));
-  EXPECT_NE(error.find("99999"), std::string::npos) << error;
-  EXPECT_NE(error.find("1..65535"), std::string::npos) << error;
-  EXPECT_FALSE(parse_multicast_endpoint("224.5.23.2:0", &error));
-  EXPECT_FALSE(parse_multicast_endpoint("224.5.23.2:99999999999999999999999", &error));
-  EXPECT_NE(error.find("1..65535"), std::string::npos) << error;
+  const auto too_high = parse_multicast_endpoint("224.5.23.2:99999");
+  EXPECT_FALSE(too_high);
+  EXPECT_NE(error_of(too_high).find("99999"), std::string::npos) << error_of(too_high);
+  EXPECT_NE(error_of(too_high).find("1..65535"), std::string::npos) << error_of(too_high);
+  EXPECT_FALSE(parse_multicast_endpoint("224.5.23.2:0"));
+  const auto huge = parse_multicast_endpoint("224.5.23.2:99999999999999999999999");
+  EXPECT_FALSE(huge);
+  EXPECT_NE(error_of(huge).find("1..65535"), std::string::npos) << error_of(huge);
 }
 
 TEST(ParseMulticastEndpoint, RejectsMalformedText) {
   for (const char* text : {"", ":10006", "vision:10006", "224.5.23:10006", "224.5.23.2:10x06",
                            "224.5.23.2:-1", "224.5.23.2:+5", " 224.5.23.2:10006"}) {
-    std::string error;
-    EXPECT_FALSE(parse_multicast_endpoint(text, &error)) << text;
-    EXPECT_FALSE(error.empty()) << text;
+    const auto endpoint = parse_multicast_endpoint(text);
+    EXPECT_FALSE(endpoint) << text;
+    EXPECT_FALSE(error_of(endpoint).empty()) << text;
   }
 }
 
 TEST(ParseInterface, AcceptsAddressAndAll) {
-  std::string error;
-  const auto loopback = parse_interface("127.0.0.1", false, &error);
-  ASSERT_TRUE(loopback) << error;
+  const auto loopback = parse_interface("127.0.0.1", false);
+  ASSERT_TRUE(loopback) << error_of(loopback);
   EXPECT_FALSE(loopback->all);
   EXPECT_EQ(loopback->address, address_v4::loopback());
   EXPECT_EQ(loopback->to_string(), "127.0.0.1");
-  const auto all = parse_interface("all", true, &error);
-  ASSERT_TRUE(all) << error;
+  const auto all = parse_interface("all", true);
+  ASSERT_TRUE(all) << error_of(all);
   EXPECT_TRUE(all->all);
   EXPECT_EQ(all->to_string(), "all");
   EXPECT_EQ(InterfaceChoice{}.address, address_v4::loopback());  // the default is 127.0.0.1
 }
 
 TEST(ParseInterface, RejectsAllForSendersAndNonAddresses) {
-  std::string error;
-  EXPECT_FALSE(parse_interface("all", false, &error));
-  EXPECT_NE(error.find("all"), std::string::npos) << error;
-  EXPECT_FALSE(parse_interface("eth0", true, &error));
-  EXPECT_NE(error.find("eth0"), std::string::npos) << error;
-  EXPECT_FALSE(parse_interface("224.5.23.2", true, &error));
-  EXPECT_FALSE(parse_interface("255.255.255.255", true, &error));
-  EXPECT_FALSE(parse_interface("", true, &error));
+  const auto all_for_sender = parse_interface("all", false);
+  EXPECT_FALSE(all_for_sender);
+  EXPECT_NE(error_of(all_for_sender).find("all"), std::string::npos) << error_of(all_for_sender);
+  const auto device_name = parse_interface("eth0", true);
+  EXPECT_FALSE(device_name);
+  EXPECT_NE(error_of(device_name).find("eth0"), std::string::npos) << error_of(device_name);
+  EXPECT_FALSE(parse_interface("224.5.23.2", true));
+  EXPECT_FALSE(parse_interface("255.255.255.255", true));
+  EXPECT_FALSE(parse_interface("", true));
 }
 
 TEST(Interfaces, ListsLoopback) {
-  std::string error;
-  const auto interfaces = ipv4_interfaces(&error);
-  EXPECT_TRUE(error.empty()) << error;
+  const auto interfaces = ipv4_interfaces();
+  EXPECT_TRUE(interfaces) << error_of(interfaces);
   EXPECT_TRUE(is_local_address(address_v4::loopback()));
 }
 

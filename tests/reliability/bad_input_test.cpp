@@ -255,10 +255,10 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
   }
 
   // The trainer's table is the clean stream's.
-  const TableLoadResult loaded = load_table(dir / "trainer.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_EQ(entries(loaded.stored->table), entries(clean_training->table()));
-  EXPECT_EQ(loaded.stored->metadata.samples, clean_training->samples());
+  const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(entries(loaded->table), entries(clean_training->table()));
+  EXPECT_EQ(loaded->metadata.samples, clean_training->samples());
 
   // The predictor's predictions are the clean stream's.
   const auto p = last_status(predictor.stderr_text());

@@ -86,10 +86,10 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
       ASSERT_EQ(logged.saves, 0) << "a save was logged but there is no table";
       continue;
     }
-    const TableLoadResult loaded = load_table(table_path, Grid(3, 2));
-    ASSERT_TRUE(loaded) << "after kill " << round << ": " << loaded.message;
-    const std::uint64_t transitions = loaded.stored->table.transitions();
-    const std::uint64_t formations = loaded.stored->metadata.samples;
+    const auto loaded = load_table(table_path, Grid(3, 2));
+    ASSERT_TRUE(loaded) << "after kill " << round << ": " << loaded.error().message;
+    const std::uint64_t transitions = loaded->table.transitions();
+    const std::uint64_t formations = loaded->metadata.samples;
     if (logged.saves > 0) {
       EXPECT_GE(transitions, logged.transitions) << "kill " << round << " lost a logged save";
       EXPECT_GE(formations, logged.formations) << "kill " << round;

@@ -204,9 +204,9 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   EXPECT_EQ(status.at("field_changes"), 1u);
   EXPECT_EQ(status.at("other_clock"), c.frames_other_clock);
   EXPECT_NE(trainer.stderr_text().find("[clock_conflicts]"), std::string::npos);
-  const TableLoadResult loaded = load_table(dir / "trainer.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_EQ(entries(loaded.stored->table), entries(expected->table()));
+  const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(entries(loaded->table), entries(expected->table()));
   ASSERT_EQ(received.size(), expected_predictions.size());
   for (std::size_t i = 0; i < received.size(); ++i)
     ASSERT_EQ(received[i], expected_predictions[i]) << i;
@@ -251,12 +251,11 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   config.seed = 72;
   config.start_time_s = 100000;
   const auto b = train(simulated_packets(config, 300));
-  const TableLoadResult loaded = load_table(dir / "trainer.bin", Grid(3, 2));
-  ASSERT_TRUE(loaded) << loaded.message;
-  EXPECT_LT(loaded.stored->table.transitions(),
-            a->table().transitions() + b->table().transitions());
+  const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_LT(loaded->table.transitions(), a->table().transitions() + b->table().transitions());
   std::cout << "[ figures  ] two producers: packets=" << status.at("packets")
-            << " transitions=" << loaded.stored->table.transitions()
+            << " transitions=" << loaded->table.transitions()
             << " (alone: " << a->table().transitions() << " + " << b->table().transitions()
             << ") clock_conflicts=" << status.at("clock_conflicts")
             << " clock_resets=" << status.at("clock_resets")

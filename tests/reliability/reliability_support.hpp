@@ -20,11 +20,11 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/prediction_message.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 
@@ -40,7 +40,7 @@ using testing::new_group;
 using testing::PredictionListener;
 
 inline net::MulticastEndpoint endpoint_of(const std::string& group) {
-  return *net::parse_multicast_endpoint(group);
+  return net::parse_multicast_endpoint(group).value();
 }
 
 using Entries = testing::TableEntries;

@@ -35,7 +35,7 @@ class PredictionListener {
  public:
   explicit PredictionListener(const std::string& group) {
     receiver_ = std::make_unique<net::ProtoMulticastReceiver<proto::FormationPrediction>>(
-        io_, *net::parse_multicast_endpoint(group));
+        io_, net::parse_multicast_endpoint(group).value());
     receiver_->start([this](const proto::FormationPrediction& message, const net::udp::endpoint&) {
       std::lock_guard lock(mutex_);
       messages_.push_back(message);

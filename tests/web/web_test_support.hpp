@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "formation_prediction.pb.h"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -57,16 +57,15 @@ class PredictionArrivals {
  public:
   using Time = std::chrono::steady_clock::time_point;
   PredictionArrivals(const std::string& predictions, const std::string& vision) {
-    std::string error;
     receiver_ = std::make_unique<net::ProtoMulticastReceiver<proto::FormationPrediction>>(
-        io_, *net::parse_multicast_endpoint(predictions, &error));
+        io_, net::parse_multicast_endpoint(predictions).value());
     receiver_->start([this](const proto::FormationPrediction& message, const net::udp::endpoint&) {
       std::lock_guard lock(mutex_);
       arrivals_.push_back(std::chrono::steady_clock::now());
       frames_.push_back(message.frame_number());
     });
     vision_ = std::make_unique<net::ProtoMulticastReceiver<SSL_WrapperPacket>>(
-        io_, *net::parse_multicast_endpoint(vision, &error));
+        io_, net::parse_multicast_endpoint(vision).value());
     vision_->start([this](const SSL_WrapperPacket& packet, const net::udp::endpoint&) {
       if (!packet.has_detection()) return;
       std::lock_guard lock(mutex_);

@@ -25,10 +25,9 @@ int run_offline(const TrainerOptions& options) {
   bool every_file_whole = true;
   SSL_WrapperPacket packet;
   for (const std::string& file : options.from_logs) {
-    std::string error;
-    std::optional<LogReader> reader = LogReader::open(file, &error);
+    Result<LogReader> reader = LogReader::open(file);
     if (!reader) {
-      spdlog::error("{}", error);
+      spdlog::error("{}", reader.error().message);
       every_file_whole = false;
       continue;
     }
@@ -56,13 +55,14 @@ int run_offline(const TrainerOptions& options) {
       case LogReader::Ending::cut_off:
         // What a recorder killed mid-write leaves: only the last message is lost.
         if (options.strict) {
-          spdlog::error("{}; the {} vision packets before it were used (--strict)",
-                        reader->error(), frames);
+          spdlog::error("{}; the {} vision packets before it were used (--strict)", reader->error(),
+                        frames);
           every_file_whole = false;
         } else {
-          spdlog::warn("{}: the file ends inside its last message; the {} vision packets before "
-                       "it were used",
-                       reader->error(), frames);
+          spdlog::warn(
+              "{}: the file ends inside its last message; the {} vision packets before "
+              "it were used",
+              reader->error(), frames);
         }
         break;
       case LogReader::Ending::damaged:

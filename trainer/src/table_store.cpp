@@ -48,13 +48,13 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                    config.grid.to_string());
     return std::make_unique<Training>(config, TransitionTable(config.grid));
   }
-  TableLoadResult loaded = load_table(table_path, config.grid);
+  auto loaded = load_table(table_path, config.grid);
   if (!loaded) {
-    throw std::runtime_error(loaded.message +
+    throw std::runtime_error(loaded.error().message +
                              "; the file is left as it is: give another --table, or --reset to "
                              "replace it with an empty table");
   }
-  StoredTable& stored = *loaded.stored;
+  StoredTable& stored = *loaded;
   if (stored.metadata.step_s != config.step_s) {
     throw std::runtime_error(fmt::format(
         "{} was trained with --step {}, not {}: its transitions mean another time scale; use the "
@@ -72,9 +72,9 @@ bool save_training(const std::filesystem::path& table_path, Training& training) 
   metadata.field = training.sampler().field();
   metadata.step_s = training.sampler().config().step_s;
   metadata.samples = training.samples();
-  const TableSaveResult result = save_table(table_path, training.table(), metadata);
-  if (!result) {
-    spdlog::error("{}", result.message);
+  const auto saved = save_table(table_path, training.table(), metadata);
+  if (!saved) {
+    spdlog::error("{}", saved.error().message);
     return false;
   }
   training.mark_saved();

@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "ssl_formation/result.hpp"
+
 namespace ssl_formation {
 
 // A point on the field in millimetres, centre of the field at (0, 0).
@@ -59,8 +61,8 @@ class Grid {
   // Throws std::invalid_argument for sizes outside 1..max_cells cells.
   Grid(int length_cells, int width_cells);
 
-  // Parses "LxW" such as "3x2"; std::nullopt with a reason on error.
-  static std::optional<Grid> parse(std::string_view text, std::string* error = nullptr);
+  // Parses "LxW" such as "3x2"; the error names the text and what is wrong with it.
+  static Result<Grid> parse(std::string_view text);
 
   int length() const { return length_; }  // L, columns along x
   int width() const { return width_; }    // W, rows along y

@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ssl_formation/result.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 struct gzFile_s;  // zlib's file, kept out of this header
@@ -70,9 +71,8 @@ using GzFilePtr = std::unique_ptr<gzFile_s, GzFileCloser>;
 // Reads messages one by one through a buffer, reusing its storage: no allocation per message.
 class LogReader {
  public:
-  // Opens and checks the header. On failure returns nullopt and sets *error (if given) to a
-  // message naming the path and the problem.
-  static std::optional<LogReader> open(const std::filesystem::path& path, std::string* error);
+  // Opens and checks the header; on failure the error names the path and the problem.
+  static Result<LogReader> open(const std::filesystem::path& path);
 
   // Next raw message; false at the end of the file or on an error. An index message ends the
   // file: it is counted but not read or returned (a long log's index may exceed the size limit).
@@ -137,7 +137,8 @@ class LogReader {
 // Writes a log, gzip-compressed when the path ends in ".gz". Failed writes are sticky.
 class LogWriter {
  public:
-  static std::optional<LogWriter> create(const std::filesystem::path& path, std::string* error);
+  // Creates (or truncates) the file and writes the header; the error names the path and cause.
+  static Result<LogWriter> create(const std::filesystem::path& path);
 
   // Refuses (false, error()) payloads over kLogMaxMessageSize, which no reader would accept.
   bool write(std::int32_t type, std::int64_t receive_time_ns, std::string_view payload);
@@ -165,15 +166,19 @@ class LogWriter {
   bool failed_ = false;
 };
 
-// A whole file's vision packets, plus the error text if reading stopped early (everything read
-// before it is kept) and the counters.
+// A whole file's vision packets and the counters. A file that stops early (cut off in its last
+// message, or damaged) still gives every packet before the damage: `packets` holds them, and
+// `stopped_early` says where and why reading stopped (LogReader::error()), `ending` how.
 struct LogVisionPackets {
   std::vector<SSL_WrapperPacket> packets;
   std::vector<std::int64_t> receive_times_ns;
-  std::string error;
+  std::optional<Error> stopped_early;  // nullopt when the file was read to its end
+  LogReader::Ending ending = LogReader::Ending::none;
   LogReadCounters counters;
 };
 
-LogVisionPackets read_vision_log(const std::filesystem::path& path);
+// An error only when the file cannot be opened or has no valid header (LogReader::open's error);
+// damage after the header is reported in the packets' `stopped_early`.
+Result<LogVisionPackets> read_vision_log(const std::filesystem::path& path);
 
 }  // namespace ssl_formation

@@ -37,6 +37,7 @@
 #include <string_view>
 
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/result.hpp"
 #include "ssl_formation/transition_table.hpp"
 
 namespace ssl_formation {
@@ -57,7 +58,6 @@ struct StoredTable {
 };
 
 enum class TableFileError {
-  none,
   cannot_open,    // missing, unreadable or not a regular file
   not_a_table,    // bad magic
   wrong_version,  // a format version this build cannot read
@@ -69,11 +69,11 @@ enum class TableFileError {
 
 std::string_view to_string(TableFileError error);
 
-struct TableLoadResult {
-  std::optional<StoredTable> stored;
-  TableFileError error = TableFileError::none;
-  std::string message;  // empty on success; otherwise names the path and the problem
-  explicit operator bool() const { return error == TableFileError::none && stored.has_value(); }
+// Why a table did not load: the kind, for callers that treat them differently (the trainer
+// explains wrong_grid), and a message that names the path and the problem.
+struct TableLoadError {
+  TableFileError kind = TableFileError::io_error;
+  std::string message;
 };
 
 // Reads a table file without ever writing to it. The checks run in this order, and the first
@@ -85,15 +85,9 @@ struct TableLoadResult {
 // corrupt if longer); file checksum (corrupt); then every count (corrupt).
 // `storage` chooses the in-memory layout of the loaded table; `automatic` keeps large grids
 // sparse, so loading a sparse 12x9 file never allocates S*S.
-TableLoadResult load_table(const std::filesystem::path& path,
-                           std::optional<Grid> expected_grid = std::nullopt,
-                           TableStorage storage = TableStorage::automatic);
-
-struct TableSaveResult {
-  bool ok = false;
-  std::string message;  // empty on success; otherwise names the path and the cause
-  explicit operator bool() const { return ok; }
-};
+Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path,
+                                               std::optional<Grid> expected_grid = std::nullopt,
+                                               TableStorage storage = TableStorage::automatic);
 
 // Test hooks into save_table.
 struct SaveHooks {
@@ -105,9 +99,10 @@ struct SaveHooks {
 
 // Writes the table to a temporary file in the same folder (`path` + ".tmp-<pid>-<n>"), fsyncs
 // it, renames it over `path` and fsyncs the folder, so that a reader or a crash at any moment
-// sees either the old file or the new one, never part of one. On failure the temporary file is
-// removed and `path` is left as it was. Dense tables are written densely, sparse ones as rows.
-TableSaveResult save_table(const std::filesystem::path& path, const TransitionTable& table,
-                           const TableMetadata& metadata, const SaveHooks& hooks = {});
+// sees either the old file or the new one, never part of one. On failure (the error names the
+// path and the cause) the temporary file is removed and `path` is left as it was. Dense tables
+// are written densely, sparse ones as rows.
+Result<void> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                        const TableMetadata& metadata, const SaveHooks& hooks = {});
 
 }  // namespace ssl_formation

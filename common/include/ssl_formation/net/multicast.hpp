@@ -15,11 +15,10 @@
 //
 // Typical use in a daemon:
 //
-//   std::string error;
-//   auto group = net::parse_multicast_endpoint(text_from_options, &error);   // "224.5.23.2:10006"
-//   if (!group) throw std::runtime_error("--vision-address: " + error);
-//   auto iface = net::parse_interface(interface_text, /*allow_all=*/true, &error);  // "127.0.0.1"
-//   net::MulticastReceiver receiver(io, *group, *iface);
+//   auto group = net::parse_multicast_endpoint(text_from_options);   // "224.5.23.2:10006"
+//   if (!group) throw std::runtime_error("--vision-address: " + group.error().message);
+//   auto iface = net::parse_interface(interface_text, /*allow_all=*/true).value();  // "127.0.0.1"
+//   net::MulticastReceiver receiver(io, *group, iface);
 //   receiver.start([](std::span<const std::byte> data, const net::udp::endpoint& from) { ... });
 //   io.run();
 
@@ -38,6 +37,8 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "ssl_formation/result.hpp"
 
 namespace ssl_formation::net {
 
@@ -72,10 +73,9 @@ struct MulticastEndpoint {
 std::ostream& operator<<(std::ostream& out, const MulticastEndpoint& endpoint);
 
 // Parses "GROUP:PORT". GROUP must be an IPv4 multicast address (224.0.0.0/4) in dotted decimal,
-// PORT a decimal number in 1..65535. On failure returns nullopt and, if error is not null, sets
-// it to a sentence naming the text and what is wrong with it.
-std::optional<MulticastEndpoint> parse_multicast_endpoint(std::string_view text,
-                                                          std::string* error = nullptr);
+// PORT a decimal number in 1..65535. The error is a sentence naming the text and what is wrong
+// with it.
+Result<MulticastEndpoint> parse_multicast_endpoint(std::string_view text);
 
 // The interface to join on or send from: one IPv4 address of this machine, or (receivers only)
 // every IPv4 interface of the machine. The default is the loopback address (DESIGN.md §2).
@@ -91,8 +91,7 @@ std::ostream& operator<<(std::ostream& out, const InterfaceChoice& choice);
 // Parses "all" (only if allow_all) or an IPv4 address in dotted decimal. Multicast and broadcast
 // addresses are rejected (they are never the address of an interface). Whether the address
 // belongs to this machine is checked by the kernel at start()/open(), with a clear error.
-std::optional<InterfaceChoice> parse_interface(std::string_view text, bool allow_all,
-                                               std::string* error = nullptr);
+Result<InterfaceChoice> parse_interface(std::string_view text, bool allow_all);
 
 // One IPv4 address of one network interface, as getifaddrs() reports it.
 struct InterfaceAddress {
@@ -103,9 +102,8 @@ struct InterfaceAddress {
   bool multicast = false;  // IFF_MULTICAST (Linux lets you join on "lo" without it)
 };
 
-// The IPv4 addresses of this machine's interfaces (getifaddrs). On failure returns an empty list
-// and, if error is not null, sets it.
-std::vector<InterfaceAddress> ipv4_interfaces(std::string* error = nullptr);
+// The IPv4 addresses of this machine's interfaces (getifaddrs), or why they cannot be listed.
+Result<std::vector<InterfaceAddress>> ipv4_interfaces();
 
 // Receive counters. Written on the io_context thread, readable from any thread (relaxed atomics:
 // each value is exact, but a snapshot of several is not taken at one instant).
