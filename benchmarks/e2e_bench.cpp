@@ -130,6 +130,7 @@ int make_table(const std::string& path, std::uint64_t formations, std::uint64_t 
     std::cerr << "e2e_bench make-table: " << saved.error().message << '\n';
     return 1;
   }
+  if (!saved->durable) std::cerr << "e2e_bench make-table: " << saved->warning << '\n';
   std::cout << "make-table path=" << path << " formations=" << training.samples()
             << " transitions=" << training.table().transitions()
             << " states_seen=" << training.table().rows_seen() << '\n';

@@ -565,8 +565,8 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
   return stored;
 }
 
-Result<void> save_table(const std::filesystem::path& path, const TransitionTable& table,
-                        const TableMetadata& metadata, const SaveHooks& hooks) {
+Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                              const TableMetadata& metadata, const SaveHooks& hooks) {
   // Never write a file that load_table would reject.
   if (!metadata.field.valid()) return save_failure(path, "invalid field size");
   if (!valid_step(metadata.step_s)) return save_failure(path, "invalid step");
@@ -669,16 +669,27 @@ Result<void> save_table(const std::filesystem::path& path, const TransitionTable
   }
   temp.mark_renamed();
 
-  // The rename lives in the folder; until the folder is synced a crash may bring the old
-  // file back.
+  // The rename lives in the folder; until the folder is synced a crash of the machine may
+  // bring the old file back. The new file is in place and whole all the same, so a folder that
+  // cannot be synced makes the save less durable, not failed: reporting a failure would make the
+  // caller (the trainer exits 1) treat a safe table as lost.
   std::filesystem::path folder = path.parent_path();
   if (folder.empty()) folder = ".";
   const FileDescriptor folder_fd(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
-  if (!folder_fd.valid() || ::fsync(folder_fd.get()) != 0) {
-    return save_failure(path, "written, but cannot sync its folder " + folder.string() + ": " +
-                                  errno_text(errno) + "; a crash now may restore the old file");
+  int sync_error = folder_fd.valid() ? 0 : errno;
+  if (sync_error == 0) {
+    if (hooks.sync_folder) {
+      sync_error = hooks.sync_folder(folder_fd.get());
+    } else if (::fsync(folder_fd.get()) != 0) {
+      sync_error = errno;
+    }
   }
-  return {};
+  if (sync_error != 0) {
+    return TableSaved{false, "saved table " + path.string() + ", but cannot sync its folder " +
+                                 folder.string() + ": " + errno_text(sync_error) +
+                                 "; a crash of the machine now may restore the old file"};
+  }
+  return TableSaved{};
 }
 
 }  // namespace ssl_formation

@@ -34,7 +34,7 @@ std::optional<TableFileError> kind_of(const LoadResult& result) {
 std::string message_of(const LoadResult& result) {
   return result ? "(loaded)" : result.error().message;
 }
-std::string message_of(const Result<void>& result) {
+std::string message_of(const Result<TableSaved>& result) {
   return result ? "(saved)" : result.error().message;
 }
 
@@ -184,6 +184,8 @@ TEST_F(TableFile, RoundTripDense3x2) {
 
   const auto saved = save_table(path, table, metadata);
   ASSERT_TRUE(saved) << message_of(saved);
+  EXPECT_TRUE(saved->durable);
+  EXPECT_TRUE(saved->warning.empty());
   const std::uint64_t states = table.codec().state_count();
   EXPECT_EQ(fs::file_size(path), header_size + states * states * 4 + 4);  // dense encoding
 
@@ -470,6 +472,46 @@ TEST_F(TableFile, SaveInterruptedBeforeRenameLeavesTheOldFile) {
   ASSERT_TRUE(loaded) << message_of(loaded);
   expect_same_table(loaded->table, new_table);
   EXPECT_EQ(files_in_dir(), std::vector<std::string>{"table.bin"});
+}
+
+TEST_F(TableFile, FolderThatCannotBeSyncedAfterTheRenameIsASaveWithAWarning) {
+  const Grid grid(3, 2);
+  const fs::path path = dir_ / "table.bin";
+  const TransitionTable old_table = make_table(grid, 100, TableStorage::automatic, 1);
+  const TransitionTable new_table = make_table(grid, 200, TableStorage::automatic, 2);
+  ASSERT_NE(entries_of(old_table), entries_of(new_table));
+  ASSERT_TRUE(save_table(path, old_table, make_metadata()));
+
+  int synced_fd = -1;
+  SaveHooks hooks;
+  hooks.sync_folder = [&](int folder_fd) {
+    synced_fd = folder_fd;
+    // By now the new table has been renamed over the old one.
+    const LoadResult renamed = load_table(path, grid);
+    EXPECT_TRUE(renamed) << message_of(renamed);
+    if (renamed) expect_same_table(renamed->table, new_table);
+    return EIO;
+  };
+  const auto saved = save_table(path, new_table, make_metadata(), hooks);
+  EXPECT_GE(synced_fd, 0);
+  // The rename succeeded, so the table is safe: a success, not a failure the trainer exits on.
+  ASSERT_TRUE(saved) << message_of(saved);
+  EXPECT_FALSE(saved->durable);
+  EXPECT_NE(saved->warning.find(path.string()), std::string::npos) << saved->warning;
+  EXPECT_NE(saved->warning.find(std::strerror(EIO)), std::string::npos) << saved->warning;
+  EXPECT_NE(saved->warning.find("cannot sync its folder"), std::string::npos) << saved->warning;
+
+  const LoadResult loaded = load_table(path, grid);
+  ASSERT_TRUE(loaded) << message_of(loaded);
+  expect_same_table(loaded->table, new_table);
+  EXPECT_EQ(files_in_dir(), std::vector<std::string>{"table.bin"});
+
+  // A folder that syncs makes the save durable again, without a warning.
+  hooks.sync_folder = [](int) { return 0; };
+  const auto durable = save_table(path, old_table, make_metadata(), hooks);
+  ASSERT_TRUE(durable) << message_of(durable);
+  EXPECT_TRUE(durable->durable);
+  EXPECT_TRUE(durable->warning.empty()) << durable->warning;
 }
 
 TEST_F(TableFile, SaveIntoMissingFolderFailsCleanly) {

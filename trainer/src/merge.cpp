@@ -33,6 +33,7 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
   }
   const auto saved = save_table(output, merged.table, merged.metadata);
   if (!saved) throw std::runtime_error(saved.error().message);
+  if (!saved->durable) spdlog::warn("{}", saved->warning);
   spdlog::info("merged {} tables into {}: grid {}, {} transitions from {} formations",
                inputs.size(), output.string(), merged.table.grid().to_string(),
                merged.table.transitions(), merged.metadata.samples);

@@ -77,6 +77,8 @@ bool save_training(const std::filesystem::path& table_path, Training& training) 
     spdlog::error("{}", saved.error().message);
     return false;
   }
+  // The new file is in place; only its survival of a machine crash is in doubt.
+  if (!saved->durable) spdlog::warn("{}", saved->warning);
   training.mark_saved();
   spdlog::debug("saved {} ({} transitions, {} formations)", table_path.string(),
                 training.table().transitions(), training.samples());

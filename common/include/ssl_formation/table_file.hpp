@@ -89,20 +89,32 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                                                std::optional<Grid> expected_grid = std::nullopt,
                                                TableStorage storage = TableStorage::automatic);
 
+// A save that happened. The new file is in place either way; `durable` is false when the folder
+// could not be synced after the rename, so a crash (of the machine, not the program) before the
+// kernel writes the folder back may still bring the old file back. `warning` then says so.
+struct TableSaved {
+  bool durable = true;
+  std::string warning;  // empty when durable
+};
+
 // Test hooks into save_table.
 struct SaveHooks {
   // Called once the temporary file is written, fsynced and closed, before it is renamed over
   // the target. Returning false aborts the save as a crash at that moment would, except that
   // the temporary file is removed.
   std::function<bool()> before_rename;
+  // Replaces the fsync of the folder after the rename: gets the folder's descriptor and returns
+  // 0 or an errno value, as a failing disk or file system would.
+  std::function<int(int folder_fd)> sync_folder;
 };
 
 // Writes the table to a temporary file in the same folder (`path` + ".tmp-<pid>-<n>"), fsyncs
 // it, renames it over `path` and fsyncs the folder, so that a reader or a crash at any moment
 // sees either the old file or the new one, never part of one. On failure (the error names the
-// path and the cause) the temporary file is removed and `path` is left as it was. Dense tables
-// are written densely, sparse ones as rows.
-Result<void> save_table(const std::filesystem::path& path, const TransitionTable& table,
-                        const TableMetadata& metadata, const SaveHooks& hooks = {});
+// path and the cause) the temporary file is removed and `path` is left as it was. Once the
+// rename has succeeded the save succeeds: a folder that cannot be synced then is reported in
+// TableSaved::warning, not as a failure. Dense tables are written densely, sparse ones as rows.
+Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                              const TableMetadata& metadata, const SaveHooks& hooks = {});
 
 }  // namespace ssl_formation

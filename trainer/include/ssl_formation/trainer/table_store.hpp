@@ -18,7 +18,8 @@ namespace ssl_formation::trainer {
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset);
 
-// Saves the training's table atomically; logs and returns false on failure.
+// Saves the training's table atomically; logs and returns false on failure. A save whose folder
+// could not be synced after the rename is a success, logged as a warning.
 bool save_training(const std::filesystem::path& table_path, Training& training);
 
 }  // namespace ssl_formation::trainer
