@@ -48,8 +48,9 @@ StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> o
 
 ReadyFile::~ReadyFile() {
   if (!written_) return;
-  std::error_code ignored;  // nothing to do about a file that is already gone
-  std::filesystem::remove(path_, ignored);
+  // unlink, not std::filesystem::remove: that takes a path, and building one from path_ allocates,
+  // which can throw in a destructor. Nothing to do about a file that is already gone.
+  ::unlink(path_.c_str());
 }
 
 void ReadyFile::mark_ready(const std::string& program,

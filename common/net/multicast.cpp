@@ -200,6 +200,7 @@ struct MulticastReceiver::State {
   std::vector<std::byte> buffer;  // one whole datagram (kMaxUdpPayload)
 
   static void arm(const std::shared_ptr<State>& self);
+  static void rearm(const std::shared_ptr<State>& self, std::uint64_t generation);
   static void on_readable(const std::shared_ptr<State>& self, std::uint64_t generation,
                           const error_code& ec);
   void drain(std::uint64_t generation);
@@ -222,6 +223,12 @@ void MulticastReceiver::State::arm(const std::shared_ptr<State>& self) {
                           });
 }
 
+void MulticastReceiver::State::rearm(const std::shared_ptr<State>& self, std::uint64_t generation) {
+  // Not after stop() (or a restart, which armed its own wait) from inside the handler.
+  if (!self->running || generation != self->generation) return;
+  arm(self);
+}
+
 void MulticastReceiver::State::on_readable(const std::shared_ptr<State>& self,
                                            std::uint64_t generation, const error_code& ec) {
   if (!self->running || generation != self->generation) return;  // stopped or restarted
@@ -229,37 +236,34 @@ void MulticastReceiver::State::on_readable(const std::shared_ptr<State>& self,
   // goes on. Only one wait is ever outstanding, since each completion arms one. Arming costs a
   // system call (epoll_ctl), so it comes after the datagrams are handled, not before: a datagram
   // that arrives meanwhile is not lost, the edge-triggered wait fires at once for a socket that is
-  // already readable.
-  struct RearmOnExit {
-    const std::shared_ptr<State>& self;
-    std::uint64_t generation;
-    int exceptions_at_entry = std::uncaught_exceptions();
-    // A failure to arm (only bad_alloc in practice) leaves io_context::run() as it always did,
-    // unless a throwing handler is already doing so: then it is logged, and that one goes on.
-    ~RearmOnExit() noexcept(false) {
-      // Not after stop() (or a restart, which armed its own wait) from inside the handler.
-      if (!self->running || generation != self->generation) return;
-      if (std::uncaught_exceptions() == exceptions_at_entry) {
-        arm(self);
-        return;
+  // already readable. (Not in a scope guard's destructor: a failure to arm must be able to leave
+  // run(), and a destructor that throws ends the program if it runs during unwinding.)
+  try {
+    if (ec) {
+      const auto errors = self->counters.receive_errors.fetch_add(1, std::memory_order_relaxed) + 1;
+      if (worth_logging(errors)) {
+        spdlog::warn("multicast receiver {}: wait failed: {} (error {}, re-armed)",
+                     self->describe(), ec.message(), errors);
       }
-      try {
-        arm(self);
-      } catch (const std::exception& e) {
-        spdlog::error("multicast receiver {}: cannot wait for the next datagram: {}",
-                      self->describe(), e.what());
-      }
+    } else {
+      self->drain(generation);
     }
-  } rearm{self, generation};
-  if (ec) {
-    const auto errors = self->counters.receive_errors.fetch_add(1, std::memory_order_relaxed) + 1;
-    if (worth_logging(errors)) {
-      spdlog::warn("multicast receiver {}: wait failed: {} (error {}, re-armed)", self->describe(),
-                   ec.message(), errors);
+  } catch (...) {
+    // The callback's exception leaves io_context::run() as it always did; the loop is armed
+    // first, so it goes on when run() is called again. A failure to arm now is only logged:
+    // the callback's exception is the one that goes on.
+    try {
+      rearm(self, generation);
+    } catch (const std::exception& e) {
+      spdlog::error("multicast receiver {}: cannot wait for the next datagram: {}",
+                    self->describe(), e.what());
+    } catch (...) {
+      spdlog::error("multicast receiver {}: cannot wait for the next datagram", self->describe());
     }
-    return;
+    throw;
   }
-  self->drain(generation);
+  // A failure to arm (only bad_alloc in practice) leaves io_context::run(), as it always did.
+  rearm(self, generation);
 }
 
 void MulticastReceiver::State::drain(std::uint64_t generation_at_wake) {
@@ -440,7 +444,7 @@ void MulticastReceiver::start(DatagramHandler on_datagram) {
                joined, s.granted_buffer);
 }
 
-void MulticastReceiver::stop() {
+void MulticastReceiver::stop() noexcept {
   State& s = *state_;
   if (!s.running && !s.socket.is_open()) return;
   s.running = false;

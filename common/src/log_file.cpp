@@ -85,7 +85,7 @@ bool adopt_legacy(SSL_WrapperPacket& packet) {
 }  // namespace
 
 namespace detail {
-void GzFileCloser::operator()(gzFile_s* file) const {
+void GzFileCloser::operator()(gzFile_s* file) const noexcept {
   if (file != nullptr) gzclose(file);
 }
 }  // namespace detail

@@ -78,12 +78,13 @@ class FileDescriptor {
   FileDescriptor& operator=(const FileDescriptor&) = delete;
   int get() const { return fd_; }
   bool valid() const { return fd_ >= 0; }
-  void reset(int fd) {
+  void reset(int fd) noexcept {
     close();
     fd_ = fd;
   }
   // Closes now and reports the error, because close can be the first to report a failed write.
-  int close() {
+  // noexcept: the destructors of this and TemporaryFile call it.
+  int close() noexcept {
     const int fd = std::exchange(fd_, -1);
     return fd >= 0 && ::close(fd) != 0 ? errno : 0;
   }

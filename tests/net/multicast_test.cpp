@@ -23,6 +23,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "ssl_formation/net/proto_multicast.hpp"
@@ -98,6 +99,10 @@ bool is_local_address(const address_v4& address) {
   }
   return false;
 }
+
+// The destructor stop()s; a stop() that could throw would end the program from there.
+static_assert(noexcept(std::declval<MulticastReceiver&>().stop()));
+static_assert(std::is_nothrow_destructible_v<MulticastReceiver>);
 
 // The message of a parse that failed, or "" for one that succeeded.
 template <typename T>

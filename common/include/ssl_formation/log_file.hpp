@@ -63,7 +63,9 @@ struct LogReadCounters {
 
 namespace detail {
 struct GzFileCloser {
-  void operator()(gzFile_s* file) const;
+  // gzclose reports nothing a destructor could act on: LogWriter::close() is where the errors of
+  // closing a written file are reported.
+  void operator()(gzFile_s* file) const noexcept;
 };
 using GzFilePtr = std::unique_ptr<gzFile_s, GzFileCloser>;
 }  // namespace detail

@@ -141,7 +141,7 @@ class MulticastReceiver {
   MulticastReceiver(boost::asio::io_context& io, MulticastEndpoint endpoint,
                     InterfaceChoice interface = {},
                     int receive_buffer_bytes = kDefaultReceiveBufferBytes);
-  ~MulticastReceiver();  // stop()s
+  ~MulticastReceiver();  // stop()s, which cannot throw
   MulticastReceiver(const MulticastReceiver&) = delete;
   MulticastReceiver& operator=(const MulticastReceiver&) = delete;
 
@@ -152,8 +152,8 @@ class MulticastReceiver {
 
   // Ends the loop and closes the socket (leaving the group). The callback is not called after
   // stop() returns, even for datagrams already read. Safe to call from inside the callback, and
-  // more than once.
-  void stop();
+  // more than once. Never throws (only error_code calls), so the destructor can call it.
+  void stop() noexcept;
 
   bool running() const;
   const MulticastEndpoint& endpoint() const;
