@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
          "seconds between status lines on stderr")
         ("verbose", po::bool_switch(&o.verbose), "log every formation sent");
     // clang-format on
+    sf::app::add_daemon_options(general, o.daemon);
     general.add(network).add(simulation).add(logs);
     if (!sf::app::parse_command_line(
             argc, argv, general,

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
     sf::producer::RecordOptions o;
     po::options_description general("Options");
     sf::app::add_vision_options(general, o.network);
+    sf::app::add_daemon_options(general, o.daemon);
     // clang-format off
     general.add_options()
         ("output,o", po::value(&o.output)->value_name("FILE"),

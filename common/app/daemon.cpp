@@ -63,7 +63,10 @@ void ReadyFile::mark_ready(const std::string& program,
     std::ofstream out(temporary, std::ios::trunc);
     out << text;
     out.close();
-    if (!out) throw std::runtime_error("cannot write the ready file " + temporary);
+    if (!out) {
+      ::unlink(temporary.c_str());  // whatever part of it was written
+      throw std::runtime_error("cannot write the ready file " + temporary);
+    }
   }
   std::error_code error;
   std::filesystem::rename(temporary, path_, error);
@@ -81,14 +84,19 @@ RepeatingTimer::RepeatingTimer(boost::asio::io_context& io,
   arm();
 }
 
-void RepeatingTimer::cancel() { timer_.cancel(); }
+void RepeatingTimer::cancel() {
+  // The flag covers what timer_.cancel() cannot: an expiry already queued, and a tick that
+  // cancels its own timer (there is no wait to cancel while it runs).
+  cancelled_ = true;
+  timer_.cancel();
+}
 
 void RepeatingTimer::arm() {
   timer_.expires_after(period_);
   timer_.async_wait([this](const boost::system::error_code& error) {
-    if (error) return;  // cancelled
+    if (error || cancelled_) return;
     tick_();
-    arm();
+    if (!cancelled_) arm();
   });
 }
 

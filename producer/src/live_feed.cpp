@@ -122,6 +122,10 @@ int run_simulation(const ProducerOptions& options) {
     status.cancel();
     io.stop();
   });
+  app::ReadyFile ready(options.daemon.ready_file);
+  ready.mark_ready("ssl-producer",
+                   {{"mode", "simulation"}, {"vision", group.to_string()},
+                    {"interface", interface.to_string()}});
   feed.start();
   io.run();
   feed.log_summary(feed.finished() ? "done" : "stopped");

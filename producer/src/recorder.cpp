@@ -121,6 +121,10 @@ int run_record(const RecordOptions& options) {
     by_signal = true;
     stop();
   });
+  app::ReadyFile ready(options.daemon.ready_file);
+  ready.mark_ready("ssl-record", {{"vision", group.to_string()},
+                                  {"interface", interface.to_string()},
+                                  {"output", options.output}});
   io.run();
   receiver.stop();
 

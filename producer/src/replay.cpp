@@ -288,6 +288,11 @@ int run_replay(const ProducerOptions& options) {
     status.cancel();
     io.stop();
   });
+  app::ReadyFile ready(options.daemon.ready_file);
+  ready.mark_ready("ssl-producer", {{"mode", "replay"},
+                                    {"vision", group.to_string()},
+                                    {"interface", interface.to_string()},
+                                    {"log", options.replay}});
   replay.start();
   io.run();
   replay.log_summary(!replay.finished() ? "stopped" : replay.exit_code() == 0 ? "done" : "failed");

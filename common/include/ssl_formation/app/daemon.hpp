@@ -42,10 +42,12 @@ class RepeatingTimer {
  public:
   RepeatingTimer(boost::asio::io_context& io, std::chrono::steady_clock::duration period,
                  std::function<void()> tick);
+  // No tick runs after this, also when called from inside a tick or while a tick is queued.
   void cancel();
 
  private:
   void arm();
+  bool cancelled_ = false;
   boost::asio::steady_timer timer_;
   std::chrono::steady_clock::duration period_;
   std::function<void()> tick_;

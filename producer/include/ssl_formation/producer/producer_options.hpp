@@ -38,6 +38,7 @@ struct ProducerOptions {
   double replay_start_s = 0.0;
   double replay_end_s = 0.0;  // 0 = to the end of the log
   // Everyday.
+  app::DaemonOptions daemon;  // --ready-file: written once the sending socket is open
   double status_interval_s = 5.0;
   bool verbose = false;
 };

@@ -17,6 +17,7 @@ namespace ssl_formation::producer {
 
 struct RecordOptions {
   app::NetworkOptions network;
+  app::DaemonOptions daemon;  // --ready-file: written once the group is joined
   std::string output;
   bool overwrite = false;
   bool index = false;
