@@ -122,6 +122,20 @@ void FieldSizeLog::update(const FieldSize& field) {
   logged_ = field;
 }
 
+void AttackDirectionLog::update(std::optional<AttackDirection> now) {
+  if (now == logged_) return;
+  if (now) {
+    spdlog::info("the opponent attacks {}: inferred from where its goalkeeper stands{}",
+                 to_string(*now), logged_ ? " (the teams changed ends)" : "");
+  }
+  logged_ = now;
+}
+
+std::string describe_attacks(std::optional<AttackDirection> now, bool inferred) {
+  const char* why = inferred ? " (inferred)" : " (option)";
+  return now ? std::string(to_string(*now)) + why : std::string("unknown-yet") + why;
+}
+
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds) {
   if (!std::isfinite(seconds) || seconds <= 0.0 || seconds > 1e6) {
     std::ostringstream text;

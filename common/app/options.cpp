@@ -25,10 +25,19 @@ SamplerConfig ModelOptions::sampler_config() const {
   if (!color)
     throw UsageError("--opponent-color must be yellow or blue, not '" + opponent_color + "'");
   config.opponent_color = *color;
-  const auto attacks = parse_attack_direction(opponent_attacks);
-  if (!attacks)
-    throw UsageError("--opponent-attacks must be +x or -x, not '" + opponent_attacks + "'");
-  config.opponent_attacks = *attacks;
+  if (opponent_attacks == "auto") {
+    config.infer_attacks = true;
+  } else {
+    const auto attacks = parse_attack_direction(opponent_attacks);
+    if (!attacks) {
+      throw UsageError("--opponent-attacks must be +x, -x or auto, not '" + opponent_attacks +
+                       "'");
+    }
+    config.opponent_attacks = *attacks;
+  }
+  const auto mode = parse_sampling(sampling);
+  if (!mode) throw UsageError("--sampling must be frame or step, not '" + sampling + "'");
+  config.sampling = *mode;
   config.field = FieldSize{field_length_mm, field_width_mm};
   if (!config.field.valid()) {
     throw UsageError("--field-length and --field-width must be positive millimetres");
@@ -45,7 +54,11 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "opponent-color", po::value(&model.opponent_color)->default_value(model.opponent_color),
       "the opponent's colour: yellow or blue")(
       "opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),
-      "the direction the opponent attacks in the feed's coordinates: +x or -x")(
+      "the direction the opponent attacks in the feed's coordinates: +x, -x, or auto (from where "
+      "its goalkeeper stands; follows a change of ends)")(
+      "sampling", po::value(&model.sampling)->default_value(model.sampling),
+      "step: a formation every --step (the paper's protocol); frame: a formation at every frame, "
+      "each robot's previous cell from --step earlier")(
       "field-length", po::value(&model.field_length_mm)->default_value(model.field_length_mm),
       "field length in mm until a geometry packet says otherwise")(
       "field-width", po::value(&model.field_width_mm)->default_value(model.field_width_mm),

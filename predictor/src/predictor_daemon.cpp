@@ -92,10 +92,12 @@ class PredictorDaemon {
       }
       pipeline_.add(frame);
       if (frame.has_geometry) field_log_.update(pipeline_.sampler().field());
+      if (config_.infer_attacks) attack_log_.update(pipeline_.sampler().attacks());
     });
-    spdlog::info("predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s",
-                 options_.horizon, to_string(config_.opponent_color),
-                 to_string(config_.opponent_attacks), config_.grid.to_string(), config_.step_s);
+    spdlog::info(
+        "predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s, {} sampling",
+        options_.horizon, to_string(config_.opponent_color), options_.model.opponent_attacks,
+        config_.grid.to_string(), config_.step_s, to_string(config_.sampling));
     check_table();
     if (!watcher_.table()) {
       spdlog::info("waiting for the table {}: start ssl-trainer with --table {} (or give --table)",
@@ -193,9 +195,11 @@ class PredictorDaemon {
 
   void log_status() {
     const auto& c = pipeline_.sampler().counters();
-    spdlog::info("status: {} formations={} predictions={} sent={} table_reloads={} | {}",
-                 app::describe_reception(receiver_), c.samples, pipeline_.predictions(),
-                 sender_.sent(), watcher_.reloads(), describe_rejections(c));
+    spdlog::info(
+        "status: {} formations={} predictions={} sent={} table_reloads={} attacks={} | {}",
+        app::describe_reception(receiver_), c.samples, pipeline_.predictions(), sender_.sent(),
+        watcher_.reloads(), app::describe_attacks(pipeline_.sampler().attacks(), config_.infer_attacks),
+        describe_rejections(c));
     // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
     for (const std::string& line : new_rejections(reported_, c))
       spdlog::warn("input: {}", line);
@@ -234,7 +238,9 @@ class PredictorDaemon {
   }
 
   web::FieldViewSetup view_setup() const {
-    return web::FieldViewSetup{pipeline_.sampler().field(), config_.grid, config_.opponent_attacks,
+    // The direction in use: inferred with --opponent-attacks auto (the configured one until then).
+    return web::FieldViewSetup{pipeline_.sampler().field(), config_.grid,
+                               pipeline_.sampler().attacks().value_or(config_.opponent_attacks),
                                config_.opponent_color};
   }
 
@@ -250,6 +256,7 @@ class PredictorDaemon {
   // The field view (--http-port), and what only it needs.
   web::TeamRobots ours_;
   app::FieldSizeLog field_log_;
+  app::AttackDirectionLog attack_log_;
   std::optional<web::FieldViewServer> web_;
   std::optional<std::chrono::steady_clock::time_point> last_packet_;
   std::optional<std::chrono::steady_clock::time_point> last_rate_time_;

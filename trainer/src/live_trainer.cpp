@@ -20,10 +20,12 @@ void log_status(const Training& training, const net::VisionReceiver& receiver,
   const SamplerCounters& c = training.sampler().counters();
   spdlog::info(
       "status: {} formations={} transitions={} table_transitions={} states_seen={} "
-      "rejected_robots={} late_frames={} | {}",
+      "rejected_robots={} late_frames={} attacks={} | {}",
       app::describe_reception(receiver), c.samples, c.transitions, training.table().transitions(),
       training.table().rows_seen(), c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id,
-      c.frames_late, describe_rejections(c));
+      c.frames_late,
+      app::describe_attacks(training.sampler().attacks(), training.sampler().config().infer_attacks),
+      describe_rejections(c));
   for (const std::string& line : new_rejections(reported, c)) spdlog::warn("input: {}", line);
   reported = c;
 }
@@ -44,14 +46,17 @@ int run_live(const TrainerOptions& options) {
   app::ReadyFile ready(options.daemon.ready_file);
   net::VisionReceiver receiver(io, group, interface, options.receive_buffer_bytes);
   app::FieldSizeLog field_log(config.field, config.use_geometry);
+  app::AttackDirectionLog attack_log;
   receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
     training->add(frame);
     if (frame.has_geometry) field_log.update(training->sampler().field());
+    if (config.infer_attacks) attack_log.update(training->sampler().attacks());
   });
-  spdlog::info("training: opponent {} attacking {}; grid {}, step {} s; table {} saved every {} s",
-               to_string(config.opponent_color), to_string(config.opponent_attacks),
-               config.grid.to_string(), config.step_s, table_path.string(),
-               options.flush_interval_s);
+  spdlog::info(
+      "training: opponent {} attacking {}; grid {}, step {} s, {} sampling; table {} saved every "
+      "{} s",
+      to_string(config.opponent_color), options.model.opponent_attacks, config.grid.to_string(),
+      config.step_s, to_string(config.sampling), table_path.string(), options.flush_interval_s);
 
   app::RepeatingTimer flush(io, flush_period, [&] {
     if (training->changed_since_save()) save_training(table_path, *training);

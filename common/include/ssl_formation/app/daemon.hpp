@@ -8,6 +8,7 @@
 #include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -90,6 +91,20 @@ class FieldSizeLog {
  private:
   FieldSize logged_;
 };
+
+// Logs the direction the opponent attacks once it is inferred (--opponent-attacks auto) and at
+// every switch (the teams changed ends), with the reason.
+class AttackDirectionLog {
+ public:
+  // Cheap when nothing changed; call it after every frame.
+  void update(std::optional<AttackDirection> now);
+
+ private:
+  std::optional<AttackDirection> logged_;
+};
+
+// "+x (option)", "-x (inferred)", "unknown yet (inferred)": for status lines.
+std::string describe_attacks(std::optional<AttackDirection> now, bool inferred);
 
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds);
 

@@ -34,6 +34,7 @@ struct ModelOptions {
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   bool ignore_geometry = false;
+  std::string sampling = "step";
 
   Grid parsed_grid() const;              // throws UsageError
   SamplerConfig sampler_config() const;  // validates everything; throws UsageError
