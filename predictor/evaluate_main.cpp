@@ -11,6 +11,7 @@ namespace po = boost::program_options;
 int main(int argc, char** argv) {
   return sf::app::run_main("ssl-evaluate", [&] {
     sf::evaluate::EvaluateOptions o;
+    std::string horizons = "0.2,0.5,1,2";
     po::options_description general("Options");
     general.add_options()("mode", po::value(&o.mode)->required(), "paper, holdout or grid-sweep")(
         "seed", po::value(&o.seed)->default_value(o.seed), "seed of the simulated training stream")(
@@ -21,11 +22,18 @@ int main(int argc, char** argv) {
         "test-formations", po::value(&o.test_formations)->default_value(o.test_formations),
         "simulated test formations (holdout, grid-sweep)")(
         "tests", po::value(&o.tests)->default_value(o.tests), "paper mode: number of tests")(
-        "train-log", po::value(&o.train_log),
-        "train on this official log instead of the simulation")(
-        "test-log", po::value(&o.test_log), "test on this official log instead of the simulation")(
+        "train-log", po::value(&o.train_logs)->multitoken()->value_name("FILE..."),
+        "train on these official logs (each its own stream) instead of the simulation")(
+        "test-log", po::value(&o.test_logs)->multitoken()->value_name("FILE..."),
+        "test on these official logs (each its own stream) instead of the simulation")(
         "split", po::value(&o.split)->default_value(o.split),
-        "holdout on one log: train on this first fraction of --train-log, test on the rest")(
+        "train on this first fraction of every --train-log and test on the rest of each")(
+        "horizons", po::value(&horizons)->default_value(horizons),
+        "holdout: horizons in seconds, each evaluated as a model of its own (step = horizon)")(
+        "chain-steps", po::value(&o.chain_steps)->default_value(o.chain_steps),
+        "holdout: also chains of 1 to this many steps of --step")(
+        "velocity-window", po::value(&o.velocity_window_s)->default_value(o.velocity_window_s),
+        "seconds over which the constant-velocity baselines take a robot's velocity")(
         "jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm),
         "noise of the simulated vision, mm")("cameras",
                                              po::value(&o.cameras)->default_value(o.cameras),
@@ -49,6 +57,7 @@ int main(int argc, char** argv) {
           "--tests, --train-formations and --test-formations must be positive");
     }
     if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
+    o.horizons = sf::evaluate::parse_horizons(horizons);
     sf::app::init_logging("ssl-evaluate");
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});

@@ -234,6 +234,7 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   result.table_memory_bytes = training.table().memory_bytes();
   const auto table = std::make_shared<const StoredTable>(StoredTable{training.table(), {}});
   setup.codec = &table->table.codec();
+  result.table = table;
 
   for (int k = 1; k <= config.steps; ++k) {
     result.horizons.emplace_back();

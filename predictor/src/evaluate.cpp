@@ -2,12 +2,15 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 
 #include "ssl_formation/evaluation.hpp"
 #include "ssl_formation/log_file.hpp"
+#include "ssl_formation/position_evaluation.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/training.hpp"
@@ -46,6 +49,16 @@ class PacketSource {
     }
     return source;
   }
+  // Several logs one after the other (for the paper protocol, which trains one table).
+  static PacketSource from_logs(const std::vector<std::string>& paths) {
+    PacketSource source;
+    for (const std::string& path : paths) {
+      PacketSource one = from_log(path);
+      source.packets_.insert(source.packets_.end(), std::make_move_iterator(one.packets_.begin()),
+                             std::make_move_iterator(one.packets_.end()));
+    }
+    return source;
+  }
   const std::vector<SSL_WrapperPacket>& packets() const { return packets_; }
   // The first `fraction` of the packets and the rest: a time split of one log.
   std::pair<PacketSource, PacketSource> split(double fraction) const {
@@ -70,24 +83,6 @@ TransitionTable train(const SamplerConfig& config, const PacketSource& source,
   return training.table();
 }
 
-// The test stream through the PredictionPipeline the predictor runs, predicting from `table`
-// as far ahead as the evaluation looks.
-std::vector<ev::PredictedTest> predict_stream(const SamplerConfig& config,
-                                              std::shared_ptr<const StoredTable> table,
-                                              const PacketSource& source, FieldSize* field) {
-  std::vector<ev::PredictedTest> tests;
-  PredictionConfig prediction;
-  prediction.sampler = config;
-  prediction.horizon = ev::HoldoutResult::max_horizon;
-  PredictionPipeline pipeline(prediction, [&](const PredictedFormation& predicted) {
-    tests.push_back({predicted.formation(), predicted.prediction});
-  });
-  pipeline.set_table(std::move(table));
-  for (const auto& packet : source.packets()) pipeline.add(packet);
-  *field = pipeline.sampler().field();
-  return tests;
-}
-
 std::ofstream open_csv(const EvaluateOptions& options, const std::string& name) {
   const std::filesystem::path path = std::filesystem::path(options.output_dir) / name;
   std::filesystem::create_directories(path.parent_path());
@@ -106,9 +101,10 @@ int run_paper(const EvaluateOptions& options) {
   SamplerConfig config = options.model.sampler_config();
   const auto started = std::chrono::steady_clock::now();
   const PacketSource training_data =
-      options.train_log.empty() ? PacketSource::simulated(options.seed, options.train_formations,
-                                                          options.jitter_mm, options.cameras)
-                                : PacketSource::from_log(options.train_log);
+      options.train_logs.empty()
+          ? PacketSource::simulated(options.seed, options.train_formations, options.jitter_mm,
+                                    options.cameras)
+          : PacketSource::from_logs(options.train_logs);
   FieldSize field = config.field;
   std::uint64_t training_samples = 0;
   const TransitionTable table = train(config, training_data, &field, &training_samples);
@@ -169,48 +165,65 @@ int run_paper(const EvaluateOptions& options) {
 
 namespace {
 
-std::pair<PacketSource, PacketSource> holdout_data(const EvaluateOptions& options) {
+using Streams = std::vector<std::vector<SSL_WrapperPacket>>;
+
+// The training and test streams the options describe: logs (each its own stream, split in
+// time with --split) or the simulated vision of two seeds.
+std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options) {
+  Streams train;
+  Streams test;
   if (options.split > 0.0) {
-    if (options.train_log.empty()) throw app::UsageError("--split needs --train-log");
-    return PacketSource::from_log(options.train_log).split(options.split);
+    if (options.train_logs.empty()) throw app::UsageError("--split needs --train-log");
+    for (const std::string& log : options.train_logs) {
+      auto [head, tail] = PacketSource::from_log(log).split(options.split);
+      train.push_back(head.packets());
+      test.push_back(tail.packets());
+    }
+  } else {
+    for (const std::string& log : options.train_logs) {
+      train.push_back(PacketSource::from_log(log).packets());
+    }
+    if (train.empty()) {
+      train.push_back(PacketSource::simulated(options.seed, options.train_formations,
+                                              options.jitter_mm, options.cameras)
+                          .packets());
+    }
   }
-  PacketSource train_data = options.train_log.empty()
-                                ? PacketSource::simulated(options.seed, options.train_formations,
-                                                          options.jitter_mm, options.cameras)
-                                : PacketSource::from_log(options.train_log);
-  PacketSource test_data = options.test_log.empty()
-                               ? PacketSource::simulated(options.test_seed, options.test_formations,
-                                                         options.jitter_mm, options.cameras)
-                               : PacketSource::from_log(options.test_log);
-  return {std::move(train_data), std::move(test_data)};
+  for (const std::string& log : options.test_logs) {
+    test.push_back(PacketSource::from_log(log).packets());
+  }
+  if (test.empty()) {
+    test.push_back(PacketSource::simulated(options.test_seed, options.test_formations,
+                                           options.jitter_mm, options.cameras)
+                       .packets());
+  }
+  return {std::move(train), std::move(test)};
 }
+
+// One configuration's evaluation: its horizons, from `steps` steps of `step_s`.
+struct Section {
+  double step_s = 0.0;
+  ev::PositionEvaluation evaluation;
+};
 
 struct GridReport {
   Grid grid{3, 2};
-  ev::HoldoutResult result;
-  std::size_t test_formations = 0;
-  std::uint64_t transitions = 0;
-  std::size_t memory_bytes = 0;
-  double prediction_us = 0.0;  // mean two-step prediction time
+  std::vector<Section> sections;  // one per --horizons entry, then the chains of --step
+  double prediction_us = 0.0;     // mean two-step prediction time of the chains' table
 };
 
-GridReport holdout_for_grid(const SamplerConfig& config, const PacketSource& train_data,
-                            const PacketSource& test_data) {
-  GridReport report;
-  report.grid = config.grid;
-  const auto stored =
-      std::make_shared<const StoredTable>(StoredTable{train(config, train_data), {}});
-  const TransitionTable& table = stored->table;
-  FieldSize field;
-  const std::vector<ev::PredictedTest> test = predict_stream(config, stored, test_data, &field);
-  report.result = ev::evaluate_holdout(table.codec(), test, field);
-  report.test_formations = test.size();
-  report.transitions = table.transitions();
-  report.memory_bytes = table.memory_bytes();
-  // Prediction time: two steps ahead from every test formation, as the predictor does live.
-  Prediction prediction;
+// Two-step predictions from the test formations, timed, as the predictor does live.
+double time_predictions(const TransitionTable& table, const Streams& test,
+                        const SamplerConfig& config) {
   std::vector<std::vector<RobotStateById>> inputs;
-  for (const auto& t : test) inputs.push_back(robot_states(t.formation));
+  FormationSampler sampler(config, [&](const FormationSample& sample) {
+    if (inputs.size() < 5000) inputs.push_back(robot_states(sample.formation));
+  });
+  for (const auto& stream : test) {
+    sampler.start_new_stream();
+    for (const auto& packet : stream) sampler.add(packet);
+  }
+  Prediction prediction;
   const auto start = std::chrono::steady_clock::now();
   std::size_t runs = 0;
   for (int pass = 0; pass < 20 && !inputs.empty(); ++pass) {
@@ -221,103 +234,173 @@ GridReport holdout_for_grid(const SamplerConfig& config, const PacketSource& tra
   }
   const double elapsed =
       std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
-  report.prediction_us = runs ? elapsed / static_cast<double>(runs) : 0.0;
+  return runs ? elapsed / static_cast<double>(runs) : 0.0;
+}
+
+GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& grid,
+                            const Streams& train, const Streams& test) {
+  app::ModelOptions model = options.model;
+  model.grid = grid;
+  const SamplerConfig base = model.sampler_config();
+  GridReport report;
+  report.grid = base.grid;
+  const auto evaluate = [&](double step_s, int steps) {
+    ev::PositionEvaluationConfig config;
+    config.sampler = base;
+    config.sampler.step_s = step_s;
+    config.steps = steps;
+    config.velocity_window_s = options.velocity_window_s;
+    report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
+  };
+  for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);
+  evaluate(base.step_s, options.chain_steps);
+  report.prediction_us = time_predictions(report.sections.back().evaluation.table->table, test, base);
   return report;
 }
 
-void print_holdout(const GridReport& report) {
-  std::printf("Held-out evaluation, grid %s: %zu test formations, table of %llu transitions\n",
-              report.grid.to_string().c_str(), report.test_formations,
-              static_cast<unsigned long long>(report.transitions));
-  std::printf("%-8s %-18s %12s %12s %14s %10s\n", "horizon", "method", "exact state", "exact cell",
-              "cells off/robot", "robots");
-  for (int h = 0; h < ev::HoldoutResult::max_horizon; ++h) {
-    for (std::size_t m = 0; m < ev::all_methods.size(); ++m) {
-      const ev::Accuracy& a = report.result.accuracy[static_cast<std::size_t>(h)][m];
-      std::printf("%-8d %-18s %11.2f%% %11.2f%% %14.3f %10llu\n", h + 1,
-                  ev::to_string(ev::all_methods[m]), 100.0 * a.state_accuracy(),
-                  100.0 * a.cell_accuracy(), a.mean_distance(),
-                  static_cast<unsigned long long>(a.robots));
+const char* quantity_name(bool robot) { return robot ? "robot" : "formation"; }
+
+void print_holdout(const GridReport& report, const SamplerConfig& base) {
+  const ev::PositionEvaluation& chains = report.sections.back().evaluation;
+  std::printf(
+      "Held-out evaluation, grid %s, %s sampling: %llu test formations; the chains' table: %llu "
+      "transitions from %llu formations\n",
+      report.grid.to_string().c_str(), std::string(to_string(base.sampling)).c_str(),
+      static_cast<unsigned long long>(chains.test_formations),
+      static_cast<unsigned long long>(chains.transitions),
+      static_cast<unsigned long long>(chains.train_formations));
+  std::printf("%9s %5s %-25s %11s %11s %9s %9s %9s %9s %9s\n", "horizon", "steps", "method",
+              "exact state", "exact cell", "cells off", "mean mm", "median mm", "p90 mm", "robots");
+  for (const Section& section : report.sections) {
+    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
+      const ev::HorizonScore& score = section.evaluation.horizons[h];
+      for (std::size_t m = 0; m < ev::all_position_methods.size(); ++m) {
+        const ev::Accuracy& a = score.cells[m];
+        std::printf("%7.2f s %5zu %-25s %10.2f%% %10.2f%% %9.3f %9.1f %9.1f %9.1f %9llu\n",
+                    score.horizon_s, h + 1,
+                    std::string(ev::to_string(ev::all_position_methods[m])).c_str(),
+                    100.0 * a.state_accuracy(), 100.0 * a.cell_accuracy(), a.mean_distance(),
+                    score.error[m].mean(), score.error[m].median(), score.error[m].percentile(90),
+                    static_cast<unsigned long long>(a.robots));
+      }
     }
   }
-  for (int h = 0; h < ev::HoldoutResult::max_horizon; ++h) {
-    const ev::Calibration& c = report.result.calibration[static_cast<std::size_t>(h)];
-    std::printf(
-        "confidence that the whole formation is right, horizon %d: Brier %.4f over %llu "
-        "formations\n",
-        h + 1, c.brier(), static_cast<unsigned long long>(c.n));
-    std::printf("  %-12s %10s %16s %14s\n", "confidence", "formations", "mean confidence",
-                "observed");
-    for (int b = 0; b < ev::Calibration::bins; ++b) {
-      const auto i = static_cast<std::size_t>(b);
-      if (c.bin_count[i] == 0) continue;
-      std::printf("  [%.1f, %.1f%c %10llu %16.4f %13.2f%%\n", b / 10.0, (b + 1) / 10.0,
-                  b == 9 ? ']' : ')', static_cast<unsigned long long>(c.bin_count[i]),
-                  c.bin_confidence[i] / double(c.bin_count[i]),
-                  100.0 * double(c.bin_hits[i]) / double(c.bin_count[i]));
+  std::printf("Calibration of the model's probabilities (10 equal bins):\n");
+  std::printf("%9s %5s %-10s %9s %9s %12s\n", "horizon", "steps", "quantity", "Brier", "ECE",
+              "predictions");
+  for (const Section& section : report.sections) {
+    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
+      const ev::HorizonScore& score = section.evaluation.horizons[h];
+      for (const bool robot : {true, false}) {
+        const ev::Calibration& c = robot ? score.robot : score.formation;
+        std::printf("%7.2f s %5zu %-10s %9.4f %9.4f %12llu\n", score.horizon_s, h + 1,
+                    quantity_name(robot), c.brier(), ev::expected_calibration_error(c),
+                    static_cast<unsigned long long>(c.n));
+      }
     }
   }
 }
 
-void write_holdout_csv(std::ofstream& accuracy, std::ofstream& reliability,
-                       const GridReport& report) {
-  for (int h = 0; h < ev::HoldoutResult::max_horizon; ++h) {
-    for (std::size_t m = 0; m < ev::all_methods.size(); ++m) {
-      const ev::Accuracy& a = report.result.accuracy[static_cast<std::size_t>(h)][m];
-      accuracy << report.grid.to_string() << ',' << h + 1 << ','
-               << ev::to_string(ev::all_methods[m]) << ',' << a.state_accuracy() << ','
-               << a.cell_accuracy() << ',' << a.mean_distance() << ',' << a.robots << '\n';
-    }
-    const ev::Calibration& c = report.result.calibration[static_cast<std::size_t>(h)];
-    for (int b = 0; b < ev::Calibration::bins; ++b) {
-      const auto i = static_cast<std::size_t>(b);
-      reliability << report.grid.to_string() << ',' << h + 1 << ',' << b << ',' << c.bin_count[i]
-                  << ',' << (c.bin_count[i] ? c.bin_confidence[i] / double(c.bin_count[i]) : 0.0)
-                  << ',' << (c.bin_count[i] ? double(c.bin_hits[i]) / double(c.bin_count[i]) : 0.0)
-                  << ',' << c.brier() << '\n';
+void write_holdout_csv(std::ofstream& accuracy, std::ofstream& calibration,
+                       std::ofstream& reliability, const GridReport& report) {
+  const std::string grid = report.grid.to_string();
+  for (const Section& section : report.sections) {
+    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
+      const ev::HorizonScore& score = section.evaluation.horizons[h];
+      for (std::size_t m = 0; m < ev::all_position_methods.size(); ++m) {
+        const ev::Accuracy& a = score.cells[m];
+        accuracy << grid << ',' << h + 1 << ',' << score.horizon_s << ','
+                 << ev::to_string(ev::all_position_methods[m]) << ',' << a.state_accuracy() << ','
+                 << a.cell_accuracy() << ',' << a.mean_distance() << ',' << score.error[m].mean()
+                 << ',' << score.error[m].median() << ',' << score.error[m].percentile(90) << ','
+                 << a.robots << '\n';
+      }
+      for (const bool robot : {true, false}) {
+        const ev::Calibration& c = robot ? score.robot : score.formation;
+        calibration << grid << ',' << h + 1 << ',' << score.horizon_s << ",model,"
+                    << quantity_name(robot) << ',' << c.brier() << ','
+                    << ev::expected_calibration_error(c) << ',' << c.n << '\n';
+        for (std::size_t b = 0; b < c.bin_count.size(); ++b) {
+          const auto n = static_cast<double>(c.bin_count[b]);
+          reliability << grid << ',' << h + 1 << ',' << score.horizon_s << ','
+                      << quantity_name(robot) << ',' << b << ',' << c.bin_count[b] << ','
+                      << (n > 0 ? c.bin_confidence[b] / n : 0.0) << ','
+                      << (n > 0 ? static_cast<double>(c.bin_hits[b]) / n : 0.0) << '\n';
+        }
+      }
     }
   }
 }
 
 }  // namespace
 
+std::vector<double> parse_horizons(const std::string& text) {
+  std::vector<double> horizons;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::string item = text.substr(begin, end - begin);
+    double value = 0.0;
+    const auto [rest, error] = std::from_chars(item.data(), item.data() + item.size(), value);
+    if (item.empty() || error != std::errc() || rest != item.data() + item.size() ||
+        !(value > 0.0) || value > 600.0) {
+      throw app::UsageError("--horizons takes positive seconds separated by commas (e.g. "
+                            "0.2,0.5,1,2), not '" + text + "'");
+    }
+    horizons.push_back(value);
+    begin = end + 1;
+  }
+  return horizons;
+}
+
 int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& grids) {
-  const auto [train_data, test_data] = holdout_data(options);
-  std::ofstream accuracy =
-      open_csv(options, grids.size() > 1 ? "grid-sweep-accuracy.csv" : "holdout-accuracy.csv");
-  accuracy << "grid,horizon,method,state_accuracy,cell_accuracy,mean_cell_distance,robots\n";
-  std::ofstream reliability = open_csv(
-      options, grids.size() > 1 ? "grid-sweep-reliability.csv" : "holdout-reliability.csv");
-  reliability << "grid,horizon,bin,formations,mean_confidence,observed_frequency,brier\n";
+  if (options.chain_steps < 1 || options.chain_steps > 10) {
+    throw app::UsageError("--chain-steps must be 1 to 10");
+  }
+  if (!(options.velocity_window_s > 0.0)) {
+    throw app::UsageError("--velocity-window must be a positive number of seconds");
+  }
+  const SamplerConfig base = options.model.sampler_config();
+  const auto [train, test] = holdout_streams(options);
+  const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
+  std::ofstream accuracy = open_csv(options, prefix + "accuracy.csv");
+  accuracy << "grid,horizon_steps,horizon_s,method,state_accuracy,cell_accuracy,"
+              "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots\n";
+  std::ofstream calibration = open_csv(options, prefix + "calibration.csv");
+  calibration << "grid,horizon_steps,horizon_s,method,quantity,brier,ece,predictions\n";
+  std::ofstream reliability = open_csv(options, prefix + "reliability.csv");
+  reliability << "grid,horizon_steps,horizon_s,quantity,bin,count,mean_confidence,"
+                 "observed_frequency\n";
   std::vector<GridReport> reports;
   for (const std::string& grid : grids) {
-    app::ModelOptions model = options.model;
-    model.grid = grid;
-    reports.push_back(holdout_for_grid(model.sampler_config(), train_data, test_data));
-    print_holdout(reports.back());
-    write_holdout_csv(accuracy, reliability, reports.back());
+    reports.push_back(holdout_for_grid(options, grid, train, test));
+    print_holdout(reports.back(), base);
+    write_holdout_csv(accuracy, calibration, reliability, reports.back());
     std::printf("\n");
   }
   if (grids.size() > 1) {
     std::ofstream sweep = open_csv(options, "grid-sweep.csv");
     sweep << "grid,states,transitions,table_memory_bytes,prediction_us,model_cell_accuracy_h1,"
-             "persistence_cell_accuracy_h1,constant_velocity_cell_accuracy_h1,model_mean_distance_"
-             "h1\n";
-    std::printf("Grid sweep (horizon 1)\n%-6s %12s %12s %14s %14s %12s %12s %12s\n", "grid",
-                "states", "transitions", "table memory", "predict 2 (us)", "model cell",
+             "persistence_cell_accuracy_h1,constant_velocity_cell_accuracy_h1,"
+             "damped_constant_velocity_cell_accuracy_h1,model_mean_error_mm_h1\n";
+    std::printf("Grid sweep (one step of --step)\n%-6s %12s %12s %14s %14s %12s %12s %12s\n",
+                "grid", "states", "transitions", "table memory", "predict 2 (us)", "model cell",
                 "persist cell", "const-v cell");
     for (const GridReport& r : reports) {
-      const auto& h1 = r.result.accuracy[0];
+      const ev::PositionEvaluation& chains = r.sections.back().evaluation;
+      const ev::HorizonScore& h1 = chains.horizons.front();
       const StateCodec codec(r.grid);
       std::printf("%-6s %12u %12llu %11.1f KiB %14.3f %11.2f%% %11.2f%% %11.2f%%\n",
                   r.grid.to_string().c_str(), codec.state_count(),
-                  static_cast<unsigned long long>(r.transitions), r.memory_bytes / 1024.0,
-                  r.prediction_us, 100 * h1[0].cell_accuracy(), 100 * h1[1].cell_accuracy(),
-                  100 * h1[2].cell_accuracy());
-      sweep << r.grid.to_string() << ',' << codec.state_count() << ',' << r.transitions << ','
-            << r.memory_bytes << ',' << r.prediction_us << ',' << h1[0].cell_accuracy() << ','
-            << h1[1].cell_accuracy() << ',' << h1[2].cell_accuracy() << ',' << h1[0].mean_distance()
-            << '\n';
+                  static_cast<unsigned long long>(chains.transitions),
+                  static_cast<double>(chains.table_memory_bytes) / 1024.0, r.prediction_us,
+                  100 * h1.cells[0].cell_accuracy(), 100 * h1.cells[1].cell_accuracy(),
+                  100 * h1.cells[2].cell_accuracy());
+      sweep << r.grid.to_string() << ',' << codec.state_count() << ',' << chains.transitions << ','
+            << chains.table_memory_bytes << ',' << r.prediction_us << ','
+            << h1.cells[0].cell_accuracy() << ',' << h1.cells[1].cell_accuracy() << ','
+            << h1.cells[2].cell_accuracy() << ',' << h1.cells[3].cell_accuracy() << ','
+            << h1.error[0].mean() << '\n';
     }
   }
   return 0;

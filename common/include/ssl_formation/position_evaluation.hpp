@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/predictor.hpp"
 #include "ssl_formation/sampler.hpp"
+#include "ssl_formation/table_file.hpp"
 
 class SSL_WrapperPacket;
 
@@ -138,6 +140,7 @@ struct PositionEvaluation {
   std::uint64_t transitions = 0;
   std::size_t table_memory_bytes = 0;
   std::uint64_t test_formations = 0;
+  std::shared_ptr<const StoredTable> table;  // what the model was trained to
 };
 
 // Trains the model on the training streams (each its own stream: nothing spans two), fits the

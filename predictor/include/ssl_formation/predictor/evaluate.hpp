@@ -2,8 +2,9 @@
 // ssl-evaluate's work: how good the predictions are, trained and tested through the same
 // Training and PredictionPipeline the daemons run.
 //   paper       the paper's §6 protocol and its table, next to the paper's own numbers
-//   holdout     train on one stream, test on another: model against persistence and constant
-//               velocity, per horizon, and the calibration of the confidence
+//   holdout     train on some streams, test on others: every horizon in seconds, the error in
+//               millimetres and the cells of the model against persistence, constant velocity
+//               and damped constant velocity, and the calibration of every probability stated
 //   grid-sweep  the holdout report for several grids, with table memory and prediction time
 
 #include <cstdint>
@@ -24,12 +25,22 @@ struct EvaluateOptions {
   int tests = 5000;
   double jitter_mm = 0.0;
   int cameras = 1;
-  std::string train_log;
-  std::string test_log;
+  // Logs, each its own stream; --split F trains on the first F of every --train-log and tests
+  // on the rest of each.
+  std::vector<std::string> train_logs;
+  std::vector<std::string> test_logs;
   double split = 0.0;
+  // holdout: every horizon (seconds) is a model of its own (step = horizon, one step ahead),
+  // besides the chains of up to chain_steps steps of --step.
+  std::vector<double> horizons{0.2, 0.5, 1.0, 2.0};
+  int chain_steps = 3;
+  double velocity_window_s = 0.1;
   std::string output_dir = ".";
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
 };
+
+// "0.2,0.5,1,2" -> {0.2, 0.5, 1, 2}; throws app::UsageError naming --horizons.
+std::vector<double> parse_horizons(const std::string& text);
 
 // Each prints its report, writes its CSV files into output_dir and returns the exit status.
 int run_paper(const EvaluateOptions& options);
