@@ -200,5 +200,32 @@ TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
   EXPECT_EQ(bad_horizon.exit_code, 2);
 }
 
+// --sampling step is the paper's protocol as it was: the same table file and the same predictions,
+// byte for byte, as the code before rolling sampling made of the same log (tests/data/README.md).
+TEST(StepSampling, ReproducesTheTableAndPredictionsOfBeforeByteForByte) {
+  TempDir dir;
+  const std::filesystem::path data = SSLF_TEST_DATA_DIR;
+  const auto log = data / "step-golden.log.gz";
+  for (const std::vector<std::string> sampling : {std::vector<std::string>{},
+                                                 std::vector<std::string>{"--sampling", "step"}}) {
+    SCOPED_TRACE(sampling.empty() ? "default" : "--sampling step");
+    const auto table = dir / "table.bin";
+    std::filesystem::remove(table);
+    std::vector<std::string> train{"--from-log", log.string(), "--table", table.string(),
+                                   "--grid", "6x4"};
+    train.insert(train.end(), sampling.begin(), sampling.end());
+    const auto trained = testing::run_to_end(trainer_program, train, dir.path(), "train", 30s);
+    ASSERT_EQ(trained.exit_code, 0) << trained.err;
+    EXPECT_EQ(read_text(table), read_text(data / "step-golden-6x4.bin"));
+
+    std::vector<std::string> predict{"--from-log", log.string(), "--table",
+                                     (data / "step-golden-6x4.bin").string(), "--grid", "6x4"};
+    predict.insert(predict.end(), sampling.begin(), sampling.end());
+    const auto predicted = testing::run_to_end(predictor_program, predict, dir.path(), "predict", 30s);
+    ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
+    EXPECT_EQ(predicted.out, read_text(data / "step-golden-6x4.csv"));
+  }
+}
+
 }  // namespace
 }  // namespace ssl_formation
