@@ -201,6 +201,22 @@ void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks&
   }
 }
 
+namespace {
+
+// Every position the stream shows of each robot, frame by frame, whatever the model's sampling:
+// the baselines' velocities come from the robots' own observed positions.
+RobotTracks observed_tracks(const SamplerConfig& model, const std::vector<SSL_WrapperPacket>& stream) {
+  SamplerConfig every_frame = model;
+  every_frame.sampling = Sampling::frame;
+  RobotTracks tracks;
+  FormationSampler sampler(every_frame,
+                           [&](const FormationSample& sample) { tracks.add(sample.formation); });
+  for (const SSL_WrapperPacket& packet : stream) sampler.add(packet);
+  return tracks;
+}
+
+}  // namespace
+
 PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
                                       const std::vector<std::vector<SSL_WrapperPacket>>& train,
                                       const std::vector<std::vector<SSL_WrapperPacket>>& test) {
@@ -218,12 +234,11 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     training.start_new_stream();
     for (const SSL_WrapperPacket& packet : stream) training.add(packet);
     std::vector<Formation> formations;
-    RobotTracks tracks;
     FormationSampler sampler(config.sampler, [&](const FormationSample& sample) {
       formations.push_back(sample.formation);
-      tracks.add(sample.formation);
     });
     for (const SSL_WrapperPacket& packet : stream) sampler.add(packet);
+    const RobotTracks tracks = observed_tracks(config.sampler, stream);
     for (int k = 1; k <= config.steps; ++k) {
       fit_damping(fits[static_cast<std::size_t>(k - 1)], setup, tracks, formations, horizon_s(k));
     }
@@ -246,14 +261,13 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   for (const auto& stream : test) {
     std::vector<Formation> formations;
     std::vector<std::vector<PredictedStep>> predicted;
-    RobotTracks tracks;
     PredictionPipeline pipeline(prediction, [&](const PredictedFormation& p) {
       formations.push_back(p.formation());
       predicted.push_back(p.prediction.steps);
-      tracks.add(p.formation());
     });
     pipeline.set_table(table);
     for (const SSL_WrapperPacket& packet : stream) pipeline.add(packet);
+    const RobotTracks tracks = observed_tracks(config.sampler, stream);
     setup.field = pipeline.sampler().field();
     result.test_formations += formations.size();
     for (std::size_t i = 0; i < formations.size(); ++i) {

@@ -173,6 +173,21 @@ TEST(PositionEvaluation, TheModelIsScoredAtTheCentreOfItsPredictedCell) {
   EXPECT_EQ(score.robot.n, robots);
 }
 
+TEST(PositionEvaluation, StepSamplingStillTakesVelocitiesFromEveryObservedFrame) {
+  // One formation a step, but the baselines see the robots' own positions frame by frame: the
+  // same errors as with frame sampling on the instants both score.
+  PositionEvaluationConfig config;
+  config.sampler.grid = Grid(6, 4);
+  config.sampler.step_s = 0.5;
+  config.sampler.sampling = Sampling::step;
+  const PositionEvaluation step = evaluate_positions(config, {stream(20.0)}, {stream(10.0)});
+  const HorizonScore& score = step.horizons[0];
+  ASSERT_GT(score.error[1].count(), 0u);
+  EXPECT_EQ(step.test_formations, 21u);
+  // Constant velocity beats persistence on this motion only if it had velocities.
+  EXPECT_LT(score.error[2].mean(), 0.5 * score.error[1].mean());
+}
+
 TEST(PositionEvaluation, PercentilesInterpolateBetweenOrderStatistics) {
   ErrorStats stats;
   for (const double e : {40.0, 10.0, 30.0, 20.0, 50.0}) stats.add(e);
