@@ -2,12 +2,18 @@
 # Runs ssl-evaluate in its three modes and turns the CSVs into PNG plots:
 #   fig4-similarity.png      running averages of the similarity measures (the paper's Figure 4)
 #   fig5-confidence.png      running average confidence of the 1st and 2nd prediction (Figure 5)
-#   accuracy-vs-horizon.png  model against persistence and constant velocity, horizons 1-3
-#   reliability.png          reliability diagram of the formation confidence
+#   error-vs-horizon.png     position error in mm against horizon in seconds: the model against
+#                            persistence, constant velocity and damped constant velocity
+#   accuracy-vs-horizon.png  exact cell and state against horizon in seconds, same methods
+#   reliability.png          reliability diagrams of the per-robot probability and the formation
+#                            confidence
 #   grid-sweep.png           accuracy, table memory and prediction time per grid
 #
 #   scripts/plot-eval.sh [OUTPUT_DIR]      (default: build/eval)
-# Extra ssl-evaluate options can be given in SSLF_EVAL_OPTIONS, e.g. "--jitter-mm 20".
+# Extra ssl-evaluate options can be given in SSLF_EVAL_OPTIONS, e.g. "--jitter-mm 20"; those for
+# holdout and grid-sweep alone in SSLF_HOLDOUT_OPTIONS, e.g. to evaluate on the shared grSim
+# recordings: SSLF_HOLDOUT_OPTIONS="--train-log A.log.gz --test-log B.log.gz --sampling frame
+# --step 1".
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -24,9 +30,9 @@ evaluate="$build_dir/predictor/ssl-evaluate"
 # shellcheck disable=SC2086
 "$evaluate" paper --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} | tee "$out/paper.txt"
 # shellcheck disable=SC2086
-"$evaluate" holdout --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} | tee "$out/holdout.txt"
+"$evaluate" holdout --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} ${SSLF_HOLDOUT_OPTIONS:-} | tee "$out/holdout.txt"
 # shellcheck disable=SC2086
-"$evaluate" grid-sweep --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} | tee "$out/grid-sweep.txt"
+"$evaluate" grid-sweep --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} ${SSLF_HOLDOUT_OPTIONS:-} | tee "$out/grid-sweep.txt"
 
 # Debian's python3 (where python3-matplotlib lives), whatever else is first on PATH.
 MPLBACKEND=Agg /usr/bin/python3 - "$out" <<'PY'
@@ -57,39 +63,67 @@ ax.set_title("Confidence level decrease (paper Figure 5)"); ax.legend()
 fig.tight_layout(); fig.savefig(os.path.join(out, "fig5-confidence.png"), dpi=110)
 
 holdout = rows("holdout-accuracy.csv")
-methods = ["model", "persistence", "constant velocity"]
-fig, axes = plt.subplots(1, 3, figsize=(12, 4))
-for ax, key, label in zip(axes, ["state_accuracy", "cell_accuracy", "mean_cell_distance"],
-                          ["exact state", "exact cell", "cells off per robot"]):
+methods = ["model", "persistence", "constant velocity", "damped constant velocity"]
+# The horizons in seconds are each a model of their own (horizon_steps 1); the chains of --step
+# follow them in the file and are left out here, so each horizon appears once.
+def one_step_rows(method):
+    seen, out = set(), []
+    for r in holdout:
+        if r["method"] != method or r["horizon_steps"] != "1" or r["horizon_s"] in seen:
+            continue
+        seen.add(r["horizon_s"]); out.append(r)
+    return sorted(out, key=lambda r: float(r["horizon_s"]))
+fig, ax = plt.subplots(figsize=(7, 4.5))
+for m in methods:
+    points = [(float(r["horizon_s"]), float(r["mean_error_mm"])) for r in one_step_rows(m)
+              if int(r["robots"]) > 0]
+    ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", label=m)
+ax.set_xlabel("horizon (s)"); ax.set_ylabel("mean position error (mm)")
+ax.set_title("Held-out position error against horizon"); ax.legend()
+fig.tight_layout(); fig.savefig(os.path.join(out, "error-vs-horizon.png"), dpi=110)
+
+fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+for ax, key, label in zip(axes, ["cell_accuracy", "state_accuracy"], ["exact cell", "exact state"]):
     for m in methods:
-        points = [(int(r["horizon"]), float(r[key])) for r in holdout if r["method"] == m]
+        points = [(float(r["horizon_s"]), float(r[key])) for r in one_step_rows(m)
+                  if int(r["robots"]) > 0]
         ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", label=m)
-    ax.set_xlabel("horizon (steps)"); ax.set_title(label); ax.set_xticks([1, 2, 3])
+    ax.set_xlabel("horizon (s)"); ax.set_title(label)
 axes[0].legend()
-fig.suptitle("Held-out accuracy: model against baselines")
+fig.suptitle("Held-out accuracy in cells: model against baselines")
 fig.tight_layout(); fig.savefig(os.path.join(out, "accuracy-vs-horizon.png"), dpi=110)
 
 reliability = rows("holdout-reliability.csv")
-fig, ax = plt.subplots(figsize=(5, 5))
-ax.plot([0, 1], [0, 1], color="grey", linestyle=":", label="perfect calibration")
-for h in ["1", "2"]:
-    points = [(float(r["mean_confidence"]), float(r["observed_frequency"]), int(r["formations"]))
-              for r in reliability if r["horizon"] == h and int(r["formations"]) > 0]
-    brier = float([r for r in reliability if r["horizon"] == h][0]["brier"])
-    ax.scatter([p[0] for p in points], [p[1] for p in points], s=[10 + p[2] / 20 for p in points],
-               label=f"horizon {h} (Brier {brier:.3f})")
-    ax.plot([p[0] for p in points], [p[1] for p in points], alpha=0.5)
-ax.set_xlabel("predicted confidence (bin mean)"); ax.set_ylabel("observed frequency")
-ax.set_title("Reliability of the formation confidence"); ax.legend()
+fig, axes = plt.subplots(1, 2, figsize=(10, 5))
+for ax, quantity in zip(axes, ["robot", "formation"]):
+    ax.plot([0, 1], [0, 1], color="grey", linestyle=":", label="perfect calibration")
+    done = set()
+    for r0 in reliability:
+        key = (r0["horizon_steps"], r0["horizon_s"])
+        if r0["quantity"] != quantity or r0["horizon_steps"] != "1" or key in done:
+            continue
+        done.add(key)
+        points = [(float(r["mean_confidence"]), float(r["observed_frequency"]), int(r["count"]))
+                  for r in reliability[reliability.index(r0):reliability.index(r0) + 10]
+                  if int(r["count"]) > 0]
+        if not points:
+            continue
+        ax.plot([p[0] for p in points], [p[1] for p in points], marker="o",
+                label=f"{float(r0['horizon_s']):g} s")
+    ax.set_xlabel("stated probability (bin mean)"); ax.set_ylabel("observed frequency")
+    ax.set_title("per-robot probability" if quantity == "robot" else "formation confidence")
+    ax.legend()
+fig.suptitle("Reliability of the model's probabilities")
 fig.tight_layout(); fig.savefig(os.path.join(out, "reliability.png"), dpi=110)
 
 sweep = rows("grid-sweep.csv")
 grids = [r["grid"] for r in sweep]
 fig, axes = plt.subplots(1, 3, figsize=(13, 4))
 for key, label in [("model_cell_accuracy_h1", "model"), ("persistence_cell_accuracy_h1", "persistence"),
-                   ("constant_velocity_cell_accuracy_h1", "constant velocity")]:
+                   ("constant_velocity_cell_accuracy_h1", "constant velocity"),
+                   ("damped_constant_velocity_cell_accuracy_h1", "damped constant velocity")]:
     axes[0].plot(grids, [float(r[key]) for r in sweep], marker="o", label=label)
-axes[0].set_title("exact cell, horizon 1"); axes[0].legend()
+axes[0].set_title("exact cell, one step"); axes[0].legend()
 axes[1].bar(grids, [int(r["table_memory_bytes"]) / 1024 for r in sweep]); axes[1].set_title("table memory (KiB)")
 axes[2].bar(grids, [float(r["prediction_us"]) for r in sweep]); axes[2].set_title("2-step prediction (µs)")
 fig.suptitle("Grid sweep")
