@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the whole system on this machine's loopback: ssl-producer sends the paper's simulated
 # opponent, ssl-trainer learns the table, ssl-predictor predicts the next formations and prints
-# one line per prediction. Stops all three on Ctrl-C or after --duration seconds.
+# one line per prediction (rolling: a prediction at every frame, --sampling frame). Stops all
+# three on Ctrl-C or after --duration seconds.
 #
 #   scripts/demo.sh [--duration SECONDS] [--period SECONDS] [--grid LxW] [--horizon N]
 #                   [--cameras N] [--keep-table] [--http-port PORT]
@@ -57,14 +58,24 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 0' INT TERM
 
+rm -f "$run_dir"/*.ready
 "$build_dir/trainer/ssl-trainer" --vision-address "$vision" --table "$table" --grid "$grid" \
-  --flush-interval 1 --status-interval 5 2>"$run_dir/trainer.log" &
+  --sampling frame --flush-interval 1 --status-interval 5 --ready-file "$run_dir/trainer.ready" \
+  2>"$run_dir/trainer.log" &
 pids+=($!)
 "$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
-  --table "$table" --grid "$grid" --horizon "$horizon" --reload-interval 0.5 \
-  --http-port "$http_port" --http-address 127.0.0.1 2>"$run_dir/predictor.log" &
+  --table "$table" --grid "$grid" --horizon "$horizon" --sampling frame --reload-interval 0.5 \
+  --http-port "$http_port" --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
+  2>"$run_dir/predictor.log" &
 pids+=($!)
-sleep 0.5
+# The producer starts once both daemons have joined the group (they write their ready files).
+for _ in $(seq 100); do
+  [ -f "$run_dir/trainer.ready" ] && [ -f "$run_dir/predictor.ready" ] && break
+  for pid in "${pids[@]}"; do
+    kill -0 "$pid" 2>/dev/null || { echo "a daemon failed to start; see $run_dir/*.log" >&2; tail -5 "$run_dir"/*.log >&2; exit 1; }
+  done
+  sleep 0.1
+done
 "$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
   --cameras "$cameras" 2>"$run_dir/producer.log" &
 pids+=($!)

@@ -321,8 +321,11 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
 void FormationSampler::on_frame_instant(const ClockInstant& instant,
                                         std::vector<FormationRobot>& robots) {
   const double sample_s = instant.time_s;
-  // A gap in the frames: nothing before it is anyone's previous.
-  if (!history_.empty() && sample_s - history_.back().time_s > config_.frame_gap_s) break_chain();
+  // A gap longer than a step: nothing before it can be anyone's previous.
+  if (!history_.empty() &&
+      sample_s - history_.back().time_s > config_.step_s + config_.history_tolerance_s) {
+    break_chain();
+  }
   // Samples older than step_s (and the tolerance) can no longer be anyone's previous.
   const double oldest_s = sample_s - config_.step_s - config_.history_tolerance_s;
   while (!history_.empty() && history_.front().time_s < oldest_s - time_epsilon_s) {

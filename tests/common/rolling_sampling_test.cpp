@@ -92,33 +92,51 @@ TEST(RollingSampling, NoPreviousAcrossAGapNorForARobotNotSeenAStepEarlier) {
   Collector out;
   FormationSampler sampler(rolling(1.0), out.handler());
   std::uint32_t number = 0;
-  // 3 s of frames, then nothing for 0.8 s (more than frame_gap_s), then 3 s more. Robot 3
-  // appears at 1.5 s.
+  // 3 s of frames, then nothing for 1.5 s (more than a step), then 3 s more. Robot 3 appears at
+  // 1.5 s.
   std::vector<double> times;
   for (int i = 0; i <= 30; ++i) times.push_back(0.1 * i);
-  for (int i = 0; i <= 30; ++i) times.push_back(3.8 + 0.1 * i);
+  for (int i = 0; i <= 30; ++i) times.push_back(4.5 + 0.1 * i);
   for (const double t : times) {
     std::vector<RobotDetection> robots{{1, {walker_x(t), -1000}}};
     if (t >= 1.5 - 1e-9) robots.push_back({3, {2000, 2000}});
     sampler.add(frame_at(number++, 100.0 + t, robots));
   }
+  ASSERT_EQ(out.samples.size(), times.size());
   for (const FormationSample& sample : out.samples) {
     const double t = sample.formation.time_s - 100.0;
-    const bool after_gap = t > 3.5;
-    const double since_start = after_gap ? t - 3.8 : t;
+    // A step earlier there is a sample only 1-3 s into each part: never across the gap.
+    const double since_start = t > 3.5 ? t - 4.5 : t;
     const bool has_previous = since_start > 1.0 - 0.05;
     EXPECT_EQ(sample.formation.continues_previous, has_previous) << t;
     const FormationRobot* late = sample.formation.find(3);
+    std::size_t transitions_of_3 = 0;
+    for (const Transition& tr : sample.transitions) transitions_of_3 += tr.robot_id == 3;
     if (late && has_previous) {
       // Robot 3 was not seen a step before 1.5-2.4 s: it starts with velocity 0, unchained.
-      const bool seen_a_step_before = after_gap || t - 1.0 >= 1.5 - 0.05;
-      EXPECT_EQ(late->previous_cell == late->cell, true) << t;
-      std::size_t transitions_of_3 = 0;
-      for (const Transition& tr : sample.transitions) transitions_of_3 += tr.robot_id == 3;
+      const bool seen_a_step_before = t > 3.5 || t - 1.0 >= 1.5 - 0.05;
       EXPECT_EQ(transitions_of_3, seen_a_step_before ? 1u : 0u) << t;
+      if (!seen_a_step_before) EXPECT_EQ(late->previous_cell, late->cell) << t;
+    } else {
+      EXPECT_EQ(transitions_of_3, 0u) << t;
     }
   }
-  EXPECT_GE(sampler.counters().chain_breaks, 1u);
+  EXPECT_EQ(sampler.counters().chain_breaks, 1u);  // the gap
+}
+
+TEST(RollingSampling, AFeedOfOneFrameAStepChainsLikeStepSampling) {
+  // The paper's simulated opponent sends one frame per formation, a step apart: frame sampling
+  // then counts the same transitions as step sampling.
+  for (const Sampling sampling : {Sampling::frame, Sampling::step}) {
+    SamplerConfig config = rolling(2.0);
+    config.sampling = sampling;
+    Collector out;
+    FormationSampler sampler(config, out.handler());
+    for (std::uint32_t i = 0; i < 20; ++i) {
+      sampler.add(frame_at(i, 2.0 * i, {{1, {walker_x(0.2 * i), -1000}}, {2, {0, 1000}}}));
+    }
+    EXPECT_EQ(sampler.counters().transitions, 2u * 19u) << to_string(sampling);
+  }
 }
 
 TEST(RollingSampling, AStepSamplerOfTheSameStreamIsTheStepSamplingOfOld) {

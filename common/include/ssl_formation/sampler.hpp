@@ -67,12 +67,12 @@ struct SamplerConfig : DataClockConfig {
   double attack_window_s = 10.0;
   // Frame sampling: instants are frame_resolution_s apart (so every frame time is one); the
   // sample standing for "step_s earlier" is the one nearest that time within
-  // history_tolerance_s; a robot is in a sample if seen within frame_robot_timeout_s; frame
-  // instants more than frame_gap_s apart are a gap, and nothing before it is anyone's previous.
+  // history_tolerance_s (none there: no previous cell, no transition); a robot is in a sample if
+  // seen within frame_robot_timeout_s. Samples more than step_s + history_tolerance_s apart are a
+  // gap: nothing before it can be anyone's previous, and it counts as a chain break.
   double frame_resolution_s = 0.001;
   double history_tolerance_s = 0.05;
   double frame_robot_timeout_s = 0.1;
-  double frame_gap_s = 0.5;
 
   double robot_fresh_window_s() const {
     return std::min(robot_timeout_s, sampling == Sampling::frame ? frame_robot_timeout_s : step_s);
