@@ -284,22 +284,7 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   const bool continues = previous_ && k - previous_k_ == 1 && !instant.in_conflict;
   if (previous_ && !continues) ++counters_.chain_breaks;
   if (instant.in_conflict) ++counters_.samples_in_conflict;
-  FormationSample& sample = sample_scratch_;
-  build_formation(codec_, field_, robots, continues ? &*previous_ : nullptr, sample.formation);
-  sample.formation.time_s = sample_s;
-  sample.formation.frame_number = last_frame_number_;
-  sample.formation.opponent_attacks = attacks_.value_or(config_.opponent_attacks);
-  sample.transitions.clear();
-  if (continues) {
-    for (const FormationRobot& robot : sample.formation.robots) {
-      if (const FormationRobot* before = previous_->find(robot.robot_id)) {
-        sample.transitions.push_back({robot.robot_id, before->state, robot.state});
-      }
-    }
-  }
-  ++counters_.samples;
-  if (instant.forced) ++counters_.samples_forced;
-  counters_.transitions += sample.transitions.size();
+  FormationSample& sample = build_sample(instant, robots, continues ? &*previous_ : nullptr);
   previous_k_ = k;
   // This sample becomes the previous one after the handler has run (the predictor sends its
   // prediction from there, so nothing else should come first), by swapping buffers rather than
@@ -315,6 +300,31 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
     }
   } becomes_previous{*this, restarts_};
   if (on_sample_) on_sample_(sample);
+}
+
+// The sample of an instant, into sample_scratch_: its formation from `robots` (whose storage it
+// takes) with the previous cells from `before` (none: velocity 0), and a transition from
+// `before` for every robot in both.
+FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
+                                                std::vector<FormationRobot>& robots,
+                                                const Formation* before) {
+  FormationSample& sample = sample_scratch_;
+  build_formation(codec_, field_, robots, before, sample.formation);
+  sample.formation.time_s = instant.time_s;
+  sample.formation.frame_number = last_frame_number_;
+  sample.formation.opponent_attacks = attacks_.value_or(config_.opponent_attacks);
+  sample.transitions.clear();
+  if (before) {
+    for (const FormationRobot& robot : sample.formation.robots) {
+      if (const FormationRobot* then = before->find(robot.robot_id)) {
+        sample.transitions.push_back({robot.robot_id, then->state, robot.state});
+      }
+    }
+  }
+  ++counters_.samples;
+  if (instant.forced) ++counters_.samples_forced;
+  counters_.transitions += sample.transitions.size();
+  return sample;
 }
 
 // Frame sampling: the sample's previous formation is the one sampled step_s before it.
@@ -348,22 +358,7 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
     ++counters_.samples_in_conflict;
     before = nullptr;
   }
-  FormationSample& sample = sample_scratch_;
-  build_formation(codec_, field_, robots, before, sample.formation);
-  sample.formation.time_s = sample_s;
-  sample.formation.frame_number = last_frame_number_;
-  sample.formation.opponent_attacks = attacks_.value_or(config_.opponent_attacks);
-  sample.transitions.clear();
-  if (before) {
-    for (const FormationRobot& robot : sample.formation.robots) {
-      if (const FormationRobot* then = before->find(robot.robot_id)) {
-        sample.transitions.push_back({robot.robot_id, then->state, robot.state});
-      }
-    }
-  }
-  ++counters_.samples;
-  if (instant.forced) ++counters_.samples_forced;
-  counters_.transitions += sample.transitions.size();
+  FormationSample& sample = build_sample(instant, robots, before);
   // The sample joins the history after the handler has run (the predictor sends its prediction
   // from there); a handler that starts a new stream forgets it too.
   struct JoinsHistory {

@@ -116,7 +116,9 @@ TEST(RollingSampling, NoPreviousAcrossAGapNorForARobotNotSeenAStepEarlier) {
       // Robot 3 was not seen a step before 1.5-2.4 s: it starts with velocity 0, unchained.
       const bool seen_a_step_before = t > 3.5 || t - 1.0 >= 1.5 - 0.05;
       EXPECT_EQ(transitions_of_3, seen_a_step_before ? 1u : 0u) << t;
-      if (!seen_a_step_before) EXPECT_EQ(late->previous_cell, late->cell) << t;
+      if (!seen_a_step_before) {
+        EXPECT_EQ(late->previous_cell, late->cell) << t;
+      }
     } else {
       EXPECT_EQ(transitions_of_3, 0u) << t;
     }

@@ -182,6 +182,8 @@ class FormationSampler : private DataClockListener {
   // Forgets the formations a later one could take its previous cells from (a chain break).
   void break_chain();
   void on_frame_instant(const ClockInstant& instant, std::vector<FormationRobot>& robots);
+  FormationSample& build_sample(const ClockInstant& instant, std::vector<FormationRobot>& robots,
+                                const Formation* before);
 
   SamplerConfig config_;
   StateCodec codec_;
