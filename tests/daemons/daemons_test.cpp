@@ -16,12 +16,14 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
+#include "status_lines.hpp"
 
 namespace ssl_formation {
 namespace {
 
 using namespace std::chrono_literals;
 using testing::ChildProcess;
+using testing::Readiness;
 using testing::TempDir;
 
 const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
@@ -68,7 +70,8 @@ void produce(const TempDir& dir, const std::string& group, std::uint64_t seed, i
 
 // Stops a trainer with SIGTERM once it has sampled `formations`, and checks it exits cleanly.
 void stop_trainer_after(ChildProcess& trainer, int formations) {
-  ASSERT_TRUE(trainer.wait_for_stderr("formations=" + std::to_string(formations) + " ", 10s))
+  ASSERT_TRUE(
+      testing::wait_for_status(trainer, "formations", static_cast<std::uint64_t>(formations), 10s))
       << trainer.stderr_text();
   trainer.signal(SIGTERM);
   const auto code = trainer.wait(5s);
@@ -80,8 +83,8 @@ TEST(Daemons, TrainerTableHoldsExactlyTheLibrarysTransitions) {
   TempDir dir;
   const std::string group = new_group();
   ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(),
-                       "trainer");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
+                       "trainer", Readiness::ready_file);
+  ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   produce(dir, group, 11, 300);
   stop_trainer_after(trainer, 300);
 
@@ -98,8 +101,8 @@ TEST(Daemons, FourCameraFeedTrainsTheSameTableAsOneCamera) {
   TempDir dir;
   const std::string group = new_group();
   ChildProcess trainer(trainer_program, trainer_args(group, dir / "table.bin"), dir.path(),
-                       "trainer");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
+                       "trainer", Readiness::ready_file);
+  ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   produce(dir, group, 21, 200, {"--cameras", "4", "--camera-overlap", "400"});
   stop_trainer_after(trainer, 200);
   const auto loaded = load_table(dir / "table.bin", Grid(3, 2));
@@ -117,8 +120,9 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
                           "--table", table_path.string(), "--horizon", "3"},
-                         dir.path(), "predictor");
-  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
+                         dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
   PredictionListener listener(predictions);
   produce(dir, vision, 4, 60);
   const auto received = listener.wait_for(60, 10s);
@@ -172,15 +176,30 @@ TEST(Daemons, ProducerPacketsRoundTripThroughOurSchema) {
   const std::string group = new_group();
   boost::asio::io_context io;
   net::MulticastReceiver receiver(io, net::parse_multicast_endpoint(group).value());
+  std::mutex mutex;
   std::vector<std::string> datagrams;
+  bool marker_back = false;
   receiver.start([&](std::span<const std::byte> data, const net::udp::endpoint&) {
-    datagrams.emplace_back(reinterpret_cast<const char*>(data.data()), data.size());
+    std::string bytes(reinterpret_cast<const char*>(data.data()), data.size());
+    std::lock_guard lock(mutex);
+    if (bytes == testing::end_marker) {
+      marker_back = true;
+    } else {
+      datagrams.push_back(std::move(bytes));
+    }
   });
-  std::thread io_thread([&] { io.run_for(8s); });
+  std::thread io_thread([&] { io.run_for(20s); });
   produce(dir, group, 8, 20, {"--cameras", "4", "--jitter-mm", "15", "--opponent-color", "blue"});
-  std::this_thread::sleep_for(300ms);
+  // The producer has stopped: once our end marker is back, all it sent has arrived.
+  ASSERT_TRUE(testing::send_to_group(group, testing::end_marker));
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (std::lock_guard lock(mutex); marker_back) break;
+    std::this_thread::sleep_for(2ms);
+  }
   io.stop();
   io_thread.join();
+  ASSERT_TRUE(marker_back);
   // 20 formations x 4 cameras, plus a geometry packet every 3 s of data time (10 of them).
   ASSERT_EQ(datagrams.size(), 90u);
   int detections = 0;
@@ -205,8 +224,9 @@ TEST(Daemons, TrainerSavesOnSigtermAndResumesItsCounts) {
   const auto table_path = dir / "table.bin";
   std::uint64_t first_transitions = 0;
   {
-    ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer1");
-    ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
+    ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer1",
+                         Readiness::ready_file);
+    ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
     produce(dir, group, 5, 100);
     stop_trainer_after(trainer, 100);
     const auto loaded = load_table(table_path, Grid(3, 2));
@@ -215,9 +235,13 @@ TEST(Daemons, TrainerSavesOnSigtermAndResumesItsCounts) {
     EXPECT_EQ(entries(loaded->table), entries(reference_table(5, 100)));
   }
   {
-    ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer2");
-    ASSERT_TRUE(trainer.wait_for_stderr("resumed", 5s)) << trainer.stderr_text();
-    ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s));
+    ChildProcess trainer(trainer_program, trainer_args(group, table_path), dir.path(), "trainer2",
+                         Readiness::ready_file);
+    ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
+    // Ready means the table is open, and the trainer says it resumed it (the counts below show
+    // that it really did).
+    EXPECT_NE(trainer.stderr_text().find("resumed " + table_path.string()), std::string::npos)
+        << trainer.stderr_text();
     produce(dir, group, 5, 100);
     stop_trainer_after(trainer, 100);
   }
@@ -245,8 +269,8 @@ TEST(Daemons, TrainerRefusesATableOfAnotherGridUnlessReset) {
   ChildProcess trainer(trainer_program,
                        {"--table", table_path.string(), "--grid", "6x4", "--reset",
                         "--vision-address", group, "--status-interval", "0.1"},
-                       dir.path(), "reset");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
+                       dir.path(), "reset", Readiness::ready_file);
+  ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   trainer.signal(SIGTERM);
   EXPECT_EQ(trainer.wait(5s), 0);
   EXPECT_TRUE(load_table(table_path, Grid(6, 4)));
@@ -257,16 +281,19 @@ TEST(Daemons, PredictorWaitsForTheTableAndPicksUpReplacements) {
   const auto table_path = dir / "table.bin";
   const std::string vision = new_group();
   const std::string predictions = new_group();
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--reload-interval", "0.05", "--quiet"},
-                         dir.path(), "predictor");
-  ASSERT_TRUE(predictor.wait_for_stderr("waiting for the table", 5s)) << predictor.stderr_text();
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+       table_path.string(), "--reload-interval", "0.05", "--quiet", "--status-interval", "0.05"},
+      dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  ASSERT_EQ(predictor.ready_fact("table_loaded"), "0") << predictor.stderr_text();
   PredictionListener listener(predictions);
 
   const TransitionTable first = reference_table(1, 100);
   ASSERT_TRUE(save_table(table_path, first, TableMetadata{}));
-  ASSERT_TRUE(predictor.wait_for_stderr("(reload 1)", 5s)) << predictor.stderr_text();
+  ASSERT_TRUE(testing::wait_for_status(predictor, "table_reloads", 1, 5s))
+      << predictor.stderr_text();
   produce(dir, vision, 2, 5);
   auto received = listener.wait_for(5, 5s);
   ASSERT_EQ(received.size(), 5u);
@@ -275,7 +302,8 @@ TEST(Daemons, PredictorWaitsForTheTableAndPicksUpReplacements) {
   const TransitionTable second = reference_table(1, 400);
   ASSERT_NE(first.transitions(), second.transitions());
   ASSERT_TRUE(save_table(table_path, second, TableMetadata{}));  // atomic rename, as the trainer
-  ASSERT_TRUE(predictor.wait_for_stderr("(reload 2)", 5s)) << predictor.stderr_text();
+  ASSERT_TRUE(testing::wait_for_status(predictor, "table_reloads", 2, 5s))
+      << predictor.stderr_text();
   produce(dir, vision, 2, 5);
   received = listener.wait_for(10, 5s);
   ASSERT_EQ(received.size(), 10u);
@@ -292,20 +320,22 @@ TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
   const TransitionTable table = reference_table(3, 500);
   ASSERT_TRUE(save_table(dir / "predict.bin", table, TableMetadata{}));
   ChildProcess trainer_a(trainer_program, trainer_args(vision_a, dir / "a.bin"), dir.path(),
-                         "trainer-a");
+                         "trainer-a", Readiness::ready_file);
   ChildProcess trainer_b(trainer_program, trainer_args(vision_b, dir / "b.bin"), dir.path(),
-                         "trainer-b");
+                         "trainer-b", Readiness::ready_file);
   ChildProcess predictor_a(predictor_program,
                            {"--vision-address", vision_a, "--prediction-address", predictions_a,
                             "--table", (dir / "predict.bin").string(), "--quiet"},
-                           dir.path(), "predictor-a");
+                           dir.path(), "predictor-a", Readiness::ready_file);
   ChildProcess predictor_b(predictor_program,
                            {"--vision-address", vision_b, "--prediction-address", predictions_b,
                             "--table", (dir / "predict.bin").string(), "--quiet"},
-                           dir.path(), "predictor-b");
+                           dir.path(), "predictor-b", Readiness::ready_file);
   for (ChildProcess* p : {&trainer_a, &trainer_b, &predictor_a, &predictor_b}) {
-    ASSERT_TRUE(p->wait_for_stderr("listening on", 5s)) << p->stderr_text();
+    ASSERT_TRUE(p->wait_until_ready(10s)) << p->stderr_text();
   }
+  EXPECT_EQ(predictor_a.ready_fact("table_loaded"), "1");
+  EXPECT_EQ(predictor_b.ready_fact("table_loaded"), "1");
   PredictionListener listen_a(predictions_a);
   PredictionListener listen_b(predictions_b);
   produce(dir, vision_a, 6, 40);
@@ -313,14 +343,26 @@ TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
   EXPECT_EQ(listen_a.wait_for(40, 5s).size(), 40u);
   trainer_b.signal(SIGTERM);
   ASSERT_EQ(trainer_b.wait(5s), 0);
-  std::this_thread::sleep_for(200ms);
-  EXPECT_TRUE(listen_b.wait_for(1, 0ms).empty());
+  predictor_b.signal(SIGTERM);
+  ASSERT_EQ(predictor_b.wait(5s), 0);
+  // All of pipeline a's predictions have arrived, and so, once an end marker sent after them
+  // through each prediction group is back, has anything that went astray.
+  const auto on_a = listen_a.drain(5s);
+  const auto on_b = listen_b.drain(5s);
+  ASSERT_TRUE(on_a.has_value() && on_b.has_value());
+  EXPECT_EQ(on_a->size(), 40u);
+  EXPECT_TRUE(on_b->empty());
   const auto a = load_table(dir / "a.bin", Grid(3, 2));
   const auto b = load_table(dir / "b.bin", Grid(3, 2));
   ASSERT_TRUE(a && b);
   EXPECT_EQ(entries(a->table), entries(reference_table(6, 40)));
   EXPECT_EQ(b->table.transitions(), 0u);
-  EXPECT_NE(trainer_b.stderr_text().find("packets=0 "), std::string::npos);
+  // Pipeline b's daemons received nothing at all (their last status lines, written as they exit).
+  for (ChildProcess* p : {&trainer_b, &predictor_b}) {
+    const testing::Status status = testing::last_status(p->stderr_text());
+    ASSERT_TRUE(status.contains("packets")) << p->stderr_text();
+    EXPECT_EQ(status.at("packets"), 0u) << p->stderr_text();
+  }
 }
 
 TEST(Daemons, SharedOptionsHelpAndErrors) {
@@ -352,20 +394,25 @@ TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
   for (const int signal_number : {SIGINT, SIGTERM}) {
     const std::string group = new_group();
     std::vector<std::unique_ptr<ChildProcess>> daemons;
-    daemons.push_back(std::make_unique<ChildProcess>(
-        trainer_program, trainer_args(group, dir / "t.bin"), dir.path(), "trainer"));
+    daemons.push_back(std::make_unique<ChildProcess>(trainer_program,
+                                                     trainer_args(group, dir / "t.bin"), dir.path(),
+                                                     "trainer", Readiness::ready_file));
     daemons.push_back(std::make_unique<ChildProcess>(
         predictor_program,
         std::vector<std::string>{"--vision-address", group, "--table", (dir / "t.bin").string(),
-                                 "--prediction-address", new_group()},
-        dir.path(), "predictor"));
+                                 "--prediction-address", new_group(), "--status-interval", "0.1"},
+        dir.path(), "predictor", Readiness::ready_file));
     daemons.push_back(std::make_unique<ChildProcess>(
         producer_program, std::vector<std::string>{"--vision-address", group, "--period", "0.05"},
-        dir.path(), "producer"));
+        dir.path(), "producer", Readiness::ready_file));
     for (auto& d : daemons) {
-      ASSERT_TRUE(d->wait_for_stderr("info:", 5s));
+      ASSERT_TRUE(d->wait_until_ready(10s)) << d->stderr_text();
     }
-    std::this_thread::sleep_for(300ms);
+    EXPECT_EQ(daemons[2]->ready_fact("mode"), "simulation");
+    // Stopped mid-stream: once the feed reaches the trainer and the predictor.
+    for (auto& d : {daemons[0].get(), daemons[1].get()}) {
+      ASSERT_TRUE(testing::wait_for_status(*d, "packets", 1, 10s)) << d->stderr_text();
+    }
     for (auto& d : daemons) {
       const auto start = std::chrono::steady_clock::now();
       d->signal(signal_number);

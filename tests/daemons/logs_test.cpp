@@ -13,10 +13,12 @@
 #include <thread>
 
 #include "child_process.hpp"
+#include "pipeline_support.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
+#include "status_lines.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -24,6 +26,7 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using testing::ChildProcess;
+using testing::Readiness;
 using testing::TempDir;
 
 const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
@@ -40,11 +43,16 @@ class Listener {
   };
 
   explicit Listener(const std::string& group)
-      : receiver_(io_, net::parse_multicast_endpoint(group).value()) {
+      : group_(group), receiver_(io_, net::parse_multicast_endpoint(group).value()) {
     receiver_.start([this](std::span<const std::byte> data, const net::udp::endpoint&) {
+      const auto at = Clock::now();
+      std::string bytes(reinterpret_cast<const char*>(data.data()), data.size());
       std::lock_guard lock(mutex_);
-      datagrams_.push_back(
-          {Clock::now(), std::string(reinterpret_cast<const char*>(data.data()), data.size())});
+      if (bytes == testing::end_marker) {
+        ++markers_;
+      } else {
+        datagrams_.push_back({at, std::move(bytes)});
+      }
     });
     thread_ = std::thread([this] { io_.run_for(30s); });
   }
@@ -52,12 +60,26 @@ class Listener {
     io_.stop();
     thread_.join();
   }
-  // Waits until `n` datagrams arrived (or the time-out), then a little longer for stragglers.
-  std::vector<Datagram> wait_for(std::size_t n, std::chrono::milliseconds timeout,
-                                 std::chrono::milliseconds settle = 200ms) {
+  // Waits until `n` datagrams arrived (or the time-out); then, the sender having stopped, sends
+  // an end marker and waits for it, so that any datagram beyond the `n` has arrived too.
+  std::vector<Datagram> wait_for(std::size_t n, std::chrono::milliseconds timeout) {
     const auto deadline = Clock::now() + timeout;
     while (Clock::now() < deadline && count() < n) std::this_thread::sleep_for(5ms);
-    std::this_thread::sleep_for(settle);
+    std::size_t markers = 0;
+    {
+      std::lock_guard lock(mutex_);
+      markers = markers_;
+    }
+    EXPECT_TRUE(testing::send_to_group(group_, testing::end_marker));
+    const auto marker_deadline = Clock::now() + 5s;
+    while (Clock::now() < marker_deadline) {
+      {
+        std::lock_guard lock(mutex_);
+        if (markers_ > markers) return datagrams_;
+      }
+      std::this_thread::sleep_for(2ms);
+    }
+    ADD_FAILURE() << "the end marker sent to " << group_ << " did not come back";
     std::lock_guard lock(mutex_);
     return datagrams_;
   }
@@ -67,11 +89,13 @@ class Listener {
   }
 
  private:
+  const std::string group_;
   boost::asio::io_context io_;
   net::MulticastReceiver receiver_;
   std::thread thread_;
   std::mutex mutex_;
   std::vector<Datagram> datagrams_;
+  std::size_t markers_ = 0;
 };
 
 SSL_WrapperPacket detection_packet(std::uint32_t frame_number, double t_capture) {
@@ -399,11 +423,17 @@ TEST(Logs, ReplayStopsOnASignal) {
   TempDir dir;
   const auto path = dir / "loop.log";
   write_paced_log(path, 20, unix_ns_paced);
+  const std::string group = new_group();
+  Listener listener(group);
   ChildProcess producer(producer_program,
-                        {"--replay", path.string(), "--vision-address", new_group(), "--loop"},
-                        dir.path(), "replay");
-  ASSERT_TRUE(producer.wait_for_stderr("replaying", 5s)) << producer.stderr_text();
-  std::this_thread::sleep_for(300ms);
+                        {"--replay", path.string(), "--vision-address", group, "--loop"},
+                        dir.path(), "replay", Readiness::ready_file);
+  ASSERT_TRUE(producer.wait_until_ready(10s)) << producer.stderr_text();
+  EXPECT_EQ(producer.ready_fact("mode"), "replay");
+  // Stopped mid-replay: once its packets arrive.
+  const auto deadline = Clock::now() + 10s;
+  while (listener.count() < 3 && Clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  ASSERT_GE(listener.count(), 3u) << producer.stderr_text();
   producer.signal(SIGINT);
   EXPECT_EQ(producer.wait(1s), 0);
   EXPECT_NE(producer.stderr_text().find("stopped: "), std::string::npos) << producer.stderr_text();
@@ -467,15 +497,16 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
   ChildProcess recorder(
       record_program,
       {"--vision-address", group, "--output", path.string(), "--status-interval", "0.05"},
-      dir.path(), "record");
-  ASSERT_TRUE(recorder.wait_for_stderr("recording", 5s)) << recorder.stderr_text();
+      dir.path(), "record", Readiness::ready_file);
+  ASSERT_TRUE(recorder.wait_until_ready(10s)) << recorder.stderr_text();
+  EXPECT_EQ(recorder.ready_fact("output"), path.string());
   const auto produced =
       testing::run_to_end(producer_program,
                           {"--vision-address", group, "--period", "0.002", "--count", "100",
                            "--seed", "3", "--status-interval", "100"},
                           dir.path(), "producer", 20s);
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
-  ASSERT_TRUE(recorder.wait_for_stderr("recorded=" + std::to_string(expected.size()) + " ", 5s))
+  ASSERT_TRUE(testing::wait_for_status(recorder, "recorded", expected.size(), 10s))
       << recorder.stderr_text();
   recorder.signal(SIGINT);
   const auto code = recorder.wait(2s);
@@ -542,8 +573,8 @@ TEST(Logs, RecordCountsButSkipsDatagramsThatAreNotVisionAndStopsAtItsCount) {
   ChildProcess recorder(record_program,
                         {"--vision-address", group, "--output", path.string(), "--count", "5",
                          "--index", "--status-interval", "0.05"},
-                        dir.path(), "record");
-  ASSERT_TRUE(recorder.wait_for_stderr("recording", 5s)) << recorder.stderr_text();
+                        dir.path(), "record", Readiness::ready_file);
+  ASSERT_TRUE(recorder.wait_until_ready(10s)) << recorder.stderr_text();
   boost::asio::io_context io;
   net::MulticastSender sender(io, net::parse_multicast_endpoint(group).value());
   sender.open();
@@ -552,14 +583,15 @@ TEST(Logs, RecordCountsButSkipsDatagramsThatAreNotVisionAndStopsAtItsCount) {
   for (std::uint32_t i = 0; i < 8; ++i) {
     const std::string bytes = detection_packet(i, 10.0 + 0.1 * i).SerializeAsString();
     sender.send(std::as_bytes(std::span(bytes)));
-    std::this_thread::sleep_for(2ms);
+    std::this_thread::sleep_for(2ms);  // the sender's pace, not a wait for anything
   }
   const auto code = recorder.wait(3s);
   ASSERT_TRUE(code.has_value()) << recorder.stderr_text();
   EXPECT_EQ(*code, 0) << recorder.stderr_text();
-  EXPECT_NE(recorder.stderr_text().find("done: recorded=5 "), std::string::npos)
-      << recorder.stderr_text();
-  EXPECT_NE(recorder.stderr_text().find("skipped=1 "), std::string::npos) << recorder.stderr_text();
+  const testing::Status done = testing::last_status(recorder.stderr_text(), "done:");
+  ASSERT_TRUE(done.contains("recorded") && done.contains("skipped")) << recorder.stderr_text();
+  EXPECT_EQ(done.at("recorded"), 5u) << recorder.stderr_text();
+  EXPECT_EQ(done.at("skipped"), 1u) << recorder.stderr_text();
   const LogVisionPackets recorded = read_vision_log(path).value();
   EXPECT_FALSE(recorded.stopped_early) << recorded.stopped_early->message;
   EXPECT_EQ(recorded.counters.index, 1u);  // --index

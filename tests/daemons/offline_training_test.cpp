@@ -9,6 +9,7 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
+#include "status_lines.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -172,15 +173,15 @@ TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
   testing::ChildProcess live(trainer_program,
                              {"--vision-address", group, "--table", (dir / "live.bin").string(),
                               "--status-interval", "0.1"},
-                             dir.path(), "live");
-  ASSERT_TRUE(live.wait_for_stderr("listening on", 5s)) << live.stderr_text();
+                             dir.path(), "live", testing::Readiness::ready_file);
+  ASSERT_TRUE(live.wait_until_ready(10s)) << live.stderr_text();
   // 300 formations of 2 s of data time at 300x: 2 s of wall time, with the recorded spacing.
   const auto replay = testing::run_to_end(
       producer_program,
       {"--replay", (dir / "match.log.gz").string(), "--speed", "300", "--vision-address", group},
       dir.path(), "replay", 60s);
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
-  ASSERT_TRUE(live.wait_for_stderr("formations=300 ", 10s)) << live.stderr_text();
+  ASSERT_TRUE(testing::wait_for_status(live, "formations", 300, 10s)) << live.stderr_text();
   live.signal(SIGTERM);
   ASSERT_EQ(live.wait(5s), 0);
 

@@ -1,11 +1,12 @@
 // Crash safety (issue 6, part 3): the trainer is killed with SIGKILL at 50 random moments while a
 // producer feeds it and it saves every 20 ms. After each kill the table loads, its checksum holds,
 // it holds at least the last save the trainer logged, and counts never go down from one kill to
-// the next (the trainer restarts on the same table each time).
+// the next (the trainer restarts on the same table each time and resumes every count in it).
 
 #include <signal.h>
 
 #include <iostream>
+#include <optional>
 #include <random>
 
 #include "reliability_support.hpp"
@@ -60,18 +61,38 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
   std::size_t most_temporaries = 0;
   const auto started = std::chrono::steady_clock::now();
   for (int round = 0; round < 50; ++round) {
+    // What this round starts from: the table file as the last kill left it, if any (round 0, and
+    // a round after kills that all came before the first save, start without one).
+    std::optional<StoredTable> before;
+    if (std::filesystem::exists(table_path)) {
+      auto loaded = load_table(table_path, Grid(3, 2));
+      ASSERT_TRUE(loaded) << "before round " << round << ": " << loaded.error().message;
+      before = std::move(*loaded);
+    }
     ChildProcess trainer(trainer_program,
                          {"--vision-address", group, "--table", table_path.string(),
                           "--flush-interval", "0.02", "--status-interval", "100", "--verbose"},
-                         dir.path(), "trainer-" + std::to_string(round));
-    ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
-    if (round > 0) {
-      ASSERT_NE(trainer.stderr_text().find("resumed " + table_path.string() + ": grid 3x2, " +
-                                           std::to_string(previous_transitions) + " transitions"),
+                         dir.path(), "trainer-" + std::to_string(round),
+                         testing::Readiness::ready_file);
+    ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
+    // Ready means the table is open: the trainer resumed exactly what the file holds (and said
+    // so), or, without a file, started an empty table.
+    const std::string resumed = "resumed " + table_path.string() + ": grid 3x2, ";
+    if (before) {
+      EXPECT_NE(trainer.stderr_text().find(
+                    resumed + std::to_string(before->table.transitions()) + " transitions, " +
+                    std::to_string(before->metadata.samples) + " formations"),
                 std::string::npos)
+          << "round " << round << ":\n"
+          << trainer.stderr_text();
+    } else {
+      EXPECT_EQ(trainer.stderr_text().find("resumed "), std::string::npos)
+          << "round " << round << " resumed a table that does not exist:\n"
           << trainer.stderr_text();
     }
     ASSERT_TRUE(producer.running());
+    // The kill moment itself is the scenario: a random instant 5 to 400 ms into the run, so the
+    // 50 kills land before, between and in the middle of the 20 ms saves.
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(random)));
     trainer.signal(SIGKILL);
     int signalled = 0;
@@ -93,6 +114,14 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
     if (logged.saves > 0) {
       EXPECT_GE(transitions, logged.transitions) << "kill " << round << " lost a logged save";
       EXPECT_GE(formations, logged.formations) << "kill " << round;
+    }
+    if (before) {
+      // Resumed, not restarted: every count of the table the round started from is still there.
+      std::size_t lower = 0;
+      before->table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count c) {
+        if (loaded->table.count(from, to) < c) ++lower;
+      });
+      EXPECT_EQ(lower, 0u) << "kill " << round << ": counts of the table it resumed went down";
     }
     EXPECT_GE(transitions, previous_transitions) << "kill " << round << ": counts went down";
     EXPECT_GE(formations, previous_formations) << "kill " << round;

@@ -223,11 +223,20 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
 TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   TempDir dir;
   const std::string group = new_group();
+  // What the two producers send: the library's streams for their seeds and clocks.
+  sim::SimulationConfig config;
+  config.seed = 71;
+  const auto a_packets = simulated_packets(config, 300);
+  const auto a = train(a_packets);
+  config.seed = 72;
+  config.start_time_s = 100000;
+  const auto b_packets = simulated_packets(config, 300);
+  const auto b = train(b_packets);
   ChildProcess trainer(trainer_program,
                        {"--vision-address", group, "--table", (dir / "trainer.bin").string(),
                         "--status-interval", "0.1", "--flush-interval", "60"},
-                       dir.path(), "trainer");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
+                       dir.path(), "trainer", testing::Readiness::ready_file);
+  ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   auto producer = [&](const char* seed, const char* start) {
     return std::make_unique<ChildProcess>(
         producer_program,
@@ -239,18 +248,16 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   auto replay = producer("72", "100000");
   ASSERT_EQ(live->wait(20s), 0);
   ASSERT_EQ(replay->wait(20s), 0);
-  ASSERT_TRUE(wait_for_status(trainer, "packets", 1, 5s));
-  std::this_thread::sleep_for(300ms);
+  // Stopped once the trainer has taken in every datagram of both.
+  const std::uint64_t sent = a_packets.size() + b_packets.size();
+  ASSERT_TRUE(wait_for_status_where(
+      trainer, [&](const testing::Status& s) { return received_or_dropped(s) >= sent; }, 10s))
+      << "sent " << sent << "\n"
+      << trainer.stderr_text();
   trainer.signal(SIGTERM);
   ASSERT_EQ(trainer.wait(5s), 0) << trainer.stderr_text();
   const auto status = last_status(trainer.stderr_text());
   EXPECT_GE(status.at("clock_conflicts"), 1u) << trainer.stderr_text();
-  sim::SimulationConfig config;
-  config.seed = 71;
-  const auto a = train(simulated_packets(config, 300));
-  config.seed = 72;
-  config.start_time_s = 100000;
-  const auto b = train(simulated_packets(config, 300));
   const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.error().message;
   EXPECT_LT(loaded->table.transitions(), a->table().transitions() + b->table().transitions());

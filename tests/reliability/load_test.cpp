@@ -7,7 +7,9 @@
 #include <sys/prctl.h>
 #include <time.h>
 
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "reliability_support.hpp"
 
@@ -31,6 +33,35 @@ void sleep_until_ns(std::int64_t deadline) {
   timespec until{static_cast<time_t>(deadline / 1'000'000'000),
                  static_cast<long>(deadline % 1'000'000'000)};
   ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr);
+}
+
+// Bytes waiting in the receive queues of the sockets bound to `port` (rx_queue in
+// /proc/net/udp): 0 once every daemon on the group has read all that reached it.
+std::uint64_t queued_bytes(std::uint16_t port) {
+  std::ifstream table("/proc/net/udp");
+  std::string line;
+  std::getline(table, line);  // the header
+  std::uint64_t total = 0;
+  while (std::getline(table, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, remote, state, queues;
+    fields >> slot >> local >> remote >> state >> queues;
+    const std::size_t colon = local.find(':');
+    const std::size_t queue_colon = queues.find(':');
+    if (colon == std::string::npos || queue_colon == std::string::npos) continue;
+    if (std::stoul(local.substr(colon + 1), nullptr, 16) != port) continue;
+    total += std::stoull(queues.substr(queue_colon + 1), nullptr, 16);
+  }
+  return total;
+}
+
+bool wait_until_read(std::uint16_t port, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (queued_bytes(port) != 0) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(5ms);
+  }
+  return true;
 }
 
 int granted_buffer(const std::string& log) {
@@ -69,14 +100,14 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   ChildProcess trainer(trainer_program,
                        {"--vision-address", group, "--table", (dir / "trainer.bin").string(),
                         "--status-interval", "1", "--flush-interval", "1"},
-                       dir.path(), "trainer");
+                       dir.path(), "trainer", testing::Readiness::ready_file);
   ChildProcess predictor(predictor_program,
                          {"--vision-address", group, "--prediction-address", new_group(), "--table",
                           (dir / "fixed.bin").string(), "--quiet", "--status-interval", "1"},
-                         dir.path(), "predictor");
-  ASSERT_TRUE(trainer.wait_for_stderr("listening on", 5s)) << trainer.stderr_text();
-  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
-  std::this_thread::sleep_for(200ms);
+                         dir.path(), "predictor", testing::Readiness::ready_file);
+  ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
   const std::uint64_t trainer_rss_start = rss_kib(trainer.pid());
   const std::uint64_t predictor_rss_start = rss_kib(predictor.pid());
 
@@ -93,14 +124,23 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
     for (const std::string& packet : bursts[b]) sender.send(packet);
   }
   const double elapsed_s = static_cast<double>(now_ns() - start) / 1e9;
-  std::this_thread::sleep_for(300ms);
+  // The trailing bursts go out once both daemons have read what the load left in their sockets,
+  // so they find room: the kernel reports a socket's drops with the next datagram it delivers.
+  const std::uint16_t port = endpoint_of(group).port;
+  ASSERT_TRUE(wait_until_read(port, 10s)) << queued_bytes(port) << " bytes still queued";
   for (std::size_t b = load_bursts; b < bursts.size(); ++b) {
     for (const std::string& packet : bursts[b]) sender.send(packet);
-    std::this_thread::sleep_for(5ms);
+    std::this_thread::sleep_for(5ms);  // the trailing bursts' own slow pace, not a wait
   }
-  std::this_thread::sleep_for(300ms);
   const std::uint64_t sent = sender.sent();
   ASSERT_EQ(sent, packets);
+  // Both have accounted for every datagram (read, or dropped and counted) before their memory is
+  // measured and they are stopped.
+  const auto all_accounted = [&](const testing::Status& s) {
+    return received_or_dropped(s) >= sent;
+  };
+  EXPECT_TRUE(wait_for_status_where(trainer, all_accounted, 10s)) << trainer.stderr_text();
+  EXPECT_TRUE(wait_for_status_where(predictor, all_accounted, 10s)) << predictor.stderr_text();
 
   EXPECT_TRUE(trainer.running()) << trainer.stderr_text();
   EXPECT_TRUE(predictor.running()) << predictor.stderr_text();

@@ -27,6 +27,7 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
+#include "status_lines.hpp"
 
 namespace ssl_formation::reliability {
 
@@ -36,8 +37,12 @@ inline const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 inline const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
 inline const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
+using testing::last_status;
 using testing::new_group;
 using testing::PredictionListener;
+using testing::received_or_dropped;
+using testing::wait_for_status;
+using testing::wait_for_status_where;
 
 inline net::MulticastEndpoint endpoint_of(const std::string& group) {
   return net::parse_multicast_endpoint(group).value();
@@ -104,29 +109,34 @@ void send_paced(const std::string& group, const Items& items) {
   Sender sender(group);
   for (const auto& item : items) {
     ASSERT_TRUE(sender.send(item));
-    std::this_thread::sleep_for(150us);
+    std::this_thread::sleep_for(150us);  // the pace of the feed, not a wait for anything
   }
 }
 
 // A trainer and a predictor (reading `predictor_table`) on one fresh vision group, the predictions
-// on another, both status lines every 0.1 s. ready() waits until both listen.
+// on another, both status lines every 0.1 s. ready() waits for both ready files: the sockets
+// joined, and the predictor's table loaded.
 struct RunningPipeline {
   RunningPipeline(const testing::TempDir& dir, const std::filesystem::path& predictor_table)
       : trainer(trainer_program,
                 {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
                  "--status-interval", "0.1", "--flush-interval", "60"},
-                dir.path(), "trainer"),
+                dir.path(), "trainer", testing::Readiness::ready_file),
         predictor(predictor_program,
                   {"--vision-address", vision, "--prediction-address", predictions, "--table",
                    predictor_table.string(), "--quiet", "--status-interval", "0.1"},
-                  dir.path(), "predictor") {}
+                  dir.path(), "predictor", testing::Readiness::ready_file) {}
 
   ::testing::AssertionResult ready() {
-    if (!trainer.wait_for_stderr("listening on", 5s)) {
-      return ::testing::AssertionFailure() << trainer.stderr_text();
+    if (!trainer.wait_until_ready(10s)) {
+      return ::testing::AssertionFailure() << "trainer not ready:\n" << trainer.stderr_text();
     }
-    if (!predictor.wait_for_stderr("loaded table", 5s)) {
-      return ::testing::AssertionFailure() << predictor.stderr_text();
+    if (!predictor.wait_until_ready(10s)) {
+      return ::testing::AssertionFailure() << "predictor not ready:\n" << predictor.stderr_text();
+    }
+    if (predictor.ready_fact("table_loaded") != "1") {
+      return ::testing::AssertionFailure() << "predictor ready without its table:\n"
+                                           << predictor.stderr_text();
     }
     return ::testing::AssertionSuccess();
   }
@@ -137,20 +147,6 @@ struct RunningPipeline {
   testing::ChildProcess predictor;
 };
 
-// key=value pairs of the last line of `text` that contains `marker` ("status:").
-inline std::map<std::string, std::uint64_t> last_status(const std::string& text,
-                                                        const std::string& marker = "status:") {
-  std::map<std::string, std::uint64_t> out;
-  const std::size_t at = text.rfind(marker);
-  if (at == std::string::npos) return out;
-  const std::string line = text.substr(at, text.find('\n', at) - at);
-  static const std::regex pair(R"(([a-z_]+)=(\d+))");
-  for (std::sregex_iterator it(line.begin(), line.end(), pair), end; it != end; ++it) {
-    out[(*it)[1]] = std::stoull((*it)[2]);
-  }
-  return out;
-}
-
 // Resident memory of a process, KiB (VmRSS in /proc/PID/status); 0 if unreadable.
 inline std::uint64_t rss_kib(pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
@@ -159,19 +155,6 @@ inline std::uint64_t rss_kib(pid_t pid) {
     if (line.rfind("VmRSS:", 0) == 0) return std::stoull(line.substr(6));
   }
   return 0;
-}
-
-// Waits until `process`'s stderr has a status line with key >= value.
-inline bool wait_for_status(testing::ChildProcess& process, const std::string& key,
-                            std::uint64_t value, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < deadline) {
-    const auto status = last_status(process.stderr_text());
-    if (auto it = status.find(key); it != status.end() && it->second >= value) return true;
-    if (!process.running()) return false;
-    std::this_thread::sleep_for(20ms);
-  }
-  return false;
 }
 
 }  // namespace ssl_formation::reliability

@@ -14,6 +14,7 @@
 #include "child_process.hpp"
 #include "raw_client.hpp"
 #include "ssl_formation/table_file.hpp"
+#include "status_lines.hpp"
 #include "web_test_support.hpp"
 
 namespace ssl_formation {
@@ -21,6 +22,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using testing::ChildProcess;
+using testing::Readiness;
 using testing::TempDir;
 using web_testing::RawClient;
 
@@ -67,9 +69,11 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
                          {"--vision-address", vision, "--prediction-address", predictions,
                           "--table", table_path.string(), "--http-port", std::to_string(port),
                           "--quiet", "--status-interval", "0.5", "--http-send-buffer", "8192"},
-                         dir.path(), "predictor");
-  ASSERT_TRUE(predictor.wait_for_stderr("field view: open", 5s)) << predictor.stderr_text();
-  ASSERT_TRUE(predictor.wait_for_stderr("loaded table", 5s)) << predictor.stderr_text();
+                         dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  ASSERT_EQ(predictor.ready_fact("http"), "http://127.0.0.1:" + std::to_string(port) + "/")
+      << predictor.stderr_text();
+  ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
   web_testing::PredictionArrivals arrivals(predictions, vision);
 
   // The bad clients, all connected before the feed starts.
@@ -104,16 +108,33 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
       }
       {
         RawClient reset(port, 4096);
+        // Connected a while without reading, so the server is writing to it when it resets.
         if (reset.upgrade()) std::this_thread::sleep_for(20ms);
         reset.reset();
       }
-      std::this_thread::sleep_for(30ms);
+      std::this_thread::sleep_for(30ms);  // the vandal's pace: 40 rounds over the 3 s feed
     }
   });
   const auto code = producer.wait(30s);
   vandal.join();
   ASSERT_EQ(code, 0) << producer.stderr_text();
-  std::this_thread::sleep_for(300ms);
+  // Checked once the predictor has handled every datagram of the feed (read, or dropped and
+  // counted) and what it sent has arrived here: its status line then holds its final count of
+  // predictions sent (one thread receives, predicts and sends).
+  const std::uint64_t vision_packets = web_testing::simulated_packet_count(9, formations);
+  ASSERT_TRUE(testing::wait_for_status_where(
+      predictor,
+      [&](const testing::Status& status) {
+        return testing::received_or_dropped(status) >= vision_packets;
+      },
+      10s))
+      << vision_packets << " vision packets sent\n"
+      << predictor.stderr_text();
+  const std::uint64_t sent = testing::last_status(predictor.stderr_text()).at("sent");
+  for (const auto deadline = std::chrono::steady_clock::now() + 5s;
+       arrivals.count() < sent && std::chrono::steady_clock::now() < deadline;) {
+    std::this_thread::sleep_for(5ms);  // a loss here shows in the count checked below
+  }
 
   const auto times = arrivals.arrivals();
   // Loopback multicast loses nothing at this rate: every formation was predicted and sent.
@@ -163,8 +184,10 @@ TEST(FieldViewBadClients, OffByDefaultAndBadOptionsAreRefused) {
   const std::string vision = testing::unique_group(testing::free_udp_port());
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--table", (dir / "t.bin").string()},
-                         dir.path(), "predictor");
-  ASSERT_TRUE(predictor.wait_for_stderr("waiting for the table", 5s)) << predictor.stderr_text();
+                         dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  EXPECT_EQ(predictor.ready_fact("table_loaded"), "0");
+  EXPECT_EQ(predictor.ready_fact("http"), "");  // no field view
   EXPECT_EQ(predictor.stderr_text().find("field view"), std::string::npos);
   predictor.signal(SIGTERM);
   EXPECT_EQ(predictor.wait(5s), 0);

@@ -15,7 +15,6 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
-#include <thread>
 
 #include "child_process.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
@@ -76,16 +75,20 @@ void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const 
               dir.path(), name);
 }
 
+// Starts the predictor and waits until it serves the field view at `url` with its table loaded.
 void start_predictor(std::optional<ChildProcess>& out, const TempDir& dir,
                      const std::string& vision, const std::string& predictions,
-                     const std::filesystem::path& table, std::uint16_t port,
+                     const std::filesystem::path& table, std::uint16_t port, const std::string& url,
                      const std::string& name) {
   out.reset();
   out.emplace(predictor_program,
               std::vector<std::string>{"--vision-address", vision, "--prediction-address",
                                        predictions, "--table", table.string(), "--http-port",
                                        std::to_string(port), "--quiet"},
-              dir.path(), name);
+              dir.path(), name, testing::Readiness::ready_file);
+  ASSERT_TRUE(out->wait_until_ready(10s)) << out->stderr_text();
+  ASSERT_EQ(out->ready_fact("http"), url) << out->stderr_text();
+  ASSERT_EQ(out->ready_fact("table_loaded"), "1") << out->stderr_text();
 }
 
 TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
@@ -102,10 +105,8 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
 
   std::optional<ChildProcess> predictor;
-  start_predictor(predictor, dir, vision, predictions, table_path, port, "predictor1");
-  ASSERT_TRUE(predictor->wait_for_stderr("field view: open " + url, 5s))
-      << predictor->stderr_text();
-  ASSERT_TRUE(predictor->wait_for_stderr("loaded table", 5s)) << predictor->stderr_text();
+  start_predictor(predictor, dir, vision, predictions, table_path, port, url, "predictor1");
+  if (HasFatalFailure()) return;
   std::optional<ChildProcess> producer;
   start_producer(producer, dir, vision, "producer1");
 
@@ -128,9 +129,10 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   // The predictor restarts on the same port.
   predictor->signal(SIGTERM);
   ASSERT_EQ(predictor->wait(5s), 0) << predictor->stderr_text();
-  std::this_thread::sleep_for(1s);
-  start_predictor(predictor, dir, vision, predictions, table_path, port, "predictor2");
-  ASSERT_TRUE(predictor->wait_for_stderr("field view: open", 5s)) << predictor->stderr_text();
+  // It comes back once the page has shown the loss, so the page really reconnects.
+  ASSERT_TRUE(browser.wait_for_stdout("PHASE disconnected ok", 20s)) << report();
+  start_predictor(predictor, dir, vision, predictions, table_path, port, url, "predictor2");
+  if (HasFatalFailure()) return;
   ASSERT_TRUE(browser.wait_for_stdout("PHASE reconnected ok", 30s)) << report();
   const auto code = browser.wait(30s);
   ASSERT_EQ(code, 0) << report();

@@ -127,6 +127,7 @@ try {
   // 4. The predictor restarts: the page loses it, reconnects and draws again.
   await page.waitForFunction(() => document.body.dataset.connected === 'false', null, { timeout: 15_000 });
   console.log('banner:', await page.textContent('#banner'));
+  phase('disconnected');  // the test starts the predictor again only now
   const lost = await page.evaluate(() => Number(document.body.dataset.predictions));
   await page.waitForFunction((n) => document.body.dataset.connected === 'true' &&
     Number(document.body.dataset.predictions) >= n + 3 && window.fieldView.connections >= 2, lost,

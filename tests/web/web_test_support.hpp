@@ -51,6 +51,17 @@ inline TransitionTable reference_table(std::uint64_t seed, int count) {
   return training.table();
 }
 
+// How many datagrams the simulated producer with `seed` sends for `count` formations (geometry
+// included), by default options.
+inline std::uint64_t simulated_packet_count(std::uint64_t seed, int count) {
+  sim::SimulationConfig config;
+  config.seed = seed;
+  sim::SimulatedVision vision(config);
+  std::uint64_t packets = 0;
+  for (int i = 0; i < count; ++i) packets += vision.next().packets.size();
+  return packets;
+}
+
 // Records when each FormationPrediction arrives on a group, and when each vision detection frame
 // arrives on the vision group (by frame number), on a thread of their own.
 class PredictionArrivals {
