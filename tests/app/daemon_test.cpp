@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "scratch_dir.hpp"
 #include "ssl_formation/app/options.hpp"
 
 namespace ssl_formation::app {
@@ -34,24 +35,10 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-// A fresh folder under the system's temporary folder, removed with everything in it.
-class TempDir {
+// A fresh folder for each test, removed with everything in it.
+class TempDir : public testing::ScratchDir {
  public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "sslf-daemon-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
+  TempDir() : ScratchDir("sslf-daemon") {}
 };
 
 std::string read_text(const fs::path& path) {

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "scratch_dir.hpp"
 #include "ssl_formation/table_file.hpp"
 
 namespace ssl_formation::predictor {
@@ -19,24 +20,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh folder under the system's temporary folder, removed with everything in it.
-class TempDir {
+// A fresh folder for each test, removed with everything in it.
+class TempDir : public testing::ScratchDir {
  public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "sslf-table-watcher-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
+  TempDir() : ScratchDir("sslf-table-watcher") {}
 };
 
 // A table with `n` transitions, so that each version of the file is told apart by its total.

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "scratch_dir.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -24,24 +25,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh folder under the system's temporary folder, removed with everything in it.
-class TempDir {
+// A fresh folder for each test, removed with everything in it.
+class TempDir : public testing::ScratchDir {
  public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "sslf-table-store-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
+  TempDir() : ScratchDir("sslf-table-store") {}
 };
 
 std::string read_bytes(const fs::path& path) {
