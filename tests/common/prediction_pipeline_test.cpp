@@ -10,6 +10,7 @@
 
 #include "ssl_formation/predictor.hpp"
 #include "ssl_formation/training.hpp"
+#include "ssl_formation/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation {
@@ -24,34 +25,19 @@ struct Robot {
 // One camera's detection frame with `robots` in the given team colour.
 SSL_WrapperPacket detection(double t_capture, const std::vector<Robot>& robots,
                             TeamColor color = TeamColor::yellow) {
-  SSL_WrapperPacket packet;
-  SSL_DetectionFrame& frame = *packet.mutable_detection();
-  frame.set_frame_number(static_cast<std::uint32_t>(t_capture * 10));
-  frame.set_t_capture(t_capture);
-  frame.set_t_sent(t_capture);
-  frame.set_camera_id(0);
+  DetectionFrameSpec spec;
+  spec.frame_number = static_cast<std::uint32_t>(t_capture * 10);
+  spec.t_capture = t_capture;
   for (const Robot& robot : robots) {
-    SSL_DetectionRobot& r =
-        color == TeamColor::yellow ? *frame.add_robots_yellow() : *frame.add_robots_blue();
-    r.set_confidence(1.0F);
-    r.set_robot_id(robot.id);
-    r.set_x(static_cast<float>(robot.x));
-    r.set_y(static_cast<float>(robot.y));
-    r.set_pixel_x(0.0F);
-    r.set_pixel_y(0.0F);
+    (color == TeamColor::yellow ? spec.yellow : spec.blue)
+        .push_back({robot.id, {robot.x, robot.y}});
   }
-  return packet;
+  return make_detection_packet(spec);
 }
 
 SSL_WrapperPacket geometry(int length_mm, int width_mm) {
-  SSL_WrapperPacket packet;
-  SSL_GeometryFieldSize& field = *packet.mutable_geometry()->mutable_field();
-  field.set_field_length(length_mm);
-  field.set_field_width(width_mm);
-  field.set_goal_width(1000);
-  field.set_goal_depth(180);
-  field.set_boundary_width(300);
-  return packet;
+  return make_geometry_packet(
+      FieldSize{static_cast<double>(length_mm), static_cast<double>(width_mm)});
 }
 
 // Frame k of a play that repeats every 4 frames, with a variation every third round so that the
