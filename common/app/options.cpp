@@ -12,6 +12,12 @@ Grid ModelOptions::parsed_grid() const {
   return *parsed;
 }
 
+ModelKind ModelOptions::parsed_model() const {
+  const auto parsed = parse_model(model);
+  if (!parsed) throw UsageError("--model must be motion or paper, not '" + model + "'");
+  return *parsed;
+}
+
 SamplerConfig ModelOptions::sampler_config() const {
   SamplerConfig config;
   config.grid = parsed_grid();
@@ -35,9 +41,19 @@ SamplerConfig ModelOptions::sampler_config() const {
     }
     config.opponent_attacks = *attacks;
   }
-  const auto mode = parse_sampling(sampling);
-  if (!mode) throw UsageError("--sampling must be frame or step, not '" + sampling + "'");
-  config.sampling = *mode;
+  const ModelKind kind = parsed_model();
+  if (sampling == "auto") {
+    config.sampling = kind == ModelKind::motion ? Sampling::frame : Sampling::step;
+  } else {
+    const auto mode = parse_sampling(sampling);
+    if (!mode) throw UsageError("--sampling must be auto, frame or step, not '" + sampling + "'");
+    if (kind == ModelKind::motion && *mode != Sampling::frame) {
+      throw UsageError(
+          "--model motion learns from every frame's velocities: use --sampling frame (or auto), "
+          "or --model paper for step sampling");
+    }
+    config.sampling = *mode;
+  }
   config.field = FieldSize{field_length_mm, field_width_mm};
   if (!config.field.valid()) {
     throw UsageError("--field-length and --field-width must be positive millimetres");
@@ -56,9 +72,13 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),
       "the direction the opponent attacks in the feed's coordinates: +x, -x, or auto (from where "
       "its goalkeeper stands; follows a change of ends)")(
+      "model", po::value(&model.model)->default_value(model.model),
+      "motion: positions in mm with calibrated radii, learned from every frame (needs a "
+      "version-2 table); paper: the paper's Markov model on cells")(
       "sampling", po::value(&model.sampling)->default_value(model.sampling),
       "step: a formation every --step (the paper's protocol); frame: a formation at every frame, "
-      "each robot's previous cell from --step earlier")(
+      "each robot's previous cell from --step earlier; auto: frame for --model motion, step for "
+      "--model paper")(
       "field-length", po::value(&model.field_length_mm)->default_value(model.field_length_mm),
       "field length in mm until a geometry packet says otherwise")(
       "field-width", po::value(&model.field_width_mm)->default_value(model.field_width_mm),

@@ -133,9 +133,8 @@ void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotT
                      [&](const RobotPrediction& r) { return r.robot_id == robot.robot_id; });
     if (model_robot == model.robots.end()) continue;
     Guess guess{&robot, actual, &*model_robot, {}};
-    // The model predicts a cell: its position is that cell's centre, in feed coordinates.
-    guess.position[0] =
-        normalise(grid.centre_of(model_robot->position, setup.field), attacks);
+    // The model's position in feed coordinates (for the paper's model, its cell's centre).
+    guess.position[0] = model_robot->feed_position;
     guess.position[1] = robot.feed_position;
     const std::optional<Point> v =
         tracks.velocity(robot.robot_id, now.time_s, setup.velocity_window_s, setup.tolerance_s);
@@ -161,7 +160,13 @@ void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotT
     Accuracy& accuracy = score.cells[m];
     ++accuracy.formations;
     for (const Guess& g : guesses) {
-      score.error[m].add(distance(g.position[m], g.truth->feed_position));
+      const double error = distance(g.position[m], g.truth->feed_position);
+      score.error[m].add(error);
+      if (m == 0 && g.model->radius90_mm > 0.0) {
+        ++score.radii.robots;
+        if (error <= g.model->radius50_mm) ++score.radii.within50;
+        if (error <= g.model->radius90_mm) ++score.radii.within90;
+      }
       const Cell predicted_cell =
           m == 0 ? g.model->position : cell_of_feed(g.position[m]);
       const StateIndex predicted_state =
@@ -228,7 +233,14 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   setup.tolerance_s = config.tolerance_s;
 
   // Training: the table, and the training streams' own formations for the damping fit.
-  Training training(config.sampler, TransitionTable(config.sampler.grid));
+  std::optional<MotionTable> motion;
+  if (config.model == ModelKind::motion) {
+    MotionConfig motion_config;
+    motion_config.step_s = step_s;
+    motion_config.horizons = config.steps;
+    motion.emplace(motion_config);
+  }
+  Training training(config.sampler, TransitionTable(config.sampler.grid), 0, std::move(motion));
   std::vector<DampingFit> fits(static_cast<std::size_t>(config.steps));
   for (const auto& stream : train) {
     training.start_new_stream();
@@ -247,7 +259,13 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   result.train_formations = training.samples();
   result.transitions = training.table().transitions();
   result.table_memory_bytes = training.table().memory_bytes();
-  const auto table = std::make_shared<const StoredTable>(StoredTable{training.table(), {}});
+  TableMetadata metadata;
+  metadata.field = training.sampler().field();
+  metadata.step_s = step_s;
+  metadata.samples = training.samples();
+  const auto table = std::make_shared<const StoredTable>(
+      StoredTable{training.table(), metadata, training.motion()});
+  if (training.motion()) result.table_memory_bytes += training.motion()->memory_bytes();
   setup.codec = &table->table.codec();
   result.table = table;
 
@@ -258,6 +276,7 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   PredictionConfig prediction;
   prediction.sampler = config.sampler;
   prediction.horizon = config.steps;
+  prediction.model = config.model;
   for (const auto& stream : test) {
     std::vector<Formation> formations;
     std::vector<std::vector<PredictedStep>> predicted;

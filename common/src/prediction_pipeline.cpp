@@ -1,14 +1,33 @@
 #include "ssl_formation/prediction_pipeline.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace ssl_formation {
 
+namespace {
+
+// The motion model's history keeps what its velocities need; the step and horizons come from
+// the table, but velocities only need the window, which is the same for every table.
+MotionConfig motion_history_config(const PredictionConfig& config) {
+  MotionConfig motion;
+  motion.step_s = config.sampler.step_s;
+  motion.horizons = 1;
+  return motion;
+}
+
+}  // namespace
+
 PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_prediction)
     : config_(config),
       on_prediction_(std::move(on_prediction)),
+      motion_history_(motion_history_config(config)),
       sampler_(config.sampler, [this](const FormationSample& sample) { on_sample(sample); }) {
+  if (config_.model == ModelKind::motion && config_.sampler.sampling != Sampling::frame) {
+    throw std::invalid_argument(
+        "the motion model predicts from every frame's velocities: it needs --sampling frame");
+  }
   if (config_.horizon < 1 || config_.horizon > PredictionConfig::max_horizon) {
     throw std::invalid_argument("the horizon must be 1 to " +
                                 std::to_string(PredictionConfig::max_horizon) + " formations");
@@ -17,6 +36,7 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
   // leaves them: a daemon woken every 16 ms pays for every cold page its hot path touches.
   constexpr std::size_t usual_robots = 16;
   robot_states_.reserve(usual_robots);
+  motion_robots_.reserve(usual_robots);
   prediction_.steps.resize(static_cast<std::size_t>(config_.horizon));
   for (PredictedStep& step : prediction_.steps) step.robots.reserve(usual_robots);
 }
@@ -27,24 +47,60 @@ void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
                                 " differs from the predictor's " +
                                 config_.sampler.grid.to_string());
   }
+  std::shared_ptr<const MotionModel> model;
+  if (table && config_.model == ModelKind::motion) {
+    if (!table->motion) {
+      throw std::invalid_argument(
+          "the table holds only the paper's counts (a version-1 table): it serves --model paper; "
+          "train a table with --model motion to use the motion model");
+    }
+    if (std::abs(table->motion->config().step_s - config_.sampler.step_s) > 1e-9) {
+      throw std::invalid_argument("the table's motion model was trained with another step");
+    }
+    model = std::make_shared<const MotionModel>(*table->motion, config_.sampler.grid,
+                                                table->metadata.field);
+  }
+  motion_model_ = std::move(model);
   table_ = std::move(table);
 }
 
 void PredictionPipeline::on_sample(const FormationSample& sample) {
+  if (config_.model == ModelKind::motion) motion_history_.add(sample.formation);
   if (!table_) {
     ++samples_without_table_;
     return;
   }
   // Holds the table for this call even if the handler sets another one.
   const std::shared_ptr<const StoredTable> stored = table_;
-  robot_states_.clear();
-  for (const FormationRobot& robot : sample.formation.robots) {
-    robot_states_.push_back({robot.robot_id, robot.state});
-  }
-  predict(stored->table, robot_states_, config_.horizon, prediction_);
+  const std::shared_ptr<const MotionModel> motion_model = motion_model_;
   PredictionContext context = prediction_context(stored->table, config_.sampler, sampler_.field());
   // The direction may be inferred (--opponent-attacks auto): the one this sample was taken with.
   context.opponent_attacks = sampler_.attacks().value_or(config_.sampler.opponent_attacks);
+  context.model = config_.model;
+  if (motion_model) {
+    motion_robots_.clear();
+    for (const FormationRobot& robot : sample.formation.robots) {
+      const MotionHistory::Entry* seen = motion_history_.latest(robot.robot_id);
+      const bool moving = seen && seen->has_velocity && seen->time_s == sample.formation.time_s;
+      motion_robots_.push_back(
+          {robot.robot_id, robot.position, moving ? seen->velocity : Point{}, moving});
+    }
+    motion_model->predict(motion_robots_, config_.horizon, sampler_.codec(), sampler_.field(),
+                          context.opponent_attacks, prediction_);
+  } else {
+    robot_states_.clear();
+    for (const FormationRobot& robot : sample.formation.robots) {
+      robot_states_.push_back({robot.robot_id, robot.state});
+    }
+    predict(stored->table, robot_states_, config_.horizon, prediction_);
+    const Grid& grid = config_.sampler.grid;
+    for (PredictedStep& step : prediction_.steps) {
+      for (RobotPrediction& robot : step.robots) {
+        robot.normalised_position = grid.centre_of(robot.position, sampler_.field());
+        robot.feed_position = normalise(robot.normalised_position, context.opponent_attacks);
+      }
+    }
+  }
   ++predictions_;
   if (on_prediction_) on_prediction_(PredictedFormation{sample, prediction_, context});
 }

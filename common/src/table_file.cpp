@@ -548,7 +548,7 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
   }
 
   // Counts. Both checksums matched, so a problem here comes from the writer, not the disk.
-  StoredTable stored{TransitionTable(grid, storage), header.metadata};
+  StoredTable stored{TransitionTable(grid, storage), header.metadata, std::nullopt};
   std::uint64_t sum = 0;
   ChunkReader reader(fd.get(), header_size, checksum_offset);
   const BodyProblem problem = header.encoding == encoding_dense

@@ -98,7 +98,10 @@ std::ofstream open_csv(const EvaluateOptions& options, const std::string& name) 
 }  // namespace
 
 int run_paper(const EvaluateOptions& options) {
-  SamplerConfig config = options.model.sampler_config();
+  // The paper's protocol is the paper's model on step sampling, whatever --model says.
+  app::ModelOptions paper = options.model;
+  paper.model = "paper";
+  SamplerConfig config = paper.sampler_config();
   const auto started = std::chrono::steady_clock::now();
   const PacketSource training_data =
       options.train_logs.empty()
@@ -250,6 +253,7 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.sampler.step_s = step_s;
     config.steps = steps;
     config.velocity_window_s = options.velocity_window_s;
+    config.model = model.parsed_model();
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
   for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);

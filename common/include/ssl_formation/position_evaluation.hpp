@@ -86,6 +86,15 @@ inline constexpr std::array<PositionMethod, 4> all_position_methods{
     PositionMethod::damped_constant_velocity};
 std::string_view to_string(PositionMethod method);
 
+// How often the truth fell within the model's stated radii.
+struct RadiusCoverage {
+  std::uint64_t robots = 0;  // scored robots with radii stated
+  std::uint64_t within50 = 0;
+  std::uint64_t within90 = 0;
+  double share50() const { return robots ? double(within50) / double(robots) : 0.0; }
+  double share90() const { return robots ? double(within90) / double(robots) : 0.0; }
+};
+
 // Every method's score at one horizon in seconds.
 struct HorizonScore {
   double horizon_s = 0.0;
@@ -93,6 +102,7 @@ struct HorizonScore {
   std::array<Accuracy, 4> cells;    // predicted state, cell and cell distance against the truth
   Calibration robot;                // the model's per-robot probability that its cell is right
   Calibration formation;            // the model's formation probability that every cell is right
+  RadiusCoverage radii;             // the model's 50% and 90% radii
 };
 
 // How to read positions: the grid and field the formations were sampled with (each formation
@@ -127,6 +137,7 @@ void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks&
 
 struct PositionEvaluationConfig {
   SamplerConfig sampler;  // the model's step, grid and sampling, for training and testing alike
+  ModelKind model = ModelKind::paper;
   int steps = 1;          // horizons 1..steps, step k being k x step_s ahead
   double velocity_window_s = 0.1;
   // How far from t + horizon the truth may be sampled (and from t - window the velocity's start).

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "formation_prediction.pb.h"
+#include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/predictor.hpp"
 #include "ssl_formation/sampler.hpp"
 
@@ -17,6 +18,7 @@ struct PredictionContext {
   TeamColor opponent_color = TeamColor::yellow;
   double step_s = 2.0;
   std::uint64_t table_transitions = 0;
+  ModelKind model = ModelKind::paper;
 };
 
 // The context a predictor running `config` on `table` writes its messages with, for the current

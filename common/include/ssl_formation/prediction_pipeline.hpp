@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 
+#include "ssl_formation/motion_predictor.hpp"
 #include "ssl_formation/prediction_message.hpp"
 #include "ssl_formation/predictor.hpp"
 #include "ssl_formation/sampler.hpp"
@@ -19,6 +20,7 @@ namespace ssl_formation {
 
 struct PredictionConfig {
   SamplerConfig sampler;
+  ModelKind model = ModelKind::paper;
   int horizon = 2;  // formations predicted ahead, 1 to max_horizon
   static constexpr int max_horizon = 100;
 };
@@ -44,14 +46,18 @@ class PredictionPipeline {
 
   // The table predictions come from; until one is set, formations are sampled (so the data
   // clock and the chains run on) and counted, but nothing is predicted. Throws
-  // std::invalid_argument for a table of another grid than the sampler's.
+  // std::invalid_argument for a table of another grid than the sampler's, or without the
+  // counts the configured model needs (a version-1 table asked for the motion model).
   void set_table(std::shared_ptr<const StoredTable> table);
   const std::shared_ptr<const StoredTable>& table() const { return table_; }
 
   void add(const VisionFrame& frame) { sampler_.add(frame); }
   void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
   // A new log file: its first formation follows nothing (no chain across two files).
-  void start_new_stream() { sampler_.start_new_stream(); }
+  void start_new_stream() {
+    sampler_.start_new_stream();
+    motion_history_.clear();
+  }
 
   const PredictionConfig& config() const { return config_; }
   const FormationSampler& sampler() const { return sampler_; }
@@ -64,9 +70,12 @@ class PredictionPipeline {
   PredictionConfig config_;
   Handler on_prediction_;
   std::shared_ptr<const StoredTable> table_;
+  std::shared_ptr<const MotionModel> motion_model_;  // built from table_ for the motion model
+  MotionHistory motion_history_;
   FormationSampler sampler_;
   // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
   std::vector<RobotStateById> robot_states_;
+  std::vector<MotionRobot> motion_robots_;
   Prediction prediction_;
   std::uint64_t predictions_ = 0;
   std::uint64_t samples_without_table_ = 0;

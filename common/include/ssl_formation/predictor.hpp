@@ -18,6 +18,15 @@ struct RobotPrediction {
   Cell previous;
   double probability = 0.0;
   bool unseen = false;  // no candidate was ever counted: the robot holds its cell
+  // The predicted position in the feed's coordinates (mm): the motion model's estimate, or for
+  // the paper's model the centre of the predicted cell (filled by the PredictionPipeline).
+  Point feed_position;
+  Point normalised_position;
+  // Radii (mm) around feed_position holding the robot with 50% and 90% probability, and the
+  // expected squared error; 0 when the model states none (the paper's).
+  double radius50_mm = 0.0;
+  double radius90_mm = 0.0;
+  double mean_square_mm2 = 0.0;
 };
 
 struct PredictedStep {

@@ -37,6 +37,7 @@
 #include <string_view>
 
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/result.hpp"
 #include "ssl_formation/transition_table.hpp"
 
@@ -55,6 +56,9 @@ struct TableMetadata {
 struct StoredTable {
   TransitionTable table;
   TableMetadata metadata;
+  // The motion model's counts (format version 2); none in a version-1 file, which serves only
+  // the paper's model.
+  std::optional<MotionTable> motion;
 };
 
 enum class TableFileError {

@@ -9,6 +9,7 @@
 
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/sampler.hpp"
 
 namespace ssl_formation::app {
@@ -34,9 +35,12 @@ struct ModelOptions {
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   bool ignore_geometry = false;
-  std::string sampling = "step";
+  std::string model = "motion";
+  // "auto": what the model needs, frame for motion and step (the paper's protocol) for paper.
+  std::string sampling = "auto";
 
   Grid parsed_grid() const;              // throws UsageError
+  ModelKind parsed_model() const;        // throws UsageError
   SamplerConfig sampler_config() const;  // validates everything; throws UsageError
 };
 void add_model_options(po::options_description& options, ModelOptions& model);

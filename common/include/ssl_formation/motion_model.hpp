@@ -1,0 +1,205 @@
+#pragma once
+// The motion model: where each opponent robot will be, in millimetres, k steps ahead, learned by
+// counting. Beyond the paper's cells it sees each robot's velocity (from its last frames) and
+// learns, per state, how the robot's real displacement differs from damped constant velocity.
+//
+// A state is (robot id, 0.5 m feature cell, velocity class): 8 directions x 3 speeds plus
+// "standing". Each row holds integer sums (count, displacement, extrapolated velocity and their
+// products), so training is counting, tables merge by adding, and merging two tables equals
+// training on both streams bit for bit. Prediction backs off from the robot's own row to the
+// cell's row (every robot), to the velocity class's row, to damped constant velocity, each row
+// shrunk towards the coarser one by its count: a young table predicts like damped constant
+// velocity and an old one like what the opponent really does.
+//
+// Probabilities and radii are calibrated on held-out data kept inside the table: every
+// `calibration_block_s` of the data clock whose hash falls in one `calibration_one_in` is held
+// out of the rows, and a deterministic sample of its instances (the lowest hashes, so that it
+// merges exactly too) is what MotionModel fits its calibration on.
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <optional>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "ssl_formation/formation.hpp"
+#include "ssl_formation/grid.hpp"
+
+namespace ssl_formation {
+
+// The models a table can serve.
+//   paper   the paper's Markov model on cells (DESIGN.md §3), bit for bit.
+//   motion  this file's model.
+enum class ModelKind { paper, motion };
+std::optional<ModelKind> parse_model(std::string_view text);
+std::string_view to_string(ModelKind model);
+
+// What a motion table's rows mean; saved with them, and equal for tables that merge.
+struct MotionConfig {
+  double step_s = 2.0;              // the table's step
+  int horizons = 3;                 // steps learned: k x step_s ahead for k = 1..horizons
+  double velocity_window_s = 0.1;   // a robot's velocity is its displacement over this window
+  double tolerance_s = 0.05;        // how far from an instant a position may be taken for it
+  double calibration_block_s = 1.0;
+  std::uint32_t calibration_one_in = 10;
+  std::uint32_t calibration_capacity = 4096;  // instances kept per horizon
+  static constexpr int max_horizons = 16;
+  bool valid() const;
+  friend bool operator==(const MotionConfig&, const MotionConfig&) = default;
+};
+
+// The state's parts, fixed by the format: feature cells of 500 mm over 14 x 10 m centred on the
+// field (Division A with its boundary; anything beyond lands in an edge cell), robot ids 0-15
+// (higher ids share one slot) and the velocity classes.
+struct MotionFeatures {
+  static constexpr double cell_mm = 500.0;
+  static constexpr int cells_x = 28;
+  static constexpr int cells_y = 20;
+  static constexpr int cell_count = cells_x * cells_y;
+  static constexpr int robot_slots = 17;
+  static constexpr int directions = 8;
+  static constexpr std::array<double, 3> speed_limits_mm_s{250.0, 750.0, 1500.0};
+  static constexpr int velocity_classes = 1 + directions * static_cast<int>(speed_limits_mm_s.size());
+
+  static int cell(Point normalised);
+  static int velocity_class(Point velocity_mm_s);
+  static int robot_slot(std::uint32_t robot_id) { return robot_id < 16 ? static_cast<int>(robot_id) : 16; }
+};
+
+// The back-off levels, finest first.
+enum class MotionLevel : std::uint8_t { robot = 0, cell = 1, velocity = 2, all = 3 };
+inline constexpr int motion_levels = 4;
+
+// A row's key: the horizon, the level and the features that level keeps (the others zero).
+struct MotionKeyParts {
+  int horizon_index = 0;
+  MotionLevel level = MotionLevel::robot;
+  int robot_slot = 0;
+  int cell = 0;
+  int velocity_class = 0;
+  std::uint32_t context = 0;  // what the robot has been doing (MotionHistory::Entry::context)
+  friend bool operator==(const MotionKeyParts&, const MotionKeyParts&) = default;
+};
+using MotionKey = std::uint64_t;
+// Packs the parts `level` keeps; decode(encode(p)) is p with the dropped parts zero.
+MotionKey encode_motion_key(MotionKeyParts parts);
+MotionKeyParts decode_motion_key(MotionKey key);
+// The finest key of an instance learned `horizon_index + 1` steps ahead.
+struct MotionInstance;
+MotionKeyParts motion_key_parts(int horizon_index, const MotionInstance& instance);
+// The key of the next coarser level (all's parent is itself).
+MotionKey coarser_motion_key(MotionKey key);
+
+// Integer sums over a row's instances (mm and mm^2): d is the displacement, e the velocity times
+// the horizon (what constant velocity predicts).
+struct MotionRow {
+  std::int64_t n = 0;
+  std::int64_t d_x = 0, d_y = 0;
+  std::int64_t e_x = 0, e_y = 0;
+  std::int64_t dd = 0;  // sum of d.d
+  std::int64_t de = 0;  // sum of d.e
+  std::int64_t ee = 0;  // sum of e.e
+  void add(const MotionRow& other);
+  friend bool operator==(const MotionRow&, const MotionRow&) = default;
+};
+
+// One learned instance, rounded to whole millimetres.
+struct MotionInstance {
+  std::uint32_t robot_id = 0;
+  std::int32_t x = 0, y = 0;    // normalised position then
+  std::int32_t v_x = 0, v_y = 0;  // velocity then, mm/s
+  std::int32_t d_x = 0, d_y = 0;  // displacement to the position horizon later
+  std::uint32_t context = 0;
+  friend bool operator==(const MotionInstance&, const MotionInstance&) = default;
+};
+
+std::int32_t whole_mm(double value);  // rounded and clamped to +-1e9
+
+// A calibration instance and its rank (lower is kept).
+struct HeldOutInstance {
+  std::uint64_t hash = 0;
+  MotionInstance instance;
+  friend bool operator==(const HeldOutInstance&, const HeldOutInstance&) = default;
+};
+
+// The counts of the motion model: the finest rows (the coarser levels are their sums, built by
+// MotionModel) and the held-out calibration sample per horizon.
+class MotionTable {
+ public:
+  explicit MotionTable(MotionConfig config = {});
+
+  const MotionConfig& config() const { return config_; }
+
+  // Learns that a robot at `instance` moved by its displacement `horizon_index + 1` steps later,
+  // as a row count or, for a held-out time, as a calibration candidate. `time_s` is when the
+  // instance started (the data clock), which decides whether it is held out.
+  void add(int horizon_index, double time_s, const MotionInstance& instance);
+  // Adds a row's sums (loading a file).
+  void add_row(MotionKey key, const MotionRow& row);
+  // Offers a calibration instance (loading a file, merging).
+  void add_held_out(int horizon_index, const HeldOutInstance& held_out);
+
+  // Adds every count and calibration instance of `other`. Throws std::invalid_argument if the
+  // configurations differ.
+  void merge(const MotionTable& other);
+
+  std::uint64_t instances() const { return instances_; }  // counted in rows
+  std::uint64_t held_out() const { return held_out_seen_; }
+  std::size_t rows() const { return rows_.size(); }
+  std::size_t memory_bytes() const;
+  // Rows in increasing key order, for saving and comparing.
+  std::vector<std::pair<MotionKey, MotionRow>> sorted_rows() const;
+  // The held-out sample of one horizon, in increasing hash order.
+  std::vector<HeldOutInstance> calibration(int horizon_index) const;
+  const std::unordered_map<MotionKey, MotionRow>& row_map() const { return rows_; }
+
+  bool is_held_out(double time_s) const;
+  friend bool operator==(const MotionTable& a, const MotionTable& b);
+
+ private:
+  MotionConfig config_;
+  std::unordered_map<MotionKey, MotionRow> rows_;
+  // Per horizon a max-heap (by hash, then content) of the kept calibration instances.
+  std::vector<std::vector<HeldOutInstance>> held_out_;
+  std::uint64_t instances_ = 0;
+  std::uint64_t held_out_seen_ = 0;
+};
+
+// Each robot's recent positions on the data clock (normalised), for velocities and for the
+// positions `k` steps back that training learns from. Forgets everything after a gap, a time
+// going backwards or a change of attack direction.
+class MotionHistory {
+ public:
+  explicit MotionHistory(const MotionConfig& config);
+
+  struct Entry {
+    double time_s = 0.0;
+    Point position;
+    Point velocity;  // mm/s, valid if has_velocity
+    bool has_velocity = false;
+  };
+  // Records a formation; its robots' velocities are then velocity(id).
+  void add(const Formation& formation);
+  void clear();
+
+  const Entry* latest(std::uint32_t robot_id) const;
+  // The entry nearest `time_s` within the tolerance.
+  const Entry* near(std::uint32_t robot_id, double time_s) const;
+
+  const MotionConfig& config() const { return config_; }
+
+ private:
+  MotionConfig config_;
+  double keep_s_;
+  std::vector<std::deque<Entry>> by_id_;
+  std::optional<double> last_time_s_;
+  AttackDirection attacks_ = AttackDirection::positive_x;
+};
+
+// Training's part: after `history.add(now)`, counts every robot of `now` against where it was
+// k steps earlier, for each horizon.
+void learn_motion(MotionTable& table, const MotionHistory& history, const Formation& now);
+
+}  // namespace ssl_formation

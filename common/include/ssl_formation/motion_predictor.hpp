@@ -1,0 +1,102 @@
+#pragma once
+// Prediction with the motion model (motion_model.hpp): a MotionTable turned into shrunk
+// estimates at every back-off level and a calibration fitted on the table's held-out sample,
+// then, for each robot and step, a position in mm, the radii holding it with 50% and 90%
+// probability and the calibrated probability that its predicted cell is right.
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "ssl_formation/grid.hpp"
+#include "ssl_formation/motion_model.hpp"
+#include "ssl_formation/predictor.hpp"
+#include "ssl_formation/state.hpp"
+
+namespace ssl_formation {
+
+struct MotionModelSettings {
+  // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
+  // are far from independent, so this is a few seconds of one robot's frames.
+  double shrinkage = 240.0;
+  // The damping of constant velocity before any data, as robots that brake with this time
+  // constant (s): k(h) = tau / h x (1 - exp(-h / tau)).
+  double prior_time_constant_s = 0.7;
+  // The spread before any data: sqrt(mean squared error) = base + per_second x horizon.
+  double prior_error_mm = 100.0;
+  double prior_error_mm_per_s = 450.0;
+  // Fewer held-out instances than this: Gaussian radii and uncalibrated probabilities.
+  std::size_t min_calibration_instances = 100;
+};
+
+// One robot as the motion model sees it: normalised position and velocity (mm/s).
+struct MotionRobot {
+  std::uint32_t robot_id = 0;
+  Point position;
+  Point velocity;
+  bool has_velocity = false;
+  std::uint32_t context = 0;  // MotionHistory::Entry::context
+};
+
+// Where one robot will be `horizon_index + 1` steps ahead, normalised.
+struct MotionForecast {
+  Point position;
+  double mean_square_mm2 = 0.0;  // the expected squared distance to the truth
+  double radius50_mm = 0.0;
+  double radius90_mm = 0.0;
+  MotionLevel level = MotionLevel::all;  // the finest level with counts
+  bool from_counts = false;             // false: the empty table's prior
+};
+
+class MotionModel {
+ public:
+  // `grid` and `field` are those the cell probabilities are calibrated for.
+  MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
+              MotionModelSettings settings = {});
+
+  const MotionConfig& config() const { return config_; }
+  int horizons() const { return config_.horizons; }
+  // The damping of constant velocity learned for a horizon (index 0 = one step).
+  double damping(int horizon_index) const { return horizon_[static_cast<std::size_t>(horizon_index)].damping; }
+
+  MotionForecast forecast(int horizon_index, const MotionRobot& robot) const;
+  // The calibrated probability that the robot is in `cell` when it is forecast `forecast`.
+  double cell_probability(int horizon_index, const MotionForecast& forecast, const Grid& grid,
+                          const FieldSize& field, Cell cell) const;
+  // The uncalibrated Gaussian mass of the cell (what the calibration maps).
+  static double gaussian_cell_mass(const MotionForecast& forecast, const Grid& grid,
+                                   const FieldSize& field, Cell cell);
+
+  // Predicts `horizon` steps for every robot into `out` (reusing its storage), the states in
+  // `codec`'s cells; positions are turned back into the feed's coordinates with `attacks`.
+  // Steps beyond the table's horizons extrapolate the last two learned steps.
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out) const;
+
+ private:
+  struct Estimate {
+    double mean_x = 0.0, mean_y = 0.0;  // residual against damped constant velocity, mm
+    double mean_square = 0.0;           // of the truth about the estimate, mm^2
+    double n = 0.0;
+  };
+  struct Horizon {
+    double damping = 1.0;
+    Estimate root;
+    double z50 = 0.0, z90 = 0.0;  // radius / sqrt(mean square)
+    // Isotonic map from the Gaussian mass to the observed hit rate: block upper bounds and
+    // their rates, increasing. Empty: identity.
+    std::vector<double> mass_upper;
+    std::vector<double> hit_rate;
+  };
+  Estimate shrink(const MotionRow& row, double damping, const Estimate& parent) const;
+  const Estimate* find(MotionKey key) const;
+  void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
+                 const FieldSize& field);
+  double calibrated(int horizon_index, double mass) const;
+
+  MotionConfig config_;
+  MotionModelSettings settings_;
+  std::vector<Horizon> horizon_;
+  std::unordered_map<MotionKey, Estimate> estimates_;
+};
+
+}  // namespace ssl_formation

@@ -1,0 +1,327 @@
+#include "ssl_formation/motion_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <tuple>
+
+namespace ssl_formation {
+
+namespace {
+
+std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser: a fixed, well-spread hash
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+std::uint64_t instance_hash(int horizon_index, double time_s, const MotionInstance& i) {
+  // The time to the millisecond and the instance itself: the same instance from the same
+  // stream always ranks the same, whichever table it is trained into.
+  std::uint64_t h = mix(static_cast<std::uint64_t>(std::llround(time_s * 1000.0)));
+  h = mix(h ^ (static_cast<std::uint64_t>(horizon_index) << 40) ^ i.robot_id);
+  h = mix(h ^ (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i.x)) << 32 |
+               static_cast<std::uint32_t>(i.y)));
+  h = mix(h ^ (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i.d_x)) << 32 |
+               static_cast<std::uint32_t>(i.d_y)));
+  return h;
+}
+
+// The heap order: higher hash first, ties broken by content so that the kept set never depends
+// on the order instances arrived in.
+bool ranks_before(const HeldOutInstance& a, const HeldOutInstance& b) {
+  const auto key = [](const HeldOutInstance& h) {
+    const MotionInstance& i = h.instance;
+    return std::tuple(h.hash, i.robot_id, i.x, i.y, i.v_x, i.v_y, i.d_x, i.d_y, i.context);
+  };
+  return key(a) < key(b);
+}
+
+}  // namespace
+
+std::int32_t whole_mm(double value) {
+  return static_cast<std::int32_t>(std::clamp(std::round(value), -1.0e9, 1.0e9));
+}
+
+std::optional<ModelKind> parse_model(std::string_view text) {
+  if (text == "paper") return ModelKind::paper;
+  if (text == "motion") return ModelKind::motion;
+  return std::nullopt;
+}
+
+std::string_view to_string(ModelKind model) {
+  return model == ModelKind::paper ? "paper" : "motion";
+}
+
+bool MotionConfig::valid() const {
+  return std::isfinite(step_s) && step_s > 0.0 && horizons >= 1 && horizons <= max_horizons && std::isfinite(velocity_window_s) &&
+         velocity_window_s > 0.0 && std::isfinite(tolerance_s) && tolerance_s >= 0.0 &&
+         std::isfinite(calibration_block_s) && calibration_block_s > 0.0 &&
+         calibration_one_in >= 2 && calibration_capacity >= 1;
+}
+
+int MotionFeatures::cell(Point p) {
+  const double fx = std::floor((p.x + cells_x * cell_mm / 2.0) / cell_mm);
+  const double fy = std::floor((p.y + cells_y * cell_mm / 2.0) / cell_mm);
+  const int x = static_cast<int>(std::clamp(fx, 0.0, static_cast<double>(cells_x - 1)));
+  const int y = static_cast<int>(std::clamp(fy, 0.0, static_cast<double>(cells_y - 1)));
+  return x * cells_y + y;
+}
+
+int MotionFeatures::velocity_class(Point v) {
+  const double speed = std::hypot(v.x, v.y);
+  int band = 0;
+  while (band < static_cast<int>(speed_limits_mm_s.size()) && speed >= speed_limits_mm_s[band]) {
+    ++band;
+  }
+  if (band == 0) return 0;
+  // Direction sectors centred on +x, +x+y, +y, ...
+  const double angle = std::atan2(v.y, v.x) + std::numbers::pi / directions;
+  int sector = static_cast<int>(std::floor(angle / (2.0 * std::numbers::pi / directions)));
+  sector = ((sector % directions) + directions) % directions;
+  return 1 + (band - 1) * directions + sector;
+}
+
+namespace {
+// Bit fields of a key, low to high: context 24, velocity class 8, cell 12, robot slot 8,
+// level 4, horizon 8.
+constexpr int context_shift = 0, velocity_shift = 24, cell_shift = 32, slot_shift = 44,
+              level_shift = 52, horizon_shift = 56;
+std::uint64_t field(MotionKey key, int shift, int bits) {
+  return (key >> shift) & ((std::uint64_t{1} << bits) - 1);
+}
+}  // namespace
+
+MotionKeyParts motion_key_parts(int horizon_index, const MotionInstance& i) {
+  MotionKeyParts p;
+  p.horizon_index = horizon_index;
+  p.level = MotionLevel::robot;
+  p.robot_slot = MotionFeatures::robot_slot(i.robot_id);
+  p.cell = MotionFeatures::cell({static_cast<double>(i.x), static_cast<double>(i.y)});
+  p.velocity_class =
+      MotionFeatures::velocity_class({static_cast<double>(i.v_x), static_cast<double>(i.v_y)});
+  p.context = i.context;
+  return p;
+}
+
+MotionKey encode_motion_key(MotionKeyParts p) {
+  switch (p.level) {
+    case MotionLevel::all: p.velocity_class = 0; [[fallthrough]];
+    case MotionLevel::velocity: p.cell = 0; p.context = 0; [[fallthrough]];
+    case MotionLevel::cell: p.robot_slot = 0; [[fallthrough]];
+    case MotionLevel::robot: break;
+  }
+  return static_cast<MotionKey>(p.horizon_index) << horizon_shift |
+         static_cast<MotionKey>(p.level) << level_shift |
+         static_cast<MotionKey>(p.robot_slot) << slot_shift |
+         static_cast<MotionKey>(p.cell) << cell_shift |
+         static_cast<MotionKey>(p.velocity_class) << velocity_shift |
+         static_cast<MotionKey>(p.context & 0xffffffu) << context_shift;
+}
+
+MotionKeyParts decode_motion_key(MotionKey key) {
+  MotionKeyParts p;
+  p.horizon_index = static_cast<int>(field(key, horizon_shift, 8));
+  p.level = static_cast<MotionLevel>(field(key, level_shift, 4));
+  p.robot_slot = static_cast<int>(field(key, slot_shift, 8));
+  p.cell = static_cast<int>(field(key, cell_shift, 12));
+  p.velocity_class = static_cast<int>(field(key, velocity_shift, 8));
+  p.context = static_cast<std::uint32_t>(field(key, context_shift, 24));
+  return p;
+}
+
+MotionKey coarser_motion_key(MotionKey key) {
+  MotionKeyParts p = decode_motion_key(key);
+  if (p.level != MotionLevel::all) p.level = static_cast<MotionLevel>(static_cast<int>(p.level) + 1);
+  return encode_motion_key(p);
+}
+
+void MotionRow::add(const MotionRow& o) {
+  n += o.n;
+  d_x += o.d_x;
+  d_y += o.d_y;
+  e_x += o.e_x;
+  e_y += o.e_y;
+  dd += o.dd;
+  de += o.de;
+  ee += o.ee;
+}
+
+MotionTable::MotionTable(MotionConfig config) : config_(config) {
+  if (!config_.valid()) throw std::invalid_argument("invalid motion model configuration");
+  held_out_.resize(static_cast<std::size_t>(config_.horizons));
+}
+
+bool MotionTable::is_held_out(double time_s) const {
+  const auto block = static_cast<std::int64_t>(std::floor(time_s / config_.calibration_block_s));
+  return mix(static_cast<std::uint64_t>(block)) % config_.calibration_one_in == 0;
+}
+
+void MotionTable::add(int horizon_index, double time_s, const MotionInstance& i) {
+  if (is_held_out(time_s)) {
+    add_held_out(horizon_index, HeldOutInstance{instance_hash(horizon_index, time_s, i), i});
+    return;
+  }
+  const double horizon_s = (horizon_index + 1) * config_.step_s;
+  const std::int64_t e_x = whole_mm(i.v_x * horizon_s);
+  const std::int64_t e_y = whole_mm(i.v_y * horizon_s);
+  MotionRow row;
+  row.n = 1;
+  row.d_x = i.d_x;
+  row.d_y = i.d_y;
+  row.e_x = e_x;
+  row.e_y = e_y;
+  row.dd = std::int64_t{i.d_x} * i.d_x + std::int64_t{i.d_y} * i.d_y;
+  row.de = i.d_x * e_x + i.d_y * e_y;
+  row.ee = e_x * e_x + e_y * e_y;
+  ++instances_;
+  rows_[encode_motion_key(motion_key_parts(horizon_index, i))].add(row);
+}
+
+void MotionTable::add_row(MotionKey key, const MotionRow& row) {
+  rows_[key].add(row);
+  instances_ += static_cast<std::uint64_t>(row.n);
+}
+
+void MotionTable::add_held_out(int horizon_index, const HeldOutInstance& held_out) {
+  ++held_out_seen_;
+  auto& heap = held_out_[static_cast<std::size_t>(horizon_index)];
+  if (heap.size() < config_.calibration_capacity) {
+    heap.push_back(held_out);
+    std::push_heap(heap.begin(), heap.end(), ranks_before);
+    return;
+  }
+  if (!ranks_before(held_out, heap.front())) return;
+  std::pop_heap(heap.begin(), heap.end(), ranks_before);
+  heap.back() = held_out;
+  std::push_heap(heap.begin(), heap.end(), ranks_before);
+}
+
+void MotionTable::merge(const MotionTable& other) {
+  if (!(other.config_ == config_)) {
+    throw std::invalid_argument("the motion tables were trained with different settings");
+  }
+  for (const auto& [key, row] : other.rows_) rows_[key].add(row);
+  instances_ += other.instances_;
+  const std::uint64_t seen = held_out_seen_ + other.held_out_seen_;
+  for (std::size_t h = 0; h < held_out_.size(); ++h) {
+    for (const HeldOutInstance& i : other.held_out_[h]) add_held_out(static_cast<int>(h), i);
+  }
+  held_out_seen_ = seen;
+}
+
+std::size_t MotionTable::memory_bytes() const {
+  std::size_t bytes = rows_.size() * (sizeof(MotionKey) + sizeof(MotionRow) + 2 * sizeof(void*));
+  for (const auto& heap : held_out_) bytes += heap.capacity() * sizeof(HeldOutInstance);
+  return bytes;
+}
+
+std::vector<std::pair<MotionKey, MotionRow>> MotionTable::sorted_rows() const {
+  std::vector<std::pair<MotionKey, MotionRow>> rows(rows_.begin(), rows_.end());
+  std::sort(rows.begin(), rows.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  return rows;
+}
+
+std::vector<HeldOutInstance> MotionTable::calibration(int horizon_index) const {
+  std::vector<HeldOutInstance> sample = held_out_[static_cast<std::size_t>(horizon_index)];
+  std::sort(sample.begin(), sample.end(), ranks_before);
+  return sample;
+}
+
+bool operator==(const MotionTable& a, const MotionTable& b) {
+  if (!(a.config_ == b.config_) || a.instances_ != b.instances_ ||
+      a.held_out_seen_ != b.held_out_seen_ || a.rows_ != b.rows_) {
+    return false;
+  }
+  for (int h = 0; h < a.config_.horizons; ++h) {
+    if (a.calibration(h) != b.calibration(h)) return false;
+  }
+  return true;
+}
+
+// ---- MotionHistory -----------------------------------------------------------------------------
+
+namespace {
+constexpr double forget_after_gap_s = 1.0;  // no robot data for this long: the play moved on
+}
+
+MotionHistory::MotionHistory(const MotionConfig& config)
+    : config_(config),
+      keep_s_(config.horizons * config.step_s + config.velocity_window_s + 2.0 * config.tolerance_s) {}
+
+void MotionHistory::clear() {
+  for (auto& entries : by_id_) entries.clear();
+  last_time_s_.reset();
+}
+
+void MotionHistory::add(const Formation& formation) {
+  const double t = formation.time_s;
+  if (last_time_s_ && (t <= *last_time_s_ || t - *last_time_s_ > forget_after_gap_s ||
+                       formation.opponent_attacks != attacks_)) {
+    clear();
+  }
+  last_time_s_ = t;
+  attacks_ = formation.opponent_attacks;
+  for (const FormationRobot& robot : formation.robots) {
+    if (robot.robot_id >= by_id_.size()) by_id_.resize(robot.robot_id + 1);
+    std::deque<Entry>& entries = by_id_[robot.robot_id];
+    while (!entries.empty() && entries.front().time_s < t - keep_s_) entries.pop_front();
+    Entry entry{t, robot.position, {}, false};
+    const Entry* then = near(robot.robot_id, t - config_.velocity_window_s);
+    if (then && t - then->time_s > config_.velocity_window_s / 2.0) {
+      const double dt = t - then->time_s;
+      entry.velocity = {(robot.position.x - then->position.x) / dt,
+                        (robot.position.y - then->position.y) / dt};
+      entry.has_velocity = true;
+    }
+    entries.push_back(entry);
+  }
+}
+
+const MotionHistory::Entry* MotionHistory::latest(std::uint32_t robot_id) const {
+  if (robot_id >= by_id_.size() || by_id_[robot_id].empty()) return nullptr;
+  return &by_id_[robot_id].back();
+}
+
+const MotionHistory::Entry* MotionHistory::near(std::uint32_t robot_id, double time_s) const {
+  if (robot_id >= by_id_.size()) return nullptr;
+  const std::deque<Entry>& entries = by_id_[robot_id];
+  const auto it = std::lower_bound(entries.begin(), entries.end(), time_s,
+                                   [](const Entry& e, double t) { return e.time_s < t; });
+  const Entry* best = nullptr;
+  double best_gap = config_.tolerance_s + 1e-9;
+  if (it != entries.end() && it->time_s - time_s <= best_gap) {
+    best = &*it;
+    best_gap = it->time_s - time_s;
+  }
+  if (it != entries.begin()) {
+    const Entry& before = *std::prev(it);
+    if (time_s - before.time_s <= best_gap) best = &before;
+  }
+  return best;
+}
+
+void learn_motion(MotionTable& table, const MotionHistory& history, const Formation& now) {
+  const MotionConfig& config = table.config();
+  for (const FormationRobot& robot : now.robots) {
+    for (int k = 1; k <= config.horizons; ++k) {
+      const double horizon_s = k * config.step_s;
+      const MotionHistory::Entry* then = history.near(robot.robot_id, now.time_s - horizon_s);
+      if (!then || !then->has_velocity || then->time_s >= now.time_s) continue;
+      MotionInstance instance;
+      instance.robot_id = robot.robot_id;
+      instance.x = whole_mm(then->position.x);
+      instance.y = whole_mm(then->position.y);
+      instance.v_x = whole_mm(then->velocity.x);
+      instance.v_y = whole_mm(then->velocity.y);
+      instance.d_x = whole_mm(robot.position.x - then->position.x);
+      instance.d_y = whole_mm(robot.position.y - then->position.y);
+      table.add(k - 1, then->time_s, instance);
+    }
+  }
+}
+
+}  // namespace ssl_formation

@@ -1,0 +1,307 @@
+#include "ssl_formation/motion_predictor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <cstdlib>
+
+namespace ssl_formation {
+
+namespace {
+
+// A 2-D isotropic Gaussian holds fraction p within sqrt(-ln(1 - p)) x its rms distance.
+const double gaussian_z50 = std::sqrt(std::log(2.0));
+const double gaussian_z90 = std::sqrt(std::log(10.0));
+
+double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+
+double quantile(std::vector<double>& values, double p) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double rank = p * static_cast<double>(values.size() - 1);
+  const auto low = static_cast<std::size_t>(std::floor(rank));
+  const std::size_t high = std::min(low + 1, values.size() - 1);
+  return values[low] + (rank - static_cast<double>(low)) * (values[high] - values[low]);
+}
+
+}  // namespace
+
+MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
+                         MotionModelSettings settings)
+    : config_(table.config()), settings_(settings) {
+  if (const char* t = std::getenv("SSLF_TUNE_SHRINK")) settings_.shrinkage = std::atof(t);
+  const int horizons = config_.horizons;
+  horizon_.resize(static_cast<std::size_t>(horizons));
+
+  // The coarser levels are sums of the finest rows.
+  std::vector<MotionRow> roots(static_cast<std::size_t>(horizons));
+  std::unordered_map<MotionKey, MotionRow> coarse;
+  const auto& rows = table.row_map();
+  for (const auto& [key, row] : rows) {
+    roots[static_cast<std::size_t>(decode_motion_key(key).horizon_index)].add(row);
+    for (MotionKey parent = coarser_motion_key(key);
+         decode_motion_key(parent).level != MotionLevel::all; parent = coarser_motion_key(parent)) {
+      coarse[parent].add(row);
+    }
+  }
+
+  for (int h = 0; h < horizons; ++h) {
+    Horizon& horizon = horizon_[static_cast<std::size_t>(h)];
+    const double horizon_s = (h + 1) * config_.step_s;
+    const double tau = settings_.prior_time_constant_s;
+    const double prior_damping = tau / horizon_s * (1.0 - std::exp(-horizon_s / tau));
+    const MotionRow& root = roots[static_cast<std::size_t>(h)];
+    // The damping is the least-squares factor, held towards the prior by `shrinkage`
+    // instances of a 500 mm extrapolation.
+    const double weight = settings_.shrinkage * 500.0 * 500.0;
+    horizon.damping = (static_cast<double>(root.de) + weight * prior_damping) /
+                      (static_cast<double>(root.ee) + weight);
+    const double prior_rms = settings_.prior_error_mm + settings_.prior_error_mm_per_s * horizon_s;
+    const Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0};
+    horizon.root = shrink(root, horizon.damping, prior);
+    horizon.z50 = gaussian_z50;
+    horizon.z90 = gaussian_z90;
+  }
+  // Coarse to fine, each level shrunk towards its parent.
+  for (int level = motion_levels - 2; level >= 0; --level) {
+    const auto shrink_level = [&](const std::unordered_map<MotionKey, MotionRow>& source) {
+      for (const auto& [key, row] : source) {
+        const MotionKeyParts parts = decode_motion_key(key);
+        if (static_cast<int>(parts.level) != level) continue;
+        const Horizon& horizon = horizon_[static_cast<std::size_t>(parts.horizon_index)];
+        const MotionKey parent_key = coarser_motion_key(key);
+        const Estimate& parent = decode_motion_key(parent_key).level == MotionLevel::all
+                                     ? horizon.root
+                                     : estimates_.at(parent_key);
+        estimates_[key] = shrink(row, horizon.damping, parent);
+      }
+    };
+    shrink_level(level == 0 ? rows : coarse);
+  }
+  for (int h = 0; h < horizons; ++h) calibrate(table, h, grid, field);
+}
+
+MotionModel::Estimate MotionModel::shrink(const MotionRow& row, double damping,
+                                          const Estimate& parent) const {
+  if (row.n == 0) return parent;
+  const double n = static_cast<double>(row.n);
+  const double k = settings_.shrinkage;
+  // Residuals r = d - damping x e, summed: their sum and the sum of their squares.
+  const double r_x = static_cast<double>(row.d_x) - damping * static_cast<double>(row.e_x);
+  const double r_y = static_cast<double>(row.d_y) - damping * static_cast<double>(row.e_y);
+  const double rr = static_cast<double>(row.dd) - 2.0 * damping * static_cast<double>(row.de) +
+                    damping * damping * static_cast<double>(row.ee);
+  Estimate e;
+  e.n = n;
+  e.mean_x = (r_x + k * parent.mean_x) / (n + k);
+  e.mean_y = (r_y + k * parent.mean_y) / (n + k);
+  const double about_mean =
+      std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
+                     n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) / n);
+  e.mean_square = (n * about_mean + k * parent.mean_square) / (n + k);
+  return e;
+}
+
+const MotionModel::Estimate* MotionModel::find(MotionKey key) const {
+  const auto it = estimates_.find(key);
+  return it == estimates_.end() ? nullptr : &it->second;
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  const Point v = robot.has_velocity ? robot.velocity : Point{};
+  MotionInstance instance;
+  instance.robot_id = robot.robot_id;
+  instance.x = whole_mm(robot.position.x);
+  instance.y = whole_mm(robot.position.y);
+  instance.v_x = whole_mm(v.x);
+  instance.v_y = whole_mm(v.y);
+  instance.context = robot.context;
+  MotionForecast f;
+  const Estimate* estimate = nullptr;
+  for (MotionKey key = encode_motion_key(motion_key_parts(horizon_index, instance));;
+       key = coarser_motion_key(key)) {
+    f.level = decode_motion_key(key).level;
+    if (f.level == MotionLevel::all) break;
+    estimate = find(key);
+    if (estimate) break;
+  }
+  if (!estimate) estimate = &horizon.root;
+  f.from_counts = horizon.root.n > 0.0;
+  const double horizon_s = (horizon_index + 1) * config_.step_s;
+  f.position = {robot.position.x + horizon.damping * v.x * horizon_s + estimate->mean_x,
+                robot.position.y + horizon.damping * v.y * horizon_s + estimate->mean_y};
+  f.mean_square_mm2 = estimate->mean_square;
+  const double rms = std::sqrt(f.mean_square_mm2);
+  f.radius50_mm = horizon.z50 * rms;
+  f.radius90_mm = horizon.z90 * rms;
+  return f;
+}
+
+double MotionModel::gaussian_cell_mass(const MotionForecast& forecast, const Grid& grid,
+                                       const FieldSize& field, Cell cell) {
+  const double s = std::sqrt(std::max(forecast.mean_square_mm2, 1.0) / 2.0);  // per axis
+  const auto axis = [&](double mean, int index, int cells, double extent) {
+    const double size = extent / cells;
+    const double inf = std::numeric_limits<double>::infinity();
+    // Edge cells hold everything beyond the field (Grid::cell_of clamps).
+    const double low = index == 0 ? -inf : -extent / 2.0 + index * size;
+    const double high = index == cells - 1 ? inf : -extent / 2.0 + (index + 1) * size;
+    return normal_cdf((high - mean) / s) - normal_cdf((low - mean) / s);
+  };
+  return axis(forecast.position.x, cell.x, grid.length(), field.length_mm) *
+         axis(forecast.position.y, cell.y, grid.width(), field.width_mm);
+}
+
+void MotionModel::calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
+                            const FieldSize& field) {
+  const std::vector<HeldOutInstance> sample = table.calibration(horizon_index);
+  if (sample.size() < settings_.min_calibration_instances) return;
+  std::vector<double> z;
+  std::vector<std::pair<double, bool>> masses;
+  z.reserve(sample.size());
+  masses.reserve(sample.size());
+  for (const HeldOutInstance& held_out : sample) {
+    const MotionInstance& i = held_out.instance;
+    const MotionRobot robot{i.robot_id,
+                            {static_cast<double>(i.x), static_cast<double>(i.y)},
+                            {static_cast<double>(i.v_x), static_cast<double>(i.v_y)},
+                            true, i.context};
+    const MotionForecast f = forecast(horizon_index, robot);
+    const Point truth{robot.position.x + i.d_x, robot.position.y + i.d_y};
+    z.push_back(std::hypot(truth.x - f.position.x, truth.y - f.position.y) /
+                std::sqrt(std::max(f.mean_square_mm2, 1.0)));
+    const Cell predicted = grid.cell_of(f.position, field);
+    masses.emplace_back(gaussian_cell_mass(f, grid, field, predicted),
+                        grid.cell_of(truth, field) == predicted);
+  }
+  Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  horizon.z50 = quantile(z, 0.5);
+  horizon.z90 = quantile(z, 0.9);
+
+  // Pool-adjacent-violators: the non-decreasing step function of the mass closest to the hits.
+  std::sort(masses.begin(), masses.end());
+  struct Block {
+    double hits = 0.0;
+    double count = 0.0;
+    double mass_sum = 0.0;
+    double upper = 0.0;
+  };
+  std::vector<Block> blocks;
+  for (const auto& [mass, hit] : masses) {
+    blocks.push_back({hit ? 1.0 : 0.0, 1.0, mass, mass});
+    while (blocks.size() >= 2) {
+      Block& last = blocks.back();
+      Block& before = blocks[blocks.size() - 2];
+      if (before.hits / before.count < last.hits / last.count) break;
+      before.hits += last.hits;
+      before.count += last.count;
+      before.mass_sum += last.mass_sum;
+      before.upper = last.upper;
+      blocks.pop_back();
+    }
+  }
+  for (const Block& block : blocks) {
+    horizon.mass_upper.push_back(block.upper);
+    // Two pseudo-instances at the block's own mean mass keep a small block off 0 and 1.
+    horizon.hit_rate.push_back((block.hits + 2.0 * block.mass_sum / block.count) /
+                               (block.count + 2.0));
+  }
+}
+
+double MotionModel::calibrated(int horizon_index, double mass) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  if (horizon.mass_upper.empty()) return mass;
+  const auto it = std::lower_bound(horizon.mass_upper.begin(), horizon.mass_upper.end(), mass);
+  if (it == horizon.mass_upper.end()) return horizon.hit_rate.back();
+  return horizon.hit_rate[static_cast<std::size_t>(it - horizon.mass_upper.begin())];
+}
+
+double MotionModel::cell_probability(int horizon_index, const MotionForecast& forecast,
+                                     const Grid& grid, const FieldSize& field, Cell cell) const {
+  return calibrated(horizon_index, gaussian_cell_mass(forecast, grid, field, cell));
+}
+
+void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
+                          const StateCodec& codec, const FieldSize& field,
+                          AttackDirection attacks, Prediction& out) const {
+  const Grid& grid = codec.grid();
+  const auto steps = static_cast<std::size_t>(horizon);
+  out.steps.resize(steps);
+  for (PredictedStep& step : out.steps) step.robots.resize(robots.size());
+  const int learned = config_.horizons;
+
+  for (std::size_t r = 0; r < robots.size(); ++r) {
+    const MotionRobot& robot = robots[r];
+    // The two forecasts before the current step, for extrapolating beyond the learned ones.
+    MotionForecast before_last{robot.position, 0.0, 0.0, 0.0, MotionLevel::all, true};
+    MotionForecast last = before_last;
+    Cell previous = grid.cell_of(robot.position, field);
+    for (int k = 1; k <= horizon; ++k) {
+      MotionForecast f;
+      int calibration_index = k - 1;
+      if (k <= learned) {
+        f = forecast(k - 1, robot);
+      } else {
+        calibration_index = learned - 1;
+        f = last;
+        f.position = {2.0 * last.position.x - before_last.position.x,
+                      2.0 * last.position.y - before_last.position.y};
+        f.radius50_mm = 2.0 * last.radius50_mm - before_last.radius50_mm;
+        f.radius90_mm = 2.0 * last.radius90_mm - before_last.radius90_mm;
+        const double rms = std::sqrt(last.mean_square_mm2) * 2.0 -
+                           std::sqrt(before_last.mean_square_mm2);
+        f.mean_square_mm2 = rms * rms;
+      }
+      const Cell cell = grid.cell_of(f.position, field);
+      RobotPrediction& p = out.steps[static_cast<std::size_t>(k - 1)].robots[r];
+      p.robot_id = robot.robot_id;
+      p.position = cell;
+      p.previous = previous;
+      p.probability = cell_probability(calibration_index, f, grid, field, cell);
+      p.unseen = !f.from_counts;
+      p.feed_position = normalise(f.position, attacks);
+      p.radius50_mm = f.radius50_mm;
+      p.radius90_mm = f.radius90_mm;
+      p.mean_square_mm2 = f.mean_square_mm2;
+      p.normalised_position = f.position;
+      previous = cell;
+      before_last = last;
+      last = f;
+    }
+  }
+
+  double confidence = 1.0;
+  for (PredictedStep& step : out.steps) {
+    Point centroid{};
+    double mean_square = 0.0;
+    double formation = 1.0;
+    bool unseen = false;
+    for (const RobotPrediction& p : step.robots) {
+      centroid.x += p.normalised_position.x;
+      centroid.y += p.normalised_position.y;
+      mean_square += p.mean_square_mm2;
+      formation *= p.probability;
+      unseen = unseen || p.unseen;
+    }
+    const double n = static_cast<double>(std::max<std::size_t>(step.robots.size(), 1));
+    centroid = {centroid.x / n, centroid.y / n};
+    step.centroid = grid.cell_of(centroid, field);
+    // The mean of n independent errors: the Gaussian mass of its cell, not calibrated.
+    MotionForecast mean_forecast;
+    mean_forecast.position = centroid;
+    mean_forecast.mean_square_mm2 = mean_square / (n * n);
+    step.centroid_probability = gaussian_cell_mass(mean_forecast, grid, field, step.centroid);
+    step.centroid_unseen = unseen;
+    const auto centroid_id = static_cast<StateIndex>(grid.cell_id(step.centroid));
+    for (RobotPrediction& p : step.robots) {
+      p.state = codec.compose(centroid_id, static_cast<StateIndex>(grid.cell_id(p.position)),
+                              static_cast<StateIndex>(grid.cell_id(p.previous)));
+    }
+    step.formation_probability = formation;
+    confidence *= formation;
+    step.confidence = confidence;
+  }
+}
+
+}  // namespace ssl_formation
