@@ -146,7 +146,9 @@ class MotionTable {
   void merge(const MotionTable& other);
 
   std::uint64_t instances() const { return instances_; }  // counted in rows
-  std::uint64_t held_out() const { return held_out_seen_; }
+  std::uint64_t held_out() const { return held_out_seen_; }  // offered, kept or not
+  // Loading a file: how many held-out instances the saved table had been offered.
+  void restore_held_out_seen(std::uint64_t seen) { held_out_seen_ = seen; }
   std::size_t rows() const { return rows_.size(); }
   std::size_t memory_bytes() const;
   // Rows in increasing key order, for saving and comparing.
