@@ -84,6 +84,15 @@ int MotionFeatures::velocity_class(Point v) {
   return 1 + (band - 1) * directions + sector;
 }
 
+std::uint32_t MotionFeatures::standing_context(double standing_s) {
+  std::uint32_t bin = 1;
+  for (const double limit : standing_limits_s) {
+    if (standing_s < limit) return bin;
+    ++bin;
+  }
+  return bin;
+}
+
 namespace {
 // Bit fields of a key, low to high: context 24, velocity class 8, cell 12, robot slot 8,
 // level 4, horizon 8.
@@ -254,6 +263,7 @@ MotionHistory::MotionHistory(const MotionConfig& config)
 
 void MotionHistory::clear() {
   for (auto& entries : by_id_) entries.clear();
+  for (Stillness& still : stillness_) still = {};
   last_time_s_.reset();
 }
 
@@ -266,10 +276,13 @@ void MotionHistory::add(const Formation& formation) {
   last_time_s_ = t;
   attacks_ = formation.opponent_attacks;
   for (const FormationRobot& robot : formation.robots) {
-    if (robot.robot_id >= by_id_.size()) by_id_.resize(robot.robot_id + 1);
+    if (robot.robot_id >= by_id_.size()) {
+      by_id_.resize(robot.robot_id + 1);
+      stillness_.resize(robot.robot_id + 1);
+    }
     std::deque<Entry>& entries = by_id_[robot.robot_id];
     while (!entries.empty() && entries.front().time_s < t - keep_s_) entries.pop_front();
-    Entry entry{t, robot.position, {}, false};
+    Entry entry{t, robot.position, {}, false, 0};
     const Entry* then = near(robot.robot_id, t - config_.velocity_window_s);
     if (then && t - then->time_s > config_.velocity_window_s / 2.0) {
       const double dt = t - then->time_s;
@@ -278,6 +291,21 @@ void MotionHistory::add(const Formation& formation) {
       entry.has_velocity = true;
     }
     entries.push_back(entry);
+  }
+  // How long each standing robot has stood: a robot that has held its place for a while is
+  // about to leave it (set plays hold each position for a second or two).
+  for (const FormationRobot& robot : formation.robots) {
+    Entry& entry = by_id_[robot.robot_id].back();
+    if (!entry.has_velocity) continue;
+    Stillness& still = stillness_[robot.robot_id];
+    const bool standing =
+        std::hypot(entry.velocity.x, entry.velocity.y) < MotionFeatures::speed_limits_mm_s[0];
+    if (!standing) {
+      still.since_s.reset();
+    } else if (!still.since_s) {
+      still.since_s = t;
+    }
+    entry.context = standing ? MotionFeatures::standing_context(t - *still.since_s) : 0;
   }
 }
 
@@ -319,6 +347,7 @@ void learn_motion(MotionTable& table, const MotionHistory& history, const Format
       instance.v_y = whole_mm(then->velocity.y);
       instance.d_x = whole_mm(robot.position.x - then->position.x);
       instance.d_y = whole_mm(robot.position.y - then->position.y);
+      instance.context = then->context;
       table.add(k - 1, then->time_s, instance);
     }
   }

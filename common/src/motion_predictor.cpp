@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <cstdlib>
 
 namespace ssl_formation {
 
 namespace {
+
+constexpr double damping_weight_mm2 = 500.0 * 500.0;
 
 // A 2-D isotropic Gaussian holds fraction p within sqrt(-ln(1 - p)) x its rms distance.
 const double gaussian_z50 = std::sqrt(std::log(2.0));
@@ -29,7 +30,6 @@ double quantile(std::vector<double>& values, double p) {
 MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
                          MotionModelSettings settings)
     : config_(table.config()), settings_(settings) {
-  if (const char* t = std::getenv("SSLF_TUNE_SHRINK")) settings_.shrinkage = std::atof(t);
   const int horizons = config_.horizons;
   horizon_.resize(static_cast<std::size_t>(horizons));
 
@@ -57,8 +57,8 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     horizon.damping = (static_cast<double>(root.de) + weight * prior_damping) /
                       (static_cast<double>(root.ee) + weight);
     const double prior_rms = settings_.prior_error_mm + settings_.prior_error_mm_per_s * horizon_s;
-    const Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0};
-    horizon.root = shrink(root, horizon.damping, prior);
+    const Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0, horizon.damping};
+    horizon.root = shrink(root, prior);
     horizon.z50 = gaussian_z50;
     horizon.z90 = gaussian_z90;
   }
@@ -73,7 +73,7 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
         const Estimate& parent = decode_motion_key(parent_key).level == MotionLevel::all
                                      ? horizon.root
                                      : estimates_.at(parent_key);
-        estimates_[key] = shrink(row, horizon.damping, parent);
+        estimates_[key] = shrink(row, parent);
       }
     };
     shrink_level(level == 0 ? rows : coarse);
@@ -81,24 +81,36 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
   for (int h = 0; h < horizons; ++h) calibrate(table, h, grid, field);
 }
 
-MotionModel::Estimate MotionModel::shrink(const MotionRow& row, double damping,
-                                          const Estimate& parent) const {
+MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& parent) const {
   if (row.n == 0) return parent;
   const double n = static_cast<double>(row.n);
   const double k = settings_.shrinkage;
-  // Residuals r = d - damping x e, summed: their sum and the sum of their squares.
-  const double r_x = static_cast<double>(row.d_x) - damping * static_cast<double>(row.e_x);
-  const double r_y = static_cast<double>(row.d_y) - damping * static_cast<double>(row.e_y);
-  const double rr = static_cast<double>(row.dd) - 2.0 * damping * static_cast<double>(row.de) +
-                    damping * damping * static_cast<double>(row.ee);
+  const double sd_x = static_cast<double>(row.d_x), sd_y = static_cast<double>(row.d_y);
+  const double se_x = static_cast<double>(row.e_x), se_y = static_cast<double>(row.e_y);
+  const double mean_e_x = se_x / n, mean_e_y = se_y / n;
+  // The row's own least-squares damping d = a + b e, held towards the parent's by `shrinkage`
+  // instances of a 500 mm extrapolation.
+  const double sxx = static_cast<double>(row.ee) - (se_x * se_x + se_y * se_y) / n;
+  const double sxy = static_cast<double>(row.de) - (sd_x * se_x + sd_y * se_y) / n;
+  const double weight = k * damping_weight_mm2;
   Estimate e;
   e.n = n;
-  e.mean_x = (r_x + k * parent.mean_x) / (n + k);
-  e.mean_y = (r_y + k * parent.mean_y) / (n + k);
-  const double about_mean =
+  e.damping = (sxy + weight * parent.damping) / (std::max(sxx, 0.0) + weight);
+  // The intercept, held towards what the parent predicts at the row's mean extrapolation.
+  const double target_x = parent.mean_x + (parent.damping - e.damping) * mean_e_x;
+  const double target_y = parent.mean_y + (parent.damping - e.damping) * mean_e_y;
+  const double r_x = sd_x - e.damping * se_x;
+  const double r_y = sd_y - e.damping * se_y;
+  e.mean_x = (r_x + k * target_x) / (n + k);
+  e.mean_y = (r_y + k * target_y) / (n + k);
+  // Sum of |d - a - b e|^2 over the row.
+  const double b = e.damping;
+  const double rr = static_cast<double>(row.dd) - 2.0 * b * static_cast<double>(row.de) +
+                    b * b * static_cast<double>(row.ee);
+  const double about_fit =
       std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
                      n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) / n);
-  e.mean_square = (n * about_mean + k * parent.mean_square) / (n + k);
+  e.mean_square = (n * about_fit + k * parent.mean_square) / (n + k);
   return e;
 }
 
@@ -129,8 +141,8 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
   if (!estimate) estimate = &horizon.root;
   f.from_counts = horizon.root.n > 0.0;
   const double horizon_s = (horizon_index + 1) * config_.step_s;
-  f.position = {robot.position.x + horizon.damping * v.x * horizon_s + estimate->mean_x,
-                robot.position.y + horizon.damping * v.y * horizon_s + estimate->mean_y};
+  f.position = {robot.position.x + estimate->damping * v.x * horizon_s + estimate->mean_x,
+                robot.position.y + estimate->damping * v.y * horizon_s + estimate->mean_y};
   f.mean_square_mm2 = estimate->mean_square;
   const double rms = std::sqrt(f.mean_square_mm2);
   f.radius50_mm = horizon.z50 * rms;

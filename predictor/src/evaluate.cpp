@@ -303,6 +303,18 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
       }
     }
   }
+  if (report.sections.front().evaluation.horizons.front().radii.robots == 0) return;
+  std::printf("The model's radii: how often the robot was within them (aim: 50%% and 90%%):\n");
+  std::printf("%9s %5s %12s %12s %12s\n", "horizon", "steps", "within r50", "within r90",
+              "robots");
+  for (const Section& section : report.sections) {
+    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
+      const ev::HorizonScore& score = section.evaluation.horizons[h];
+      std::printf("%7.2f s %5zu %11.1f%% %11.1f%% %12llu\n", score.horizon_s, h + 1,
+                  100.0 * score.radii.share50(), 100.0 * score.radii.share90(),
+                  static_cast<unsigned long long>(score.radii.robots));
+    }
+  }
 }
 
 void write_holdout_csv(std::ofstream& accuracy, std::ofstream& calibration,
@@ -323,7 +335,8 @@ void write_holdout_csv(std::ofstream& accuracy, std::ofstream& calibration,
         const ev::Calibration& c = robot ? score.robot : score.formation;
         calibration << grid << ',' << h + 1 << ',' << score.horizon_s << ",model,"
                     << quantity_name(robot) << ',' << c.brier() << ','
-                    << ev::expected_calibration_error(c) << ',' << c.n << '\n';
+                    << ev::expected_calibration_error(c) << ',' << c.n << ','
+                    << score.radii.share50() << ',' << score.radii.share90() << '\n';
         for (std::size_t b = 0; b < c.bin_count.size(); ++b) {
           const auto n = static_cast<double>(c.bin_count[b]);
           reliability << grid << ',' << h + 1 << ',' << score.horizon_s << ','
@@ -371,7 +384,8 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   accuracy << "grid,horizon_steps,horizon_s,method,state_accuracy,cell_accuracy,"
               "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots\n";
   std::ofstream calibration = open_csv(options, prefix + "calibration.csv");
-  calibration << "grid,horizon_steps,horizon_s,method,quantity,brier,ece,predictions\n";
+  calibration << "grid,horizon_steps,horizon_s,method,quantity,brier,ece,predictions,"
+                 "within_radius_50,within_radius_90\n";
   std::ofstream reliability = open_csv(options, prefix + "reliability.csv");
   reliability << "grid,horizon_steps,horizon_s,quantity,bin,count,mean_confidence,"
                  "observed_frequency\n";

@@ -65,6 +65,10 @@ struct MotionFeatures {
 
   static int cell(Point normalised);
   static int velocity_class(Point velocity_mm_s);
+  // The context of a robot that has stood (slower than the first speed limit) this long: 1 to
+  // 1 + standing_limits_s.size(); 0 is a moving robot's.
+  static constexpr std::array<double, 3> standing_limits_s{0.5, 1.0, 2.0};
+  static std::uint32_t standing_context(double standing_s);
   static int robot_slot(std::uint32_t robot_id) { return robot_id < 16 ? static_cast<int>(robot_id) : 16; }
 };
 
@@ -79,7 +83,7 @@ struct MotionKeyParts {
   int robot_slot = 0;
   int cell = 0;
   int velocity_class = 0;
-  std::uint32_t context = 0;  // what the robot has been doing (MotionHistory::Entry::context)
+  std::uint32_t context = 0;  // how long the robot has stood (MotionFeatures::standing_context)
   friend bool operator==(const MotionKeyParts&, const MotionKeyParts&) = default;
 };
 using MotionKey = std::uint64_t;
@@ -181,6 +185,7 @@ class MotionHistory {
     Point position;
     Point velocity;  // mm/s, valid if has_velocity
     bool has_velocity = false;
+    std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
   };
   // Records a formation; its robots' velocities are then velocity(id).
   void add(const Formation& formation);
@@ -196,6 +201,10 @@ class MotionHistory {
   MotionConfig config_;
   double keep_s_;
   std::vector<std::deque<Entry>> by_id_;
+  struct Stillness {
+    std::optional<double> since_s;  // when the robot last came to a stand, if it stands
+  };
+  std::vector<Stillness> stillness_;
   std::optional<double> last_time_s_;
   AttackDirection attacks_ = AttackDirection::positive_x;
 };

@@ -77,6 +77,7 @@ class MotionModel {
     double mean_x = 0.0, mean_y = 0.0;  // residual against damped constant velocity, mm
     double mean_square = 0.0;           // of the truth about the estimate, mm^2
     double n = 0.0;
+    double damping = 1.0;               // of constant velocity, this row's
   };
   struct Horizon {
     double damping = 1.0;
@@ -87,7 +88,7 @@ class MotionModel {
     std::vector<double> mass_upper;
     std::vector<double> hit_rate;
   };
-  Estimate shrink(const MotionRow& row, double damping, const Estimate& parent) const;
+  Estimate shrink(const MotionRow& row, const Estimate& parent) const;
   const Estimate* find(MotionKey key) const;
   void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
                  const FieldSize& field);
