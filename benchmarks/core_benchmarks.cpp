@@ -154,6 +154,7 @@ BENCHMARK(BM_SamplerPerPacket)->ArgName("cameras")->Arg(1)->Arg(4);
 void BM_RollingPrediction(benchmark::State& state) {
   const sf::Grid grid = state.range(0) == 0 ? sf::Grid(3, 2) : sf::Grid(12, 9);
   const int horizon = static_cast<int>(state.range(1));
+  const bool motion = state.range(2) != 0;
   constexpr int robots = 11;
   constexpr double frame_s = 1.0 / 60.0;
   // Every robot circles its own spot; two minutes of frames.
@@ -177,7 +178,15 @@ void BM_RollingPrediction(benchmark::State& state) {
   config.sampler.step_s = 0.5;
   config.sampler.sampling = sf::Sampling::frame;
   config.horizon = horizon;
-  sf::Training training(config.sampler, sf::TransitionTable(grid));
+  config.model = motion ? sf::ModelKind::motion : sf::ModelKind::paper;
+  std::optional<sf::MotionTable> motion_table;
+  if (motion) {
+    sf::MotionConfig motion_config;
+    motion_config.step_s = config.sampler.step_s;
+    motion_config.horizons = 3;
+    motion_table.emplace(motion_config);
+  }
+  sf::Training training(config.sampler, sf::TransitionTable(grid), 0, std::move(motion_table));
   for (int i = 0; i < 120 * 60; ++i) training.add(frame_at(i, 0.0));
   std::vector<sf::VisionFrame> frames;
   for (int i = 0; i < 60 * 60; ++i) frames.push_back(frame_at(i, 0.0));
@@ -186,7 +195,11 @@ void BM_RollingPrediction(benchmark::State& state) {
   sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& p) {
     predictions += p.prediction.steps.size();
   });
-  pipeline.set_table(std::make_shared<const sf::StoredTable>(sf::StoredTable{training.table(), {}}));
+  sf::TableMetadata metadata;
+  metadata.step_s = config.sampler.step_s;
+  metadata.field = training.sampler().field();
+  pipeline.set_table(std::make_shared<const sf::StoredTable>(
+      sf::StoredTable{training.table(), metadata, training.motion()}));
   std::size_t i = 0;
   double offset_s = 1000.0;
   for (auto _ : state) {
@@ -199,17 +212,18 @@ void BM_RollingPrediction(benchmark::State& state) {
       offset_s += 100.0;
     }
   }
-  state.SetLabel(grid.to_string() + ", " + std::to_string(training.table().transitions()) +
-                 " transitions");
+  state.SetLabel(std::string(motion ? "motion, " : "paper, ") + grid.to_string() + ", " +
+                 std::to_string(training.table().transitions()) + " transitions");
   benchmark::DoNotOptimize(predictions);
 }
-// Args: grid (0 = 3x2, 1 = 12x9), horizon in steps.
+// Args: grid (0 = 3x2, 1 = 12x9), horizon in steps, model (0 = paper, 1 = motion).
 BENCHMARK(BM_RollingPrediction)
-    ->ArgNames({"grid12x9", "horizon"})
-    ->Args({0, 1})
-    ->Args({0, 3})
-    ->Args({1, 1})
-    ->Args({1, 3});
+    ->ArgNames({"grid12x9", "horizon", "motion"})
+    ->Args({0, 1, 0})
+    ->Args({0, 3, 0})
+    ->Args({1, 1, 0})
+    ->Args({1, 3, 0})
+    ->Args({1, 3, 1});
 
 }  // namespace
 

@@ -97,10 +97,12 @@ BENCHMARK(BM_ReadAndParse)
 
 // Offline training: the same loop feeding the Training the live trainer uses; range(1) chooses
 // the sampling (0: a formation every 2 s, the paper's; 1: a formation at every frame, each
-// counting the transition from 0.5 s earlier).
+// counting the transition from 0.5 s earlier; 2: the same plus the motion model's rows for 3
+// horizons, what `ssl-trainer --from-log` does by default).
 void BM_OfflineTraining(benchmark::State& state) {
   const auto& path = log_path(state.range(0) != 0);
   const bool rolling = state.range(1) != 0;
+  const bool motion = state.range(1) == 2;
   std::int64_t frames = 0;
   SSL_WrapperPacket packet;
   std::uint64_t transitions = 0;  // kept so the training cannot be optimised away
@@ -108,7 +110,14 @@ void BM_OfflineTraining(benchmark::State& state) {
     sf::SamplerConfig config;
     config.step_s = rolling ? 0.5 : 2.0;
     config.sampling = rolling ? sf::Sampling::frame : sf::Sampling::step;
-    sf::Training training(config, sf::TransitionTable(config.grid));
+    std::optional<sf::MotionTable> motion_table;
+    if (motion) {
+      sf::MotionConfig motion_config;
+      motion_config.step_s = config.step_s;
+      motion_config.horizons = 3;
+      motion_table.emplace(motion_config);
+    }
+    sf::Training training(config, sf::TransitionTable(config.grid), 0, std::move(motion_table));
     auto reader = sf::LogReader::open(path).value();  // throws with the reason
     while (reader.next_vision(packet)) {
       training.add(packet);
@@ -119,7 +128,7 @@ void BM_OfflineTraining(benchmark::State& state) {
   state.SetItemsProcessed(frames);
   benchmark::DoNotOptimize(transitions);
   state.SetLabel(std::string(state.range(0) ? ".log.gz" : ".log") +
-                 (rolling ? ", frame sampling" : ", step sampling"));
+                 (motion ? ", frame sampling + motion model" : rolling ? ", frame sampling" : ", step sampling"));
 }
 BENCHMARK(BM_OfflineTraining)
     ->ArgNames({"gzip", "frame"})
@@ -127,6 +136,8 @@ BENCHMARK(BM_OfflineTraining)
     ->Args({1, 0})
     ->Args({0, 1})
     ->Args({1, 1})
+    ->Args({0, 2})
+    ->Args({1, 2})
     ->Unit(benchmark::kMillisecond);  // CPU time: one core
 
 }  // namespace

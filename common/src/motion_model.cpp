@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 #include <tuple>
 
@@ -71,16 +70,26 @@ int MotionFeatures::cell(Point p) {
 }
 
 int MotionFeatures::velocity_class(Point v) {
-  const double speed = std::hypot(v.x, v.y);
+  const double speed_squared = v.x * v.x + v.y * v.y;
   int band = 0;
-  while (band < static_cast<int>(speed_limits_mm_s.size()) && speed >= speed_limits_mm_s[band]) {
+  while (band < static_cast<int>(speed_limits_mm_s.size()) &&
+         speed_squared >= speed_limits_mm_s[band] * speed_limits_mm_s[band]) {
     ++band;
   }
   if (band == 0) return 0;
-  // Direction sectors centred on +x, +x+y, +y, ...
-  const double angle = std::atan2(v.y, v.x) + std::numbers::pi / directions;
-  int sector = static_cast<int>(std::floor(angle / (2.0 * std::numbers::pi / directions)));
-  sector = ((sector % directions) + directions) % directions;
+  // Eight sectors of 45 degrees centred on +x, +x+y, +y, ... (counter-clockwise), told apart
+  // by comparisons with tan(22.5 degrees) rather than an atan2 per robot and frame.
+  static_assert(directions == 8);
+  constexpr double tan_22_5 = 0.41421356237309503;
+  const double ax = std::abs(v.x), ay = std::abs(v.y);
+  int sector = 0;
+  if (ay <= tan_22_5 * ax) {
+    sector = v.x > 0.0 ? 0 : 4;
+  } else if (ax <= tan_22_5 * ay) {
+    sector = v.y > 0.0 ? 2 : 6;
+  } else {
+    sector = v.x > 0.0 ? (v.y > 0.0 ? 1 : 7) : (v.y > 0.0 ? 3 : 5);
+  }
   return 1 + (band - 1) * directions + sector;
 }
 
@@ -298,8 +307,9 @@ void MotionHistory::add(const Formation& formation) {
     Entry& entry = by_id_[robot.robot_id].back();
     if (!entry.has_velocity) continue;
     Stillness& still = stillness_[robot.robot_id];
+    const double limit = MotionFeatures::speed_limits_mm_s[0];
     const bool standing =
-        std::hypot(entry.velocity.x, entry.velocity.y) < MotionFeatures::speed_limits_mm_s[0];
+        entry.velocity.x * entry.velocity.x + entry.velocity.y * entry.velocity.y < limit * limit;
     if (!standing) {
       still.since_s.reset();
     } else if (!still.since_s) {

@@ -1,6 +1,7 @@
 #include "ssl_formation/motion_predictor.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -14,7 +15,32 @@ constexpr double damping_weight_mm2 = 500.0 * 500.0;
 const double gaussian_z50 = std::sqrt(std::log(2.0));
 const double gaussian_z90 = std::sqrt(std::log(10.0));
 
-double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+// The standard normal CDF, tabulated over [-8, 8] and interpolated linearly (error below 1e-6,
+// far under what the calibration resolves): erfc for every cell edge of every robot and step
+// was a third of the prediction time.
+class NormalCdfTable {
+ public:
+  NormalCdfTable() {
+    for (std::size_t i = 0; i < values_.size(); ++i) {
+      const double z = -limit + static_cast<double>(i) / per_unit;
+      values_[i] = 0.5 * std::erfc(-z / std::sqrt(2.0));
+    }
+  }
+  double operator()(double z) const {
+    if (!(z > -limit)) return 0.0;  // also NaN
+    if (z >= limit) return 1.0;
+    const double position = (z + limit) * per_unit;
+    const auto i = static_cast<std::size_t>(position);
+    const double fraction = position - static_cast<double>(i);
+    return values_[i] + fraction * (values_[i + 1] - values_[i]);
+  }
+
+ private:
+  static constexpr double limit = 8.0;
+  static constexpr double per_unit = 512.0;
+  std::array<double, static_cast<std::size_t>(2 * limit * per_unit) + 2> values_{};
+};
+const NormalCdfTable normal_cdf;
 
 double quantile(std::vector<double>& values, double p) {
   if (values.empty()) return 0.0;
@@ -63,6 +89,7 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     horizon.z90 = gaussian_z90;
   }
   // Coarse to fine, each level shrunk towards its parent.
+  std::unordered_map<MotionKey, Estimate> estimates;
   for (int level = motion_levels - 2; level >= 0; --level) {
     const auto shrink_level = [&](const std::unordered_map<MotionKey, MotionRow>& source) {
       for (const auto& [key, row] : source) {
@@ -72,12 +99,13 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
         const MotionKey parent_key = coarser_motion_key(key);
         const Estimate& parent = decode_motion_key(parent_key).level == MotionLevel::all
                                      ? horizon.root
-                                     : estimates_.at(parent_key);
-        estimates_[key] = shrink(row, parent);
+                                     : estimates.at(parent_key);
+        estimates[key] = shrink(row, parent);
       }
     };
     shrink_level(level == 0 ? rows : coarse);
   }
+  index_estimates(estimates);
   for (int h = 0; h < horizons; ++h) calibrate(table, h, grid, field);
 }
 
@@ -114,13 +142,42 @@ MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& 
   return e;
 }
 
-const MotionModel::Estimate* MotionModel::find(MotionKey key) const {
-  const auto it = estimates_.find(key);
-  return it == estimates_.end() ? nullptr : &it->second;
+namespace {
+constexpr MotionKey empty_slot = ~MotionKey{0};  // no key has every bit set
+std::size_t slot_of(MotionKey key, std::size_t mask) {
+  key ^= key >> 31;
+  key *= 0x7fb5d329728ea185ULL;
+  key ^= key >> 27;
+  return static_cast<std::size_t>(key) & mask;
+}
+}  // namespace
+
+void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates) {
+  std::size_t size = 16;
+  while (size < 2 * estimates.size()) size *= 2;
+  index_mask_ = size - 1;
+  index_.assign(size, Slot{empty_slot, 0, 0, 0, 0, 0, 0});
+  for (const auto& [key, e] : estimates) {
+    std::size_t slot = slot_of(key, index_mask_);
+    while (index_[slot].key != empty_slot) slot = (slot + 1) & index_mask_;
+    index_[slot] = Slot{key,
+                        static_cast<float>(e.mean_x),
+                        static_cast<float>(e.mean_y),
+                        static_cast<float>(e.mean_square),
+                        static_cast<float>(e.damping),
+                        static_cast<float>(e.n),
+                        0.0f};
+  }
 }
 
-MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot) const {
-  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+const MotionModel::Slot* MotionModel::find(MotionKey key) const {
+  for (std::size_t slot = slot_of(key, index_mask_);; slot = (slot + 1) & index_mask_) {
+    if (index_[slot].key == key) return &index_[slot];
+    if (index_[slot].key == empty_slot) return nullptr;
+  }
+}
+
+MotionModel::RobotKeys MotionModel::motion_keys(const MotionRobot& robot) {
   const Point v = robot.has_velocity ? robot.velocity : Point{};
   MotionInstance instance;
   instance.robot_id = robot.robot_id;
@@ -129,21 +186,42 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
   instance.v_x = whole_mm(v.x);
   instance.v_y = whole_mm(v.y);
   instance.context = robot.context;
-  MotionForecast f;
-  const Estimate* estimate = nullptr;
-  for (MotionKey key = encode_motion_key(motion_key_parts(horizon_index, instance));;
-       key = coarser_motion_key(key)) {
-    f.level = decode_motion_key(key).level;
-    if (f.level == MotionLevel::all) break;
-    estimate = find(key);
-    if (estimate) break;
+  RobotKeys keys{};
+  keys[0] = encode_motion_key(motion_key_parts(0, instance));
+  for (std::size_t level = 1; level < keys.size(); ++level) {
+    keys[level] = coarser_motion_key(keys[level - 1]);
   }
-  if (!estimate) estimate = &horizon.root;
+  return keys;
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot) const {
+  return forecast(horizon_index, robot, motion_keys(robot));
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot,
+                                     const RobotKeys& keys) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  const Point v = robot.has_velocity ? robot.velocity : Point{};
+  MotionForecast f;
+  double mean_x = horizon.root.mean_x, mean_y = horizon.root.mean_y;
+  double mean_square = horizon.root.mean_square, damping = horizon.root.damping;
+  f.level = MotionLevel::all;
+  const MotionKey horizon_bits = encode_motion_key({horizon_index, MotionLevel::robot, 0, 0, 0, 0});
+  for (std::size_t level = 0; level < keys.size(); ++level) {
+    if (const Slot* found = find(keys[level] | horizon_bits)) {
+      mean_x = found->mean_x;
+      mean_y = found->mean_y;
+      mean_square = found->mean_square;
+      damping = found->damping;
+      f.level = static_cast<MotionLevel>(level);
+      break;
+    }
+  }
   f.from_counts = horizon.root.n > 0.0;
   const double horizon_s = (horizon_index + 1) * config_.step_s;
-  f.position = {robot.position.x + estimate->damping * v.x * horizon_s + estimate->mean_x,
-                robot.position.y + estimate->damping * v.y * horizon_s + estimate->mean_y};
-  f.mean_square_mm2 = estimate->mean_square;
+  f.position = {robot.position.x + damping * v.x * horizon_s + mean_x,
+                robot.position.y + damping * v.y * horizon_s + mean_y};
+  f.mean_square_mm2 = mean_square;
   const double rms = std::sqrt(f.mean_square_mm2);
   f.radius50_mm = horizon.z50 * rms;
   f.radius90_mm = horizon.z90 * rms;
@@ -152,14 +230,15 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
 
 double MotionModel::gaussian_cell_mass(const MotionForecast& forecast, const Grid& grid,
                                        const FieldSize& field, Cell cell) {
-  const double s = std::sqrt(std::max(forecast.mean_square_mm2, 1.0) / 2.0);  // per axis
-  const auto axis = [&](double mean, int index, int cells, double extent) {
+  // Per axis the variance is half the expected squared distance.
+  const double inverse_s = 1.0 / std::sqrt(std::max(forecast.mean_square_mm2, 1.0) / 2.0);
+  const auto axis = [inverse_s](double mean, int index, int cells, double extent) {
     const double size = extent / cells;
-    const double inf = std::numeric_limits<double>::infinity();
+    const double low = -extent / 2.0 + index * size;
     // Edge cells hold everything beyond the field (Grid::cell_of clamps).
-    const double low = index == 0 ? -inf : -extent / 2.0 + index * size;
-    const double high = index == cells - 1 ? inf : -extent / 2.0 + (index + 1) * size;
-    return normal_cdf((high - mean) / s) - normal_cdf((low - mean) / s);
+    const double below = index == 0 ? 0.0 : normal_cdf((low - mean) * inverse_s);
+    const double up_to = index == cells - 1 ? 1.0 : normal_cdf((low + size - mean) * inverse_s);
+    return up_to - below;
   };
   return axis(forecast.position.x, cell.x, grid.length(), field.length_mm) *
          axis(forecast.position.y, cell.y, grid.width(), field.width_mm);
@@ -249,11 +328,12 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
     MotionForecast before_last{robot.position, 0.0, 0.0, 0.0, MotionLevel::all, true};
     MotionForecast last = before_last;
     Cell previous = grid.cell_of(robot.position, field);
+    const RobotKeys keys = motion_keys(robot);
     for (int k = 1; k <= horizon; ++k) {
       MotionForecast f;
       int calibration_index = k - 1;
       if (k <= learned) {
-        f = forecast(k - 1, robot);
+        f = forecast(k - 1, robot, keys);
       } else {
         calibration_index = learned - 1;
         f = last;

@@ -3,6 +3,7 @@
 // estimates at every back-off level and a calibration fitted on the table's held-out sample,
 // then, for each robot and step, a position in mm, the radii holding it with 50% and 90%
 // probability and the calibrated probability that its predicted cell is right.
+#include <array>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -59,6 +60,11 @@ class MotionModel {
   double damping(int horizon_index) const { return horizon_[static_cast<std::size_t>(horizon_index)].damping; }
 
   MotionForecast forecast(int horizon_index, const MotionRobot& robot) const;
+  // The same with the robot's keys at horizon 0, finest first (motion_keys), computed once for
+  // every horizon: the hot path of predict().
+  using RobotKeys = std::array<MotionKey, motion_levels - 1>;
+  static RobotKeys motion_keys(const MotionRobot& robot);
+  MotionForecast forecast(int horizon_index, const MotionRobot& robot, const RobotKeys& keys) const;
   // The calibrated probability that the robot is in `cell` when it is forecast `forecast`.
   double cell_probability(int horizon_index, const MotionForecast& forecast, const Grid& grid,
                           const FieldSize& field, Cell cell) const;
@@ -73,6 +79,12 @@ class MotionModel {
                const FieldSize& field, AttackDirection attacks, Prediction& out) const;
 
  private:
+  // A slot is the key and the estimate rounded to floats, 32 bytes: one cache line per probe.
+  struct Slot {
+    MotionKey key;
+    float mean_x, mean_y, mean_square, damping;
+    float n, unused;
+  };
   struct Estimate {
     double mean_x = 0.0, mean_y = 0.0;  // residual against damped constant velocity, mm
     double mean_square = 0.0;           // of the truth about the estimate, mm^2
@@ -89,7 +101,8 @@ class MotionModel {
     std::vector<double> hit_rate;
   };
   Estimate shrink(const MotionRow& row, const Estimate& parent) const;
-  const Estimate* find(MotionKey key) const;
+  const Slot* find(MotionKey key) const;
+  void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
   void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
                  const FieldSize& field);
   double calibrated(int horizon_index, double mass) const;
@@ -97,7 +110,10 @@ class MotionModel {
   MotionConfig config_;
   MotionModelSettings settings_;
   std::vector<Horizon> horizon_;
-  std::unordered_map<MotionKey, Estimate> estimates_;
+  // Every level's estimates in one open-addressing table (linear probing, power-of-two size):
+  // a lookup is one or two cache lines, where a node map costs a pointer chase per probe.
+  std::vector<Slot> index_;
+  std::size_t index_mask_ = 0;
 };
 
 }  // namespace ssl_formation
