@@ -33,7 +33,8 @@ std::uint64_t instance_hash(int horizon_index, double time_s, const MotionInstan
 bool ranks_before(const HeldOutInstance& a, const HeldOutInstance& b) {
   const auto key = [](const HeldOutInstance& h) {
     const MotionInstance& i = h.instance;
-    return std::tuple(h.hash, i.robot_id, i.x, i.y, i.v_x, i.v_y, i.d_x, i.d_y, i.context);
+    return std::tuple(h.hash, i.robot_id, i.x, i.y, i.d_x, i.d_y, i.v_x, i.v_y, i.a_x, i.a_y,
+                      i.g_x, i.g_y, i.s_x, i.s_y, i.context);
   };
   return key(a) < key(b);
 }
@@ -56,7 +57,9 @@ std::string_view to_string(ModelKind model) {
 
 bool MotionConfig::valid() const {
   return std::isfinite(step_s) && step_s > 0.0 && horizons >= 1 && horizons <= max_horizons && std::isfinite(velocity_window_s) &&
-         velocity_window_s > 0.0 && std::isfinite(tolerance_s) && tolerance_s >= 0.0 &&
+         velocity_window_s > 0.0 && std::isfinite(settle_window_s) && settle_window_s > 0.0 &&
+         std::isfinite(long_settle_window_s) && long_settle_window_s > 0.0 &&
+         std::isfinite(tolerance_s) && tolerance_s >= 0.0 &&
          std::isfinite(calibration_block_s) && calibration_block_s > 0.0 &&
          calibration_one_in >= 2 && calibration_capacity >= 1;
 }
@@ -156,15 +159,41 @@ MotionKey coarser_motion_key(MotionKey key) {
   return encode_motion_key(p);
 }
 
+MotionRegressors motion_regressors_of(const MotionKinematics& k, double horizon_s) {
+  return {Point{k.velocity.x * horizon_s, k.velocity.y * horizon_s},
+          Point{k.velocity_change.x * horizon_s, k.velocity_change.y * horizon_s},
+          k.to_recent_mean, k.to_settled_mean};
+}
+
+MotionKinematics MotionInstance::kinematics() const {
+  const auto p = [](std::int32_t px, std::int32_t py) {
+    return Point{static_cast<double>(px), static_cast<double>(py)};
+  };
+  return {p(v_x, v_y), p(a_x, a_y), p(g_x, g_y), p(s_x, s_y)};
+}
+
+void MotionRow::add(const std::array<std::int64_t, 2>& d,
+                    const std::array<std::array<std::int64_t, 2>, r>& x) {
+  const auto dot = [](const std::array<std::int64_t, 2>& a, const std::array<std::int64_t, 2>& b) {
+    return a[0] * b[0] + a[1] * b[1];
+  };
+  std::size_t at = 0;
+  sums[at++] += 1;
+  sums[at++] += d[0];
+  sums[at++] += d[1];
+  for (int i = 0; i < r; ++i) {
+    sums[at++] += x[i][0];
+    sums[at++] += x[i][1];
+  }
+  sums[at++] += dot(d, d);
+  for (int i = 0; i < r; ++i) sums[at++] += dot(d, x[i]);
+  for (int i = 0; i < r; ++i) {
+    for (int j = i; j < r; ++j) sums[at++] += dot(x[i], x[j]);
+  }
+}
+
 void MotionRow::add(const MotionRow& o) {
-  n += o.n;
-  d_x += o.d_x;
-  d_y += o.d_y;
-  e_x += o.e_x;
-  e_y += o.e_y;
-  dd += o.dd;
-  de += o.de;
-  ee += o.ee;
+  for (std::size_t i = 0; i < size; ++i) sums[i] += o.sums[i];
 }
 
 MotionTable::MotionTable(MotionConfig config) : config_(config) {
@@ -183,24 +212,20 @@ void MotionTable::add(int horizon_index, double time_s, const MotionInstance& i)
     return;
   }
   const double horizon_s = (horizon_index + 1) * config_.step_s;
-  const std::int64_t e_x = whole_mm(i.v_x * horizon_s);
-  const std::int64_t e_y = whole_mm(i.v_y * horizon_s);
+  const MotionRegressors regressors = motion_regressors_of(i.kinematics(), horizon_s);
+  std::array<std::array<std::int64_t, 2>, motion_regressors> x{};
+  for (int r = 0; r < motion_regressors; ++r) {
+    x[r] = {whole_mm(regressors[r].x), whole_mm(regressors[r].y)};
+  }
   MotionRow row;
-  row.n = 1;
-  row.d_x = i.d_x;
-  row.d_y = i.d_y;
-  row.e_x = e_x;
-  row.e_y = e_y;
-  row.dd = std::int64_t{i.d_x} * i.d_x + std::int64_t{i.d_y} * i.d_y;
-  row.de = i.d_x * e_x + i.d_y * e_y;
-  row.ee = e_x * e_x + e_y * e_y;
+  row.add({i.d_x, i.d_y}, x);
   ++instances_;
   rows_[encode_motion_key(motion_key_parts(horizon_index, i))].add(row);
 }
 
 void MotionTable::add_row(MotionKey key, const MotionRow& row) {
   rows_[key].add(row);
-  instances_ += static_cast<std::uint64_t>(row.n);
+  instances_ += static_cast<std::uint64_t>(row.n());
 }
 
 void MotionTable::add_held_out(int horizon_index, const HeldOutInstance& held_out) {
@@ -268,7 +293,10 @@ constexpr double forget_after_gap_s = 1.0;  // no robot data for this long: the 
 
 MotionHistory::MotionHistory(const MotionConfig& config)
     : config_(config),
-      keep_s_(config.horizons * config.step_s + config.velocity_window_s + 2.0 * config.tolerance_s) {}
+      keep_s_(config.horizons * config.step_s +
+              std::max({config.velocity_window_s, config.settle_window_s,
+                        config.long_settle_window_s}) +
+              2.0 * config.tolerance_s) {}
 
 void MotionHistory::clear() {
   for (auto& entries : by_id_) entries.clear();
@@ -291,13 +319,35 @@ void MotionHistory::add(const Formation& formation) {
     }
     std::deque<Entry>& entries = by_id_[robot.robot_id];
     while (!entries.empty() && entries.front().time_s < t - keep_s_) entries.pop_front();
-    Entry entry{t, robot.position, {}, false, 0};
+    Entry entry;
+    entry.time_s = t;
+    entry.position = robot.position;
+    entry.sum_x = robot.position.x + (entries.empty() ? 0.0 : entries.back().sum_x);
+    entry.sum_y = robot.position.y + (entries.empty() ? 0.0 : entries.back().sum_y);
+    entry.count = 1 + (entries.empty() ? 0 : entries.back().count);
     const Entry* then = near(robot.robot_id, t - config_.velocity_window_s);
     if (then && t - then->time_s > config_.velocity_window_s / 2.0) {
       const double dt = t - then->time_s;
-      entry.velocity = {(robot.position.x - then->position.x) / dt,
-                        (robot.position.y - then->position.y) / dt};
+      MotionKinematics& k = entry.kinematics;
+      k.velocity = {(robot.position.x - then->position.x) / dt,
+                    (robot.position.y - then->position.y) / dt};
       entry.has_velocity = true;
+      if (then->has_velocity) {
+        k.velocity_change = {k.velocity.x - then->kinematics.velocity.x,
+                             k.velocity.y - then->kinematics.velocity.y};
+      }
+      // From the robot to its mean position since the first entry at or after t - window.
+      const auto to_mean_since = [&](double window_s) {
+        const auto first = std::lower_bound(
+            entries.begin(), entries.end(), t - window_s,
+            [](const Entry& e, double time) { return e.time_s < time; });
+        if (first == entries.end()) return Point{};
+        const double n = static_cast<double>(entry.count - first->count + 1);
+        return Point{(entry.sum_x - first->sum_x + first->position.x) / n - robot.position.x,
+                     (entry.sum_y - first->sum_y + first->position.y) / n - robot.position.y};
+      };
+      k.to_recent_mean = to_mean_since(config_.settle_window_s);
+      k.to_settled_mean = to_mean_since(config_.long_settle_window_s);
     }
     entries.push_back(entry);
   }
@@ -306,10 +356,11 @@ void MotionHistory::add(const Formation& formation) {
   for (const FormationRobot& robot : formation.robots) {
     Entry& entry = by_id_[robot.robot_id].back();
     if (!entry.has_velocity) continue;
+    const Point& velocity = entry.kinematics.velocity;
     Stillness& still = stillness_[robot.robot_id];
     const double limit = MotionFeatures::speed_limits_mm_s[0];
     const bool standing =
-        entry.velocity.x * entry.velocity.x + entry.velocity.y * entry.velocity.y < limit * limit;
+        velocity.x * velocity.x + velocity.y * velocity.y < limit * limit;
     if (!standing) {
       still.since_s.reset();
     } else if (!still.since_s) {
@@ -353,8 +404,15 @@ void learn_motion(MotionTable& table, const MotionHistory& history, const Format
       instance.robot_id = robot.robot_id;
       instance.x = whole_mm(then->position.x);
       instance.y = whole_mm(then->position.y);
-      instance.v_x = whole_mm(then->velocity.x);
-      instance.v_y = whole_mm(then->velocity.y);
+      const MotionKinematics& kinematics = then->kinematics;
+      instance.v_x = whole_mm(kinematics.velocity.x);
+      instance.v_y = whole_mm(kinematics.velocity.y);
+      instance.a_x = whole_mm(kinematics.velocity_change.x);
+      instance.a_y = whole_mm(kinematics.velocity_change.y);
+      instance.g_x = whole_mm(kinematics.to_recent_mean.x);
+      instance.g_y = whole_mm(kinematics.to_recent_mean.y);
+      instance.s_x = whole_mm(kinematics.to_settled_mean.x);
+      instance.s_y = whole_mm(kinematics.to_settled_mean.y);
       instance.d_x = whole_mm(robot.position.x - then->position.x);
       instance.d_y = whole_mm(robot.position.y - then->position.y);
       instance.context = then->context;

@@ -80,10 +80,11 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     // The damping is the least-squares factor, held towards the prior by `shrinkage`
     // instances of a 500 mm extrapolation.
     const double weight = settings_.shrinkage * 500.0 * 500.0;
-    horizon.damping = (static_cast<double>(root.de) + weight * prior_damping) /
-                      (static_cast<double>(root.ee) + weight);
+    horizon.damping = (static_cast<double>(root.dx(0)) + weight * prior_damping) /
+                      (static_cast<double>(root.xx(0, 0)) + weight);
     const double prior_rms = settings_.prior_error_mm + settings_.prior_error_mm_per_s * horizon_s;
-    const Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0, horizon.damping};
+    Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0, {}};
+    prior.coefficients[0] = horizon.damping;
     horizon.root = shrink(root, prior);
     horizon.z50 = gaussian_z50;
     horizon.z90 = gaussian_z90;
@@ -110,31 +111,63 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
 }
 
 MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& parent) const {
-  if (row.n == 0) return parent;
-  const double n = static_cast<double>(row.n);
+  if (row.n() == 0) return parent;
+  constexpr int r = motion_regressors;
+  const double n = static_cast<double>(row.n());
   const double k = settings_.shrinkage;
-  const double sd_x = static_cast<double>(row.d_x), sd_y = static_cast<double>(row.d_y);
-  const double se_x = static_cast<double>(row.e_x), se_y = static_cast<double>(row.e_y);
-  const double mean_e_x = se_x / n, mean_e_y = se_y / n;
-  // The row's own least-squares damping d = a + b e, held towards the parent's by `shrinkage`
-  // instances of a 500 mm extrapolation.
-  const double sxx = static_cast<double>(row.ee) - (se_x * se_x + se_y * se_y) / n;
-  const double sxy = static_cast<double>(row.de) - (sd_x * se_x + sd_y * se_y) / n;
+  const auto f = [](std::int64_t value) { return static_cast<double>(value); };
+  const double sd_x = f(row.d(0)), sd_y = f(row.d(1));
+  std::array<double, r> sx_x{}, sx_y{}, dx{};
+  std::array<std::array<double, r>, r> xx{};
+  for (int i = 0; i < r; ++i) {
+    sx_x[i] = f(row.x(i, 0));
+    sx_y[i] = f(row.x(i, 1));
+    dx[i] = f(row.dx(i));
+    for (int j = 0; j < r; ++j) xx[i][j] = f(row.xx(i, j));
+  }
+  // The row's least-squares fit d = a + sum c_i x_i on centred sums, each coefficient held
+  // towards the parent's by `shrinkage` instances of a 500 mm regressor (ridge towards the
+  // parent): r normal equations, solved by elimination.
   const double weight = k * damping_weight_mm2;
+  std::array<std::array<double, r + 1>, r> system{};
+  for (int i = 0; i < r; ++i) {
+    for (int j = 0; j < r; ++j) {
+      system[i][j] = xx[i][j] - (sx_x[i] * sx_x[j] + sx_y[i] * sx_y[j]) / n;
+    }
+    system[i][i] = std::max(system[i][i], 0.0) + weight;
+    system[i][r] = dx[i] - (sd_x * sx_x[i] + sd_y * sx_y[i]) / n + weight * parent.coefficients[i];
+  }
+  for (int i = 0; i < r; ++i) {  // the matrix is positive definite: no pivoting needed
+    for (int row_below = i + 1; row_below < r; ++row_below) {
+      const double factor = system[row_below][i] / system[i][i];
+      for (int j = i; j <= r; ++j) system[row_below][j] -= factor * system[i][j];
+    }
+  }
   Estimate e;
   e.n = n;
-  e.damping = (sxy + weight * parent.damping) / (std::max(sxx, 0.0) + weight);
-  // The intercept, held towards what the parent predicts at the row's mean extrapolation.
-  const double target_x = parent.mean_x + (parent.damping - e.damping) * mean_e_x;
-  const double target_y = parent.mean_y + (parent.damping - e.damping) * mean_e_y;
-  const double r_x = sd_x - e.damping * se_x;
-  const double r_y = sd_y - e.damping * se_y;
+  for (int i = r - 1; i >= 0; --i) {
+    double value = system[i][r];
+    for (int j = i + 1; j < r; ++j) value -= system[i][j] * e.coefficients[j];
+    e.coefficients[i] = value / system[i][i];
+  }
+  const std::array<double, r>& c = e.coefficients;
+  // The intercept, held towards what the parent predicts at the row's mean regressors.
+  double target_x = parent.mean_x, target_y = parent.mean_y;
+  double r_x = sd_x, r_y = sd_y;  // sums of d - sum c_i x_i
+  for (int i = 0; i < r; ++i) {
+    target_x += (parent.coefficients[i] - c[i]) * sx_x[i] / n;
+    target_y += (parent.coefficients[i] - c[i]) * sx_y[i] / n;
+    r_x -= c[i] * sx_x[i];
+    r_y -= c[i] * sx_y[i];
+  }
   e.mean_x = (r_x + k * target_x) / (n + k);
   e.mean_y = (r_y + k * target_y) / (n + k);
-  // Sum of |d - a - b e|^2 over the row.
-  const double b = e.damping;
-  const double rr = static_cast<double>(row.dd) - 2.0 * b * static_cast<double>(row.de) +
-                    b * b * static_cast<double>(row.ee);
+  // Sum of |d - sum c_i x_i|^2, then about the intercept.
+  double rr = f(row.dd());
+  for (int i = 0; i < r; ++i) {
+    rr -= 2.0 * c[i] * dx[i];
+    for (int j = 0; j < r; ++j) rr += c[i] * c[j] * xx[i][j];
+  }
   const double about_fit =
       std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
                      n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) / n);
@@ -156,7 +189,7 @@ void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>&
   std::size_t size = 16;
   while (size < 2 * estimates.size()) size *= 2;
   index_mask_ = size - 1;
-  index_.assign(size, Slot{empty_slot, 0, 0, 0, 0, 0, 0});
+  index_.assign(size, Slot{empty_slot, 0, 0, 0, {}});
   for (const auto& [key, e] : estimates) {
     std::size_t slot = slot_of(key, index_mask_);
     while (index_[slot].key != empty_slot) slot = (slot + 1) & index_mask_;
@@ -164,9 +197,11 @@ void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>&
                         static_cast<float>(e.mean_x),
                         static_cast<float>(e.mean_y),
                         static_cast<float>(e.mean_square),
-                        static_cast<float>(e.damping),
-                        static_cast<float>(e.n),
-                        0.0f};
+                        {}};
+    for (int i = 0; i < motion_regressors; ++i) {
+      index_[slot].coefficients[static_cast<std::size_t>(i)] =
+          static_cast<float>(e.coefficients[static_cast<std::size_t>(i)]);
+    }
   }
 }
 
@@ -178,7 +213,7 @@ const MotionModel::Slot* MotionModel::find(MotionKey key) const {
 }
 
 MotionModel::RobotKeys MotionModel::motion_keys(const MotionRobot& robot) {
-  const Point v = robot.has_velocity ? robot.velocity : Point{};
+  const Point v = robot.has_velocity ? robot.kinematics.velocity : Point{};
   MotionInstance instance;
   instance.robot_id = robot.robot_id;
   instance.x = whole_mm(robot.position.x);
@@ -201,10 +236,10 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
 MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot,
                                      const RobotKeys& keys) const {
   const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
-  const Point v = robot.has_velocity ? robot.velocity : Point{};
   MotionForecast f;
   double mean_x = horizon.root.mean_x, mean_y = horizon.root.mean_y;
-  double mean_square = horizon.root.mean_square, damping = horizon.root.damping;
+  double mean_square = horizon.root.mean_square;
+  std::array<double, motion_regressors> c = horizon.root.coefficients;
   f.level = MotionLevel::all;
   const MotionKey horizon_bits = encode_motion_key({horizon_index, MotionLevel::robot, 0, 0, 0, 0});
   for (std::size_t level = 0; level < keys.size(); ++level) {
@@ -212,15 +247,22 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
       mean_x = found->mean_x;
       mean_y = found->mean_y;
       mean_square = found->mean_square;
-      damping = found->damping;
+      for (int i = 0; i < motion_regressors; ++i) c[i] = found->coefficients[i];
       f.level = static_cast<MotionLevel>(level);
       break;
     }
   }
   f.from_counts = horizon.root.n > 0.0;
   const double horizon_s = (horizon_index + 1) * config_.step_s;
-  f.position = {robot.position.x + damping * v.x * horizon_s + mean_x,
-                robot.position.y + damping * v.y * horizon_s + mean_y};
+  // Without a velocity the robot counts as standing: no regressor moves it.
+  f.position = {robot.position.x + mean_x, robot.position.y + mean_y};
+  if (robot.has_velocity) {
+    const MotionRegressors x = motion_regressors_of(robot.kinematics, horizon_s);
+    for (int i = 0; i < motion_regressors; ++i) {
+      f.position.x += c[i] * x[i].x;
+      f.position.y += c[i] * x[i].y;
+    }
+  }
   f.mean_square_mm2 = mean_square;
   const double rms = std::sqrt(f.mean_square_mm2);
   f.radius50_mm = horizon.z50 * rms;
@@ -256,8 +298,9 @@ void MotionModel::calibrate(const MotionTable& table, int horizon_index, const G
     const MotionInstance& i = held_out.instance;
     const MotionRobot robot{i.robot_id,
                             {static_cast<double>(i.x), static_cast<double>(i.y)},
-                            {static_cast<double>(i.v_x), static_cast<double>(i.v_y)},
-                            true, i.context};
+                            i.kinematics(),
+                            true,
+                            i.context};
     const MotionForecast f = forecast(horizon_index, robot);
     const Point truth{robot.position.x + i.d_x, robot.position.y + i.d_y};
     z.push_back(std::hypot(truth.x - f.position.x, truth.y - f.position.y) /

@@ -82,8 +82,9 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
     for (const FormationRobot& robot : sample.formation.robots) {
       const MotionHistory::Entry* seen = motion_history_.latest(robot.robot_id);
       const bool moving = seen && seen->has_velocity && seen->time_s == sample.formation.time_s;
-      motion_robots_.push_back({robot.robot_id, robot.position, moving ? seen->velocity : Point{},
-                                moving, moving ? seen->context : 0});
+      motion_robots_.push_back({robot.robot_id, robot.position,
+                                moving ? seen->kinematics : MotionKinematics{}, moving,
+                                moving ? seen->context : 0});
     }
     motion_model->predict(motion_robots_, config_.horizon, sampler_.codec(), sampler_.field(),
                           context.opponent_attacks, prediction_);

@@ -4,6 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <boost/asio/io_context.hpp>
 #include <chrono>
 #include <iostream>
@@ -140,8 +141,19 @@ class PredictorDaemon {
     }
     last_rate_time_ = now;
     last_rate_packets_ = packets;
-    if (last_packet_)
-      status.since_packet_s = std::chrono::duration<double>(now - *last_packet_).count();
+    // The age of the last datagram on this process's own clocks: steady for the age, the wall
+    // clock only to date it (never the feed's t_capture, which is the simulator's or camera's).
+    const auto wall_now = std::chrono::system_clock::now();
+    const auto unix_ms = [](std::chrono::system_clock::time_point t) {
+      return std::chrono::duration_cast<std::chrono::milliseconds>(t.time_since_epoch()).count();
+    };
+    status.server_unix_ms = unix_ms(wall_now);
+    if (last_packet_) {
+      const auto age = std::max(now - *last_packet_, std::chrono::steady_clock::duration::zero());
+      status.since_packet_s = std::chrono::duration<double>(age).count();
+      status.last_packet_unix_ms =
+          unix_ms(wall_now - std::chrono::duration_cast<std::chrono::system_clock::duration>(age));
+    }
     status.parse_errors = net.parse_errors.load();
     status.kernel_drops = net.kernel_drops.load();
     status.formations = pipeline_.sampler().counters().samples;
@@ -151,6 +163,7 @@ class PredictorDaemon {
       status.table_loaded = true;
       status.table_transitions = stored.table.transitions();
       status.table_formations = stored.metadata.samples;
+      if (stored.motion) status.table_motion_instances = stored.motion->instances();
       status.table_states_seen = stored.table.rows_seen();
     }
     status.table_reloads = watcher_.reloads();
@@ -167,7 +180,15 @@ class PredictorDaemon {
     switch (watcher_.poll()) {
       case TableWatcher::Change::loaded: {
         const StoredTable& stored = *watcher_.table();
-        pipeline_.set_table(watcher_.table());
+        try {
+          pipeline_.set_table(watcher_.table());
+        } catch (const std::invalid_argument& error) {
+          // A table this model cannot use (a version-1 table for --model motion): keep
+          // predicting with the one we have, and say why.
+          table_error_ = options_.table + ": " + error.what();
+          spdlog::error("{}", table_error_);
+          break;
+        }
         spdlog::info(
             "loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
             options_.table, watcher_.reloads(), stored.table.transitions(), stored.metadata.samples,
@@ -221,7 +242,9 @@ class PredictorDaemon {
     encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram_);
     sender_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
     if (!options_.quiet) {
-      std::cout << describe_prediction(predicted.formation(), predicted.prediction) << '\n'
+      std::cout << describe_prediction(predicted.formation(), predicted.prediction,
+                                       predicted.context)
+                << '\n'
                 << std::flush;
     }
     // After the multicast: the view never delays the predictions.
@@ -270,6 +293,7 @@ class PredictorDaemon {
 PredictionConfig prediction_config(const PredictorOptions& options) {
   PredictionConfig config;
   config.sampler = options.model.sampler_config();
+  config.model = options.model.parsed_model();
   if (options.horizon < 1 || options.horizon > PredictionConfig::max_horizon) {
     throw app::UsageError("--horizon must be 1 to " +
                           std::to_string(PredictionConfig::max_horizon));

@@ -41,6 +41,8 @@ struct MotionConfig {
   double step_s = 2.0;              // the table's step
   int horizons = 3;                 // steps learned: k x step_s ahead for k = 1..horizons
   double velocity_window_s = 0.1;   // a robot's velocity is its displacement over this window
+  double settle_window_s = 0.5;     // MotionKinematics::to_recent_mean's window
+  double long_settle_window_s = 2.0;  // MotionKinematics::to_settled_mean's
   double tolerance_s = 0.05;        // how far from an instant a position may be taken for it
   double calibration_block_s = 1.0;
   std::uint32_t calibration_one_in = 10;
@@ -96,30 +98,73 @@ MotionKeyParts motion_key_parts(int horizon_index, const MotionInstance& instanc
 // The key of the next coarser level (all's parent is itself).
 MotionKey coarser_motion_key(MotionKey key);
 
-// Integer sums over a row's instances (mm and mm^2): d is the displacement, e the velocity times
-// the horizon (what constant velocity predicts).
+// What the model knows of a robot's recent motion, normalised (mm, mm/s).
+struct MotionKinematics {
+  Point velocity;          // over the velocity window
+  Point velocity_change;   // the velocity now minus one velocity window earlier
+  Point to_recent_mean;    // from the robot to its mean position over the settle window
+  Point to_settled_mean;   // the same over the long settle window
+};
+
+// The regressors the model fits a displacement with, for one horizon:
+//   e  the velocity times the horizon (what constant velocity predicts);
+//   q  the change of velocity times the horizon (braking, accelerating, turning);
+//   g  towards the mean position over the settle window (a robot circling or wobbling about a
+//      spot has the spot there);
+//   G  the same over the long settle window (where the robot has been lately).
+inline constexpr int motion_regressors = 4;
+using MotionRegressors = std::array<Point, motion_regressors>;
+MotionRegressors motion_regressors_of(const MotionKinematics& kinematics, double horizon_s);
+
+// Integer sums over a row's instances (mm and mm^2): the count, the displacements d, each
+// regressor x_i, |d|^2, d.x_i and x_i.x_j (i <= j). Sums of integers, so merging tables equals
+// training on both streams exactly.
 struct MotionRow {
-  std::int64_t n = 0;
-  std::int64_t d_x = 0, d_y = 0;
-  std::int64_t e_x = 0, e_y = 0;
-  std::int64_t dd = 0;  // sum of d.d
-  std::int64_t de = 0;  // sum of d.e
-  std::int64_t ee = 0;  // sum of e.e
+  static constexpr int r = motion_regressors;
+  static constexpr std::size_t size = 1 + 2 + 2 * r + 1 + r + r * (r + 1) / 2;
+  std::array<std::int64_t, size> sums{};
+
+  std::int64_t n() const { return sums[0]; }
+  std::int64_t d(int axis) const { return sums[1 + axis]; }
+  std::int64_t x(int i, int axis) const { return sums[3 + 2 * i + axis]; }
+  std::int64_t dd() const { return sums[3 + 2 * r]; }
+  std::int64_t dx(int i) const { return sums[4 + 2 * r + i]; }
+  std::int64_t xx(int i, int j) const { return sums[4 + 3 * r + pair_index(i, j)]; }
+
+  // Adds one instance: displacement d and regressors x, in whole millimetres.
+  void add(const std::array<std::int64_t, 2>& d, const std::array<std::array<std::int64_t, 2>, r>& x);
   void add(const MotionRow& other);
   friend bool operator==(const MotionRow&, const MotionRow&) = default;
+
+ private:
+  static constexpr int pair_index(int i, int j) {
+    if (i > j) return pair_index(j, i);
+    return i * r - i * (i - 1) / 2 + (j - i);
+  }
 };
 
 // One learned instance, rounded to whole millimetres.
 struct MotionInstance {
   std::uint32_t robot_id = 0;
-  std::int32_t x = 0, y = 0;    // normalised position then
-  std::int32_t v_x = 0, v_y = 0;  // velocity then, mm/s
+  std::int32_t x = 0, y = 0;      // normalised position then
   std::int32_t d_x = 0, d_y = 0;  // displacement to the position horizon later
+  std::int32_t v_x = 0, v_y = 0;  // MotionKinematics then, rounded
+  std::int32_t a_x = 0, a_y = 0;
+  std::int32_t g_x = 0, g_y = 0;
+  std::int32_t s_x = 0, s_y = 0;
   std::uint32_t context = 0;
+  MotionKinematics kinematics() const;
   friend bool operator==(const MotionInstance&, const MotionInstance&) = default;
 };
 
 std::int32_t whole_mm(double value);  // rounded and clamped to +-1e9
+
+// The values of an instance besides its robot id and context, in the order table files store
+// them.
+inline constexpr std::array<std::int32_t MotionInstance::*, 12> motion_instance_values{
+    &MotionInstance::x,   &MotionInstance::y,   &MotionInstance::d_x, &MotionInstance::d_y,
+    &MotionInstance::v_x, &MotionInstance::v_y, &MotionInstance::a_x, &MotionInstance::a_y,
+    &MotionInstance::g_x, &MotionInstance::g_y, &MotionInstance::s_x, &MotionInstance::s_y};
 
 // A calibration instance and its rank (lower is kept).
 struct HeldOutInstance {
@@ -183,8 +228,10 @@ class MotionHistory {
   struct Entry {
     double time_s = 0.0;
     Point position;
-    Point velocity;  // mm/s, valid if has_velocity
+    MotionKinematics kinematics;  // valid if has_velocity
     bool has_velocity = false;
+    double sum_x = 0.0, sum_y = 0.0;  // of the positions up to this one since the history began
+    std::uint64_t count = 0;
     std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
   };
   // Records a formation; its robots' velocities are then velocity(id).

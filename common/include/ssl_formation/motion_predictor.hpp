@@ -33,7 +33,7 @@ struct MotionModelSettings {
 struct MotionRobot {
   std::uint32_t robot_id = 0;
   Point position;
-  Point velocity;
+  MotionKinematics kinematics;  // valid if has_velocity; otherwise the robot counts as standing
   bool has_velocity = false;
   std::uint32_t context = 0;  // MotionHistory::Entry::context
 };
@@ -57,7 +57,9 @@ class MotionModel {
   const MotionConfig& config() const { return config_; }
   int horizons() const { return config_.horizons; }
   // The damping of constant velocity learned for a horizon (index 0 = one step).
-  double damping(int horizon_index) const { return horizon_[static_cast<std::size_t>(horizon_index)].damping; }
+  double damping(int horizon_index) const {
+    return horizon_[static_cast<std::size_t>(horizon_index)].damping;
+  }
 
   MotionForecast forecast(int horizon_index, const MotionRobot& robot) const;
   // The same with the robot's keys at horizon 0, finest first (motion_keys), computed once for
@@ -82,14 +84,15 @@ class MotionModel {
   // A slot is the key and the estimate rounded to floats, 32 bytes: one cache line per probe.
   struct Slot {
     MotionKey key;
-    float mean_x, mean_y, mean_square, damping;
-    float n, unused;
+    float mean_x, mean_y, mean_square;
+    std::array<float, motion_regressors> coefficients;
   };
   struct Estimate {
     double mean_x = 0.0, mean_y = 0.0;  // residual against damped constant velocity, mm
     double mean_square = 0.0;           // of the truth about the estimate, mm^2
     double n = 0.0;
-    double damping = 1.0;               // of constant velocity, this row's
+    // Of the regressors (motion_regressors_of): e's is the damping of constant velocity.
+    std::array<double, motion_regressors> coefficients{1.0};
   };
   struct Horizon {
     double damping = 1.0;
