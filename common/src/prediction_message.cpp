@@ -1,6 +1,7 @@
 #include "ssl_formation/prediction_message.hpp"
 
 #include <bit>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 
@@ -11,6 +12,15 @@ namespace {
 void set_cell(proto::GridCell& out, Cell cell) {
   out.set_x(static_cast<std::uint32_t>(cell.x));
   out.set_y(static_cast<std::uint32_t>(cell.y));
+}
+
+// The motion model states a position and radii for its robots; the paper's model states none,
+// and its messages carry nothing beyond the cell.
+bool states_position(const RobotPrediction& robot) { return robot.radius90_mm > 0.0; }
+
+// How far ahead step k (0 = the next) is, in seconds: the same double everywhere.
+double horizon_seconds(std::size_t k, double step_s) {
+  return static_cast<double>(k + 1) * step_s;
 }
 
 void append_cell(std::string& out, Cell cell) {
@@ -89,11 +99,15 @@ std::size_t current_robot_size(const FormationRobot& r) {
          cell_size(r.previous_cell) + 2 + point_size;
 }
 std::size_t predicted_robot_size(const RobotPrediction& r) {
-  return 1 + varint_size(r.robot_id) + 1 + varint_size(r.state) + 2 + cell_size(r.position) + 2 +
-         cell_size(r.previous) + 2 + point_size + 9 + 2;
+  const std::size_t size = 1 + varint_size(r.robot_id) + 1 + varint_size(r.state) + 2 +
+                           cell_size(r.position) + 2 + cell_size(r.previous) + 2 + point_size +
+                           9 + 2;
+  // position (8), radius_50_mm (9), radius_90_mm (10)
+  return states_position(r) ? size + 2 + point_size + 5 + 5 : size;
 }
 std::size_t step_size(std::size_t k, const PredictedStep& step) {
-  std::size_t size = 1 + varint_size(k + 1) + 2 + cell_size(step.centroid) + 9 + 2 + 9 + 9;
+  // ... and horizon_seconds (8)
+  std::size_t size = 1 + varint_size(k + 1) + 2 + cell_size(step.centroid) + 9 + 2 + 9 + 9 + 9;
   for (const RobotPrediction& r : step.robots) {
     const std::size_t robot = predicted_robot_size(r);
     size += 1 + varint_size(robot) + robot;
@@ -120,8 +134,8 @@ PredictionContext prediction_context(const TransitionTable& table, const Sampler
 void encode_prediction(const Formation& current, const Prediction& prediction,
                        const PredictionContext& context, std::string& buffer) {
   // An upper bound of the encoded size: every varint at its longest.
-  std::size_t bound = 128 + 64 * current.robots.size();
-  for (const PredictedStep& step : prediction.steps) bound += 64 + 80 * step.robots.size();
+  std::size_t bound = 160 + 64 * current.robots.size();
+  for (const PredictedStep& step : prediction.steps) bound += 80 + 112 * step.robots.size();
   if (buffer.size() < bound) buffer.resize(bound);
   wire::Writer out{buffer.data()};
   wire::uint(out, 1, current.frame_number);
@@ -154,9 +168,15 @@ void encode_prediction(const Formation& current, const Prediction& prediction,
           normalise(grid.centre_of(robot.position, context.field), context.opponent_attacks));
       wire::float64(out, 6, robot.probability);
       wire::uint(out, 7, robot.unseen ? 1 : 0);
+      if (states_position(robot)) {
+        wire::point(out, 8, robot.feed_position);
+        wire::float32(out, 9, static_cast<float>(robot.radius50_mm));
+        wire::float32(out, 10, static_cast<float>(robot.radius90_mm));
+      }
     }
     wire::float64(out, 6, step.formation_probability);
     wire::float64(out, 7, step.confidence);
+    wire::float64(out, 8, horizon_seconds(k, context.step_s));
   }
   wire::uint(out, 6, static_cast<std::uint32_t>(grid.length()));
   wire::uint(out, 7, static_cast<std::uint32_t>(grid.width()));
@@ -166,6 +186,10 @@ void encode_prediction(const Formation& current, const Prediction& prediction,
   wire::length(out, 10, color.size());
   std::memcpy(out.p, color.data(), color.size());
   out.p += color.size();
+  const std::string_view model = to_string(context.model);
+  wire::length(out, 11, model.size());
+  std::memcpy(out.p, model.data(), model.size());
+  out.p += model.size();
   buffer.resize(static_cast<std::size_t>(out.p - buffer.data()));
 }
 
@@ -205,20 +229,51 @@ void fill_prediction_message(const Formation& current, const Prediction& predict
       r.mutable_cell_centre()->set_y(static_cast<float>(centre.y));
       r.set_probability(robot.probability);
       r.set_unseen(robot.unseen);
+      if (states_position(robot)) {
+        r.mutable_position()->set_x(static_cast<float>(robot.feed_position.x));
+        r.mutable_position()->set_y(static_cast<float>(robot.feed_position.y));
+        r.set_radius_50_mm(static_cast<float>(robot.radius50_mm));
+        r.set_radius_90_mm(static_cast<float>(robot.radius90_mm));
+      }
     }
     s.set_formation_probability(step.formation_probability);
     s.set_confidence(step.confidence);
+    s.set_horizon_seconds(horizon_seconds(k, context.step_s));
   }
   out.set_grid_length(static_cast<std::uint32_t>(grid.length()));
   out.set_grid_width(static_cast<std::uint32_t>(grid.width()));
   out.set_table_transitions(context.table_transitions);
   out.set_step_seconds(context.step_s);
   out.set_opponent_color(std::string(to_string(context.opponent_color)));
+  out.set_model(std::string(to_string(context.model)));
 }
 
-std::string describe_prediction(const Formation& current, const Prediction& prediction) {
+namespace {
+
+// "+2.0s", "+0.25s": one decimal unless the horizon needs more (up to three).
+void append_horizon(std::string& line, double seconds) {
+  int digits = 1;
+  while (digits < 3) {
+    const double scale = std::pow(10.0, digits);
+    if (std::abs(std::round(seconds * scale) / scale - seconds) < 1e-9) break;
+    ++digits;
+  }
+  char text[48];
+  std::snprintf(text, sizeof text, " | +%.*fs C", digits, seconds);
+  line += text;
+}
+
+// Rounded to whole millimetres, without a "-0".
+double whole(double mm) {
+  const double rounded = std::round(mm);
+  return rounded == 0.0 ? 0.0 : rounded;
+}
+
+std::string describe(const Formation& current, const Prediction& prediction,
+                     const PredictionContext* context) {
+  const bool motion = context && context->model == ModelKind::motion;
   std::string line;
-  char number[64];
+  char number[96];
   std::snprintf(number, sizeof number, "t=%.2f frame=%u now C", current.time_s,
                 current.frame_number);
   line += number;
@@ -233,22 +288,48 @@ std::string describe_prediction(const Formation& current, const Prediction& pred
   line += ']';
   for (std::size_t k = 0; k < prediction.steps.size(); ++k) {
     const PredictedStep& step = prediction.steps[k];
-    line += " | +" + std::to_string(k + 1) + " C";
+    if (motion) {
+      append_horizon(line, horizon_seconds(k, context->step_s));
+    } else {
+      line += " | +" + std::to_string(k + 1) + " C";
+    }
     append_cell(line, step.centroid);
     std::snprintf(number, sizeof number, " p=%.3f%s [", step.centroid_probability,
                   step.centroid_unseen ? " unseen" : "");
     line += number;
     for (std::size_t i = 0; i < step.robots.size(); ++i) {
+      const RobotPrediction& robot = step.robots[i];
+      if (motion) {
+        // "r3 (1234,-567) r90=420mm p=0.62": where in the feed's mm, the 90% radius and the
+        // probability of the predicted cell; '?' after the position when no counts backed it.
+        std::snprintf(number, sizeof number, "%sr%u (%.0f,%.0f)%s r90=%.0fmm p=%.2f",
+                      i ? ", " : "", robot.robot_id, whole(robot.feed_position.x),
+                      whole(robot.feed_position.y), robot.unseen ? "?" : "", robot.radius90_mm,
+                      robot.probability);
+        line += number;
+        continue;
+      }
       if (i) line += ' ';
-      line += std::to_string(step.robots[i].robot_id);
+      line += std::to_string(robot.robot_id);
       line += ':';
-      append_cell(line, step.robots[i].position);
-      if (step.robots[i].unseen) line += '?';
+      append_cell(line, robot.position);
+      if (robot.unseen) line += '?';
     }
     std::snprintf(number, sizeof number, "] conf=%.4g", step.confidence);
     line += number;
   }
   return line;
+}
+
+}  // namespace
+
+std::string describe_prediction(const Formation& current, const Prediction& prediction) {
+  return describe(current, prediction, nullptr);
+}
+
+std::string describe_prediction(const Formation& current, const Prediction& prediction,
+                                const PredictionContext& context) {
+  return describe(current, prediction, &context);
 }
 
 }  // namespace ssl_formation

@@ -19,7 +19,7 @@
 namespace ssl_formation {
 namespace {
 
-constexpr std::size_t kColumns = 17;
+constexpr std::size_t kColumns = 22;
 
 std::vector<std::string> split(std::string_view text, char separator) {
   std::vector<std::string> parts;
@@ -94,6 +94,19 @@ void check_csv(const std::string& text, const Formation& formation, const Predic
       EXPECT_EQ(parse<double>(c[14]), step.centroid_probability);
       EXPECT_EQ(parse<double>(c[15]), step.formation_probability);
       EXPECT_EQ(parse<double>(c[16]), step.confidence);
+      EXPECT_EQ(c[17], to_string(context.model));
+      if (robot.radius90_mm > 0.0) {
+        EXPECT_EQ(parse<float>(c[18]), static_cast<float>(robot.feed_position.x));
+        EXPECT_EQ(parse<float>(c[19]), static_cast<float>(robot.feed_position.y));
+        EXPECT_EQ(parse<float>(c[20]), static_cast<float>(robot.radius50_mm));
+        EXPECT_EQ(parse<float>(c[21]), static_cast<float>(robot.radius90_mm));
+      } else {
+        // The paper's model: the cell's centre again, and no radii.
+        EXPECT_EQ(c[18], c[8]);
+        EXPECT_EQ(c[19], c[9]);
+        EXPECT_EQ(c[20], "0");
+        EXPECT_EQ(c[21], "0");
+      }
     }
   }
 }
@@ -103,7 +116,8 @@ TEST(PredictionCsv, Header) {
   EXPECT_EQ(header,
             "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,"
             "predicted_cell_y,predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,"
-            "centroid_cell_y,centroid_probability,formation_probability,confidence\n");
+            "centroid_cell_y,centroid_probability,formation_probability,confidence,model,"
+            "predicted_feed_x_mm,predicted_feed_y_mm,radius_50_mm,radius_90_mm\n");
   ASSERT_FALSE(header.empty());
   EXPECT_EQ(header.back(), '\n');
   EXPECT_EQ(split(header.substr(0, header.size() - 1), ',').size(), kColumns);
@@ -182,6 +196,56 @@ TEST(PredictionCsv, EveryColumnRoundTripsExactly) {
   EXPECT_EQ(last[3], "2");
   EXPECT_EQ(parse<double>(last[4]), 0.2);
   EXPECT_EQ(parse<double>(split(lines[2], ',')[14]), 0.30000000000000004);
+}
+
+TEST(PredictionCsv, TheMotionModelsRowsCarryItsPositionsAndRadii) {
+  HandBuilt built(AttackDirection::negative_x, 0.1);
+  built.context.model = ModelKind::motion;
+  double x = -4321.123456789;
+  for (PredictedStep& step : built.prediction.steps) {
+    for (RobotPrediction& robot : step.robots) {
+      robot.feed_position = Point{x, 1.0 / 3.0 - x};
+      robot.radius50_mm = 150.0 + x / 7.0;
+      robot.radius90_mm = 2.5 * robot.radius50_mm;
+      x += 1234.5678;
+    }
+  }
+  // Still in range and positive: 150 - 4321 / 7 is not, so shift them.
+  for (PredictedStep& step : built.prediction.steps) {
+    for (RobotPrediction& robot : step.robots) {
+      robot.radius50_mm += 1000.0;
+      robot.radius90_mm += 2500.0;
+    }
+  }
+  std::string text;
+  append_prediction_csv(built.predicted(), text);
+  check_csv(text, built.sample.formation, built.prediction, built.context);
+  const std::vector<std::string> lines = lines_of(text);
+  ASSERT_EQ(lines.size(), 4u);
+  const std::vector<std::string> first = split(lines[0], ',');
+  ASSERT_EQ(first.size(), kColumns);
+  EXPECT_EQ(first[17], "motion");
+  EXPECT_EQ(parse<float>(first[18]), static_cast<float>(-4321.123456789));
+  EXPECT_EQ(parse<float>(first[19]), static_cast<float>(1.0 / 3.0 + 4321.123456789));
+  EXPECT_EQ(parse<float>(first[20]), static_cast<float>(150.0 - 4321.123456789 / 7.0 + 1000.0));
+  EXPECT_EQ(parse<float>(first[21]),
+            static_cast<float>(2.5 * (150.0 - 4321.123456789 / 7.0) + 2500.0));
+  // The cell columns stay the cell's: the centre of normalised (0, 0), rotated back.
+  EXPECT_EQ(parse<float>(first[8]), 4000.0F);
+  EXPECT_EQ(parse<float>(first[9]), 2250.0F);
+}
+
+TEST(PredictionCsv, ThePaperModelsRowsRepeatTheCellCentreWithRadiiZero) {
+  const HandBuilt built(AttackDirection::positive_x, 2.0);
+  std::string text;
+  append_prediction_csv(built.predicted(), text);
+  const std::vector<std::string> first = split(lines_of(text)[0], ',');
+  ASSERT_EQ(first.size(), kColumns);
+  EXPECT_EQ(first[17], "paper");
+  EXPECT_EQ(first[18], "-4000");
+  EXPECT_EQ(first[19], "-2250");
+  EXPECT_EQ(first[20], "0");
+  EXPECT_EQ(first[21], "0");
 }
 
 TEST(PredictionCsv, HorizonSecondsAreTheStepTimesTheSamplingStep) {
@@ -275,7 +339,7 @@ TEST(PredictionCsv, TheLinesOfThePipelineMatchWhatItPredicted) {
       training.add(detection(100.0 + 0.7 * k, static_cast<std::uint32_t>(k), walk(k)));
     }
     ASSERT_GT(training.table().transitions(), 0u);
-    const auto table = std::make_shared<const StoredTable>(StoredTable{training.table(), {}});
+    const auto table = std::make_shared<const StoredTable>(StoredTable{training.table(), {}, std::nullopt});
 
     struct Seen {
       std::string csv;
@@ -284,7 +348,7 @@ TEST(PredictionCsv, TheLinesOfThePipelineMatchWhatItPredicted) {
       PredictionContext context;
     };
     std::vector<Seen> seen;
-    PredictionPipeline pipeline(PredictionConfig{config, 3}, [&](const PredictedFormation& p) {
+    PredictionPipeline pipeline(PredictionConfig{config, 3, ModelKind::paper}, [&](const PredictedFormation& p) {
       Seen s{std::string(), p.formation(), p.prediction, p.context};
       append_prediction_csv(p, s.csv);
       seen.push_back(std::move(s));
@@ -297,6 +361,62 @@ TEST(PredictionCsv, TheLinesOfThePipelineMatchWhatItPredicted) {
     for (const Seen& s : seen) {
       ASSERT_EQ(s.prediction.steps.size(), 3u);
       check_csv(s.csv, s.formation, s.prediction, s.context);
+    }
+  }
+}
+
+// Robots circling at a few metres a second, seen at 60 Hz.
+std::vector<std::pair<std::uint32_t, Point>> circling(double t) {
+  std::vector<std::pair<std::uint32_t, Point>> robots;
+  for (std::uint32_t id = 0; id < 3; ++id) {
+    const double phase = 0.8 * t + 2.0 * id;
+    robots.push_back({id, {2500.0 * std::cos(phase), 1800.0 * std::sin(phase)}});
+  }
+  return robots;
+}
+
+TEST(PredictionCsv, TheMotionModelsLinesOfThePipelineCarryItsPositionsAndRadii) {
+  SamplerConfig config;
+  config.grid = Grid(3, 2);
+  config.step_s = 0.5;
+  config.sampling = Sampling::frame;
+  MotionConfig motion;
+  motion.step_s = config.step_s;
+  Training training(config, TransitionTable(config.grid), 0, MotionTable(motion));
+  for (int k = 0; k < 60 * 60; ++k) {
+    training.add(detection(100.0 + k / 60.0, static_cast<std::uint32_t>(k), circling(k / 60.0)));
+  }
+  ASSERT_TRUE(training.motion().has_value());
+  ASSERT_GT(training.motion()->instances(), 0u);
+  const auto table =
+      std::make_shared<const StoredTable>(StoredTable{training.table(), {}, training.motion()});
+
+  std::vector<std::string> csv;
+  std::size_t checked = 0;
+  PredictionPipeline pipeline(PredictionConfig{config, 2, ModelKind::motion},
+                              [&](const PredictedFormation& p) {
+                                std::string text;
+                                append_prediction_csv(p, text);
+                                check_csv(text, p.formation(), p.prediction, p.context);
+                                csv.push_back(std::move(text));
+                                ++checked;
+                              });
+  pipeline.set_table(table);
+  for (int k = 0; k < 120; ++k) {
+    pipeline.add(detection(500.0 + k / 60.0, static_cast<std::uint32_t>(9000 + k),
+                           circling(500.0 + k / 60.0)));
+  }
+  ASSERT_GE(checked, 60u);
+  // Every line is the motion model's, with a position and radii 0 < r50 < r90.
+  for (const std::string& text : csv) {
+    for (const std::string& line : lines_of(text)) {
+      const std::vector<std::string> c = split(line, ',');
+      ASSERT_EQ(c.size(), kColumns);
+      EXPECT_EQ(c[17], "motion");
+      const float r50 = parse<float>(c[20]);
+      const float r90 = parse<float>(c[21]);
+      EXPECT_GT(r50, 0.0F) << line;
+      EXPECT_GT(r90, r50) << line;
     }
   }
 }

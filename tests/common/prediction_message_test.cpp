@@ -53,6 +53,15 @@ TEST(PredictionMessage, CarriesTheFormationAndEveryStepWithCellCentresInFeedCoor
   EXPECT_DOUBLE_EQ(decoded.steps(1).confidence(), prediction.steps[1].confidence);
   EXPECT_EQ(decoded.table_transitions(), 3u);
   EXPECT_EQ(decoded.grid_length(), 3u);
+  // Every step says how far ahead it is, the message which model; the paper's robots state no
+  // position or radii beyond their cells.
+  EXPECT_EQ(decoded.model(), "paper");
+  EXPECT_TRUE(step1.has_horizon_seconds());
+  EXPECT_EQ(step1.horizon_seconds(), 2.0);
+  EXPECT_EQ(decoded.steps(1).horizon_seconds(), 4.0);
+  EXPECT_FALSE(step1.robots(0).has_position());
+  EXPECT_FALSE(step1.robots(0).has_radius_50_mm());
+  EXPECT_FALSE(step1.robots(0).has_radius_90_mm());
 
   // The predictor's direct encoder writes the very same bytes.
   std::string direct;
@@ -63,6 +72,83 @@ TEST(PredictionMessage, CarriesTheFormationAndEveryStepWithCellCentresInFeedCoor
   EXPECT_NE(line.find("t=12.00 frame=6 now C(0,0) [4:(0,0)] | +1 C(1,0) p=1.000 [4:(1,0)] conf=1"),
             std::string::npos)
       << line;
+  // With the context, the paper's line is the same.
+  EXPECT_EQ(describe_prediction(formation, prediction, context), line);
+}
+
+// A prediction as the motion model makes it: positions in the feed's mm and radii.
+Prediction with_motion(Prediction prediction) {
+  double x = -4321.25;
+  for (std::size_t k = 0; k < prediction.steps.size(); ++k) {
+    for (RobotPrediction& robot : prediction.steps[k].robots) {
+      robot.feed_position = Point{x, 1234.567 - 0.5 * x};
+      robot.radius50_mm = 150.3 + 200.0 * static_cast<double>(k);
+      robot.radius90_mm = 419.6 + 400.0 * static_cast<double>(k);
+      robot.mean_square_mm2 = robot.radius50_mm * robot.radius50_mm;
+      x += 1111.1;
+    }
+  }
+  return prediction;
+}
+
+TEST(PredictionMessage, TheMotionModelsRobotsCarryTheirPositionsAndRadii) {
+  const Grid grid(3, 2);
+  TransitionTable table(grid);
+  const StateCodec& codec = table.codec();
+  const FieldSize field{9000, 6000};
+  std::vector<FormationRobot> robots(2);
+  robots[0].robot_id = 3;
+  robots[0].feed_position = Point{-3000, -1000};
+  robots[0].position = robots[0].feed_position;
+  robots[1].robot_id = 5;
+  robots[1].feed_position = Point{2000, 1500};
+  robots[1].position = robots[1].feed_position;
+  Formation formation = FormationSampler::build_formation(codec, field, robots, nullptr);
+  formation.time_s = 12.0;
+  formation.frame_number = 6;
+  const Prediction prediction = with_motion(predict(table, formation, 3));
+
+  PredictionContext context;
+  context.codec = &codec;
+  context.field = field;
+  context.step_s = 0.1;
+  context.model = ModelKind::motion;
+  proto::FormationPrediction message;
+  fill_prediction_message(formation, prediction, context, message);
+  proto::FormationPrediction decoded;
+  ASSERT_TRUE(decoded.ParseFromString(message.SerializeAsString()));
+  EXPECT_EQ(decoded.model(), "motion");
+  ASSERT_EQ(decoded.steps_size(), 3);
+  for (int k = 0; k < 3; ++k) {
+    const proto::PredictedStep& step = decoded.steps(k);
+    EXPECT_EQ(step.horizon_seconds(), static_cast<double>(k + 1) * 0.1);  // 3 x 0.1, not 0.3
+    ASSERT_EQ(step.robots_size(), 2);
+    for (int i = 0; i < 2; ++i) {
+      const RobotPrediction& robot = prediction.steps[static_cast<std::size_t>(k)]
+                                         .robots[static_cast<std::size_t>(i)];
+      const proto::PredictedRobot& r = step.robots(i);
+      ASSERT_TRUE(r.has_position());
+      EXPECT_EQ(r.position().x(), static_cast<float>(robot.feed_position.x));
+      EXPECT_EQ(r.position().y(), static_cast<float>(robot.feed_position.y));
+      EXPECT_EQ(r.radius_50_mm(), static_cast<float>(robot.radius50_mm));
+      EXPECT_EQ(r.radius_90_mm(), static_cast<float>(robot.radius90_mm));
+    }
+  }
+  std::string direct;
+  encode_prediction(formation, prediction, context, direct);
+  EXPECT_EQ(direct, message.SerializeAsString());
+
+  // The line: horizons in seconds, positions in mm, the 90% radius and the cell's probability.
+  const std::string line = describe_prediction(formation, prediction, context);
+  EXPECT_NE(line.find("t=12.00 frame=6 now C("), std::string::npos) << line;
+  EXPECT_NE(line.find(" | +0.1s C("), std::string::npos) << line;
+  EXPECT_NE(line.find(" | +0.2s C("), std::string::npos) << line;
+  EXPECT_NE(line.find(" | +0.3s C("), std::string::npos) << line;
+  // Robot 3 of the first step: (-4321.25, 1234.567 + 2160.625) rounded, r90 419.6 rounded.
+  EXPECT_NE(line.find("[r3 (-4321,3395)? r90=420mm p="), std::string::npos) << line;
+  EXPECT_NE(line.find(", r5 (-3210,2840)? r90=420mm p="), std::string::npos) << line;
+  EXPECT_NE(line.find("r90=1220mm"), std::string::npos) << line;
+  EXPECT_EQ(line.find('\n'), std::string::npos);
 }
 
 TEST(PredictionMessage, DirectEncodingEqualsTheGeneratedSerialiserOnRandomPredictions) {
@@ -88,9 +174,16 @@ TEST(PredictionMessage, DirectEncodingEqualsTheGeneratedSerialiserOnRandomPredic
                               codec.position_id(r.state)),
                 300);
     }
-    const Prediction prediction = predict(table, formation, 3);
+    const Prediction paper = predict(table, formation, 3);
+    // The motion model's robots carry positions and radii; one robot without (radius 0) too.
+    Prediction motion = with_motion(paper);
+    motion.steps[1].robots[2].radius90_mm = 0.0;
+    motion.steps[2].robots[0].feed_position = Point{-1e9, 3e8};
+    for (const auto& [model, prediction] :
+         {std::pair{ModelKind::paper, paper}, std::pair{ModelKind::motion, motion}})
     for (const AttackDirection side : {AttackDirection::positive_x, AttackDirection::negative_x}) {
       PredictionContext context;
+      context.model = model;
       context.codec = &codec;
       context.field = field;
       context.opponent_attacks = side;
@@ -102,6 +195,10 @@ TEST(PredictionMessage, DirectEncodingEqualsTheGeneratedSerialiserOnRandomPredic
       std::string direct = "left over from before";
       encode_prediction(formation, prediction, context, direct);
       ASSERT_EQ(direct, message.SerializeAsString()) << grid.to_string();
+      proto::FormationPrediction decoded;
+      ASSERT_TRUE(decoded.ParseFromString(direct));
+      EXPECT_EQ(decoded.steps(1).robots(2).has_position(), false);
+      EXPECT_EQ(decoded.steps(1).robots(1).has_position(), model == ModelKind::motion);
     }
   }
 }

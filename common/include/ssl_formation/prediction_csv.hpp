@@ -19,6 +19,14 @@
 //   centroid_probability
 //   formation_probability
 //   confidence             product of formation probabilities up to this step
+// then, appended for the motion model (the columns above are unchanged):
+//   model                  "paper" or "motion"
+//   predicted_feed_x_mm/_y_mm  where the model predicts the robot, in the feed's coordinates:
+//                          the motion model's estimate, or for the paper's model the predicted
+//                          cell's centre (then equal to predicted_x_mm/_y_mm)
+//   radius_50_mm/_90_mm    the radii around that position holding the robot with 50% and 90%
+//                          probability; 0 for the paper's model, which states none
+// The millimetres and radii are written as the message's floats.
 
 #include <string>
 #include <string_view>
