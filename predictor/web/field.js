@@ -43,6 +43,16 @@
   // Opacity from confidence: 0.3 + 0.7 * sqrt(confidence), so that the small confidences of later
   // steps (a product of probabilities) stay visible while a sure step is fully opaque.
   const opacityOf = (confidence) => 0.3 + 0.7 * Math.sqrt(Math.max(0, Math.min(1, confidence)));
+  // How far ahead a step is, in seconds ("+2.0 s", "+0.25 s"): one decimal unless the horizon
+  // needs more. From a predictor that sends no horizon_s, step x step_seconds.
+  const horizonOf = (prediction, step) => (Number.isFinite(step.horizon_s)
+    ? step.horizon_s : step.step * prediction.step_seconds);
+  const horizonText = (seconds) => {
+    if (!Number.isFinite(seconds)) return '+?';
+    let digits = 1;
+    while (digits < 3 && Math.abs(Number(seconds.toFixed(digits)) - seconds) > 1e-9) digits += 1;
+    return `+${seconds.toFixed(digits)} s`;
+  };
 
   // The field's y grows upwards, the screen's downwards.
   const sx = (x) => x;
@@ -207,7 +217,8 @@
 
     const group = $('predictions');
     group.replaceChildren();
-    // Where each robot is before each step: as seen for step 1, then its previous predicted cell.
+    // Where each robot is before each step: as seen for step 1, then where the previous step put
+    // it (its predicted position for the motion model, its cell's centre for the paper's).
     let from = new Map(prediction.opponent.map((r) => [r.id, [r.x, r.y]]));
     const steps = prediction.steps || [];
     const layers = [];
@@ -215,6 +226,7 @@
       const colour = STEP_COLOURS[index % STEP_COLOURS.length];
       const g = svgElement('g', {
         class: 'step', id: `step-${step.step}`, 'data-step': step.step,
+        'data-horizon-s': horizonOf(prediction, step),
         'data-confidence': step.confidence, opacity: opacityOf(step.confidence).toFixed(3),
       });
       layers.push(g);
@@ -228,18 +240,33 @@
         }, g);
         const label = svgElement('text', {
           class: 'step-label', fill: colour,
-          x: sx(x) - cellW / 2 + inset + 60 + 300 * index, y: sy(y) + cellH / 2 - inset - 60,
+          x: sx(x) - cellW / 2 + inset + 60 + 650 * index, y: sy(y) + cellH / 2 - inset - 60,
         }, g);
-        label.textContent = `+${step.step}`;
+        label.textContent = horizonText(horizonOf(prediction, step));
       }
       const next = new Map();
       for (const robot of step.robots) {
-        const [tx, ty] = robot.centre;
+        const stated = Array.isArray(robot.position) && Number.isFinite(robot.radius_90_mm);
+        const [tx, ty] = stated ? robot.position : robot.centre;
         next.set(robot.id, [tx, ty]);
-        svgElement('circle', {
-          class: 'predicted-cell', stroke: colour, 'data-robot-id': robot.id,
-          cx: sx(tx), cy: sy(ty), r: 60 + 25 * index,
-        }, g);
+        if (stated) {
+          // The motion model: its predicted position and the circle holding the robot with 90%
+          // probability, both in millimetres on the field.
+          svgElement('circle', {
+            class: 'radius-90', stroke: colour, fill: colour, 'data-robot-id': robot.id,
+            'data-radius-90': robot.radius_90_mm, 'data-radius-50': robot.radius_50_mm,
+            cx: sx(tx), cy: sy(ty), r: Math.max(0, robot.radius_90_mm),
+          }, g);
+          svgElement('circle', {
+            class: 'predicted-position', fill: colour, 'data-robot-id': robot.id,
+            'data-x': tx, 'data-y': ty, cx: sx(tx), cy: sy(ty), r: 45,
+          }, g);
+        } else {
+          svgElement('circle', {
+            class: 'predicted-cell', stroke: colour, 'data-robot-id': robot.id,
+            cx: sx(tx), cy: sy(ty), r: 60 + 25 * index,
+          }, g);
+        }
         const start = from.get(robot.id);
         if (!start) continue;
         const [fx, fy] = start;
@@ -264,7 +291,7 @@
     if (prediction) {
       const c = prediction.centroid.cell;
       $('now').textContent = `t=${fmt(prediction.t, 2)} s · frame ${prediction.frame} · centroid C(${c[0]},${c[1]}) · ` +
-        `${prediction.opponent.length} opponent, ${prediction.ours.length} ours`;
+        `${prediction.opponent.length} opponent, ${prediction.ours.length} ours · ${prediction.model || 'paper'} model`;
     }
     const list = $('steps');
     list.replaceChildren();
@@ -273,7 +300,8 @@
       item.dataset.step = step.step;
       const colour = STEP_COLOURS[index % STEP_COLOURS.length];
       const name = document.createElement('span');
-      name.textContent = `+${step.step}`;
+      name.className = 'horizon';
+      name.textContent = horizonText(horizonOf(prediction, step));
       name.style.color = colour;
       const what = document.createElement('span');
       const cell = step.centroid.cell;
@@ -292,18 +320,23 @@
     }
   }
 
-  function sinceVision(now) {
+  // Seconds since the predictor last received a packet: the age the server measured on its own
+  // clock when it wrote the status, plus how long that status has been here on this page's
+  // monotonic clock. Neither the data's t_capture (the simulator's or camera's seconds) nor the
+  // two machines' wall clocks are compared, so it is never negative.
+  function sinceVision() {
     const s = view.status;
-    if (!s || s.since_packet_s === null) return null;
-    return s.since_packet_s + (now - view.statusArrivedAt) / 1000;
+    if (!s || s.since_packet_s === null || s.since_packet_s === undefined) return null;
+    const here = Math.max(0, performance.now() - view.statusArrivedAt) / 1000;
+    return Math.max(0, s.since_packet_s) + here;
   }
 
-  function drawStatus(now) {
+  function drawStatus() {
     const s = view.status;
     const banner = $('banner');
     let text = '';
     let kind = '';
-    const since = sinceVision(now);
+    const since = sinceVision();
     if (!view.connected) {
       text = view.connections ? 'lost the predictor: reconnecting…' : 'connecting to the predictor…';
       kind = 'bad';
@@ -327,7 +360,8 @@
     $('status-last-packet').textContent = since === null ? 'never' : `${since.toFixed(1)} s ago`;
     $('status-parse-errors').textContent = `${s.parse_errors}` + (s.kernel_drops ? ` · ${s.kernel_drops} kernel drops` : '');
     $('status-table').textContent = s.table.loaded
-      ? `${s.table.transitions} transitions / ${s.table.formations} formations · ${s.table.states_seen} states`
+      ? `${s.table.transitions} transitions / ${s.table.formations} formations · ${s.table.states_seen} states` +
+        (Number.isFinite(s.table.motion_instances) ? ` · ${s.table.motion_instances} motion instances` : '')
       : 'not loaded yet';
     if (s.table.loaded_unix_ms !== null) {
       const at = new Date(s.table.loaded_unix_ms);
@@ -360,7 +394,7 @@
       ? (view.status ? view.status.ours : [])
       : prediction.ours;
     if (setup) drawRobots('our-robots', ours || [], 'ours', setup.our_color);
-    drawStatus(now);
+    drawStatus();
   }
 
   function frame(now) {

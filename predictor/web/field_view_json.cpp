@@ -1,5 +1,6 @@
 #include "field_view_json.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string_view>
@@ -44,6 +45,11 @@ class Json {
     return *this;
   }
   Json& integer(std::uint64_t value) {
+    comma();
+    out_ += std::to_string(value);
+    return *this;
+  }
+  Json& signed_integer(std::int64_t value) {
     comma();
     out_ += std::to_string(value);
     return *this;
@@ -146,6 +152,7 @@ std::string prediction_json(const proto::FormationPrediction& message, const Fie
   json.open('{').key("type").string("prediction");
   json.key("frame").integer(message.frame_number()).key("t").number(message.t_capture());
   write_setup(json, setup);
+  json.key("model").string(message.has_model() ? message.model() : std::string("paper"));
   json.key("table_transitions").integer(message.table_transitions());
   json.key("step_seconds").number(message.step_seconds());
   json.key("centroid");
@@ -161,6 +168,10 @@ std::string prediction_json(const proto::FormationPrediction& message, const Fie
   json.key("steps").open('[');
   for (const proto::PredictedStep& step : message.steps()) {
     json.open('{').key("step").integer(step.step());
+    json.key("horizon_s")
+        .number(step.has_horizon_seconds()
+                    ? step.horizon_seconds()
+                    : static_cast<double>(step.step()) * message.step_seconds());
     json.key("centroid");
     write_cell(json, step.centroid_cell(), setup);
     json.key("centroid_p").number(step.centroid_probability());
@@ -172,7 +183,13 @@ std::string prediction_json(const proto::FormationPrediction& message, const Fie
       json.open('{').key("id").integer(robot.robot_id());
       json.key("cell").pair(robot.position_cell().x(), robot.position_cell().y());
       json.key("centre").pair(robot.cell_centre().x(), robot.cell_centre().y());
-      json.key("p").number(robot.probability()).key("unseen").boolean(robot.unseen()).close('}');
+      json.key("p").number(robot.probability()).key("unseen").boolean(robot.unseen());
+      if (robot.has_position()) {
+        json.key("position").pair(robot.position().x(), robot.position().y());
+        json.key("radius_50_mm").number(robot.radius_50_mm());
+        json.key("radius_90_mm").number(robot.radius_90_mm());
+      }
+      json.close('}');
     }
     json.close(']').close('}');
   }
@@ -187,7 +204,20 @@ std::string status_json(const FieldViewStatus& status) {
   json.key("packets").integer(status.packets).key("packets_per_s").number(status.packets_per_s);
   json.key("since_packet_s");
   if (status.since_packet_s) {
-    json.number(*status.since_packet_s);
+    // A clock read racing the packet's own may come out a hair below 0: never say so.
+    json.number(std::max(0.0, *status.since_packet_s));
+  } else {
+    json.null();
+  }
+  json.key("last_packet_unix_ms");
+  if (status.last_packet_unix_ms) {
+    json.signed_integer(*status.last_packet_unix_ms);
+  } else {
+    json.null();
+  }
+  json.key("server_unix_ms");
+  if (status.server_unix_ms) {
+    json.signed_integer(*status.server_unix_ms);
   } else {
     json.null();
   }
@@ -199,6 +229,12 @@ std::string status_json(const FieldViewStatus& status) {
   json.key("table").open('{').key("loaded").boolean(status.table_loaded);
   json.key("transitions").integer(status.table_transitions);
   json.key("formations").integer(status.table_formations);
+  json.key("motion_instances");
+  if (status.table_motion_instances) {
+    json.integer(*status.table_motion_instances);
+  } else {
+    json.null();
+  }
   json.key("states_seen").integer(status.table_states_seen);
   json.key("reloads").integer(status.table_reloads);
   json.key("loaded_unix_ms");

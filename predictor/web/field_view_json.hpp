@@ -24,11 +24,16 @@ struct FieldViewSetup {
   TeamColor opponent_color = TeamColor::yellow;
 };
 
-// {"type":"prediction","frame":..,"t":..,"field":{..},"grid":{..},"centroid":{"cell":[x,y],
-//  "centre":[x,y]},"opponent":[{"id","x","y","cell"}],"ours":[{"id","x","y"}],
-//  "steps":[{"step","centroid":{..},"centroid_p","centroid_unseen","formation_p","confidence",
-//  "robots":[{"id","cell","centre":[x,y],"p","unseen"}]}],...}
-// Cell centres are in the feed's coordinates (the attack-direction rotation undone).
+// {"type":"prediction","frame":..,"t":..,"field":{..},"grid":{..},"model":"paper"|"motion",
+//  "centroid":{"cell":[x,y],"centre":[x,y]},"opponent":[{"id","x","y","cell"}],
+//  "ours":[{"id","x","y"}],
+//  "steps":[{"step","horizon_s","centroid":{..},"centroid_p","centroid_unseen","formation_p",
+//  "confidence","robots":[{"id","cell","centre":[x,y],"p","unseen"
+//  [,"position":[x,y],"radius_50_mm","radius_90_mm"]}]}],...}
+// Cell centres and positions are in the feed's coordinates (the attack-direction rotation
+// undone). horizon_s is how far ahead the step is (the message's horizon_seconds, or step x
+// step_seconds from an older predictor); position and the radii come only for robots whose
+// message states them (the motion model), and "model" is "paper" when the message names none.
 std::string prediction_json(const proto::FormationPrediction& message, const FieldViewSetup& setup,
                             std::span<const TeamRobot> ours);
 
@@ -36,14 +41,23 @@ struct FieldViewStatus {
   FieldViewSetup setup;
   std::uint64_t packets = 0;
   double packets_per_s = 0.0;
-  std::optional<double> since_packet_s;  // wall seconds since the last datagram; none yet: empty
+  // Seconds since the last datagram, on the server's own clock (never the data's t_capture, which
+  // is the simulator's or camera's); none yet: empty. Written as at least 0.
+  std::optional<double> since_packet_s;
+  // The server's wall clock (Unix ms) when the last datagram arrived and when this status was
+  // written, so a page can tell how old the status itself is without comparing its own clock
+  // with the data's.
+  std::optional<std::int64_t> last_packet_unix_ms;
+  std::optional<std::int64_t> server_unix_ms;
   std::uint64_t parse_errors = 0;
   std::uint64_t kernel_drops = 0;
   std::uint64_t formations = 0;
   std::uint64_t predictions = 0;
   bool table_loaded = false;
   std::uint64_t table_transitions = 0;
-  std::uint64_t table_formations = 0;
+  std::uint64_t table_formations = 0;  // the table's metadata.samples
+  // The motion model's instances counted in the table; empty for a table without its counts.
+  std::optional<std::uint64_t> table_motion_instances;
   std::uint64_t table_states_seen = 0;
   std::uint64_t table_reloads = 0;
   std::optional<std::int64_t> table_loaded_unix_ms;  // wall clock of the last (re)load
@@ -53,6 +67,10 @@ struct FieldViewStatus {
   std::span<const TeamRobot> ours;
 };
 
+// {"type":"status",<setup>,"packets","packets_per_s","since_packet_s","last_packet_unix_ms",
+//  "server_unix_ms","parse_errors","kernel_drops","formations","predictions",
+//  "table":{"loaded","transitions","formations","motion_instances","states_seen","reloads",
+//  "loaded_unix_ms","error"},"clients","dropped_frames","ours":[..]} (null for what is unknown)
 std::string status_json(const FieldViewStatus& status);
 
 }  // namespace ssl_formation::predictor::web

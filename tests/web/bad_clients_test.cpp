@@ -67,7 +67,8 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   const std::uint16_t port = web_testing::free_tcp_port();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--http-port", std::to_string(port),
+                          "--table", table_path.string(), "--model", "paper", "--http-port",
+                          std::to_string(port),
                           "--quiet", "--status-interval", "0.5", "--http-send-buffer", "8192"},
                          dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();

@@ -83,7 +83,8 @@ void start_predictor(std::optional<ChildProcess>& out, const TempDir& dir,
   out.reset();
   out.emplace(predictor_program,
               std::vector<std::string>{"--vision-address", vision, "--prediction-address",
-                                       predictions, "--table", table.string(), "--http-port",
+                                       predictions, "--table", table.string(), "--model",
+                                       "paper", "--http-port",
                                        std::to_string(port), "--quiet"},
               dir.path(), name, testing::Readiness::ready_file);
   ASSERT_TRUE(out->wait_until_ready(10s)) << out->stderr_text();
@@ -98,7 +99,8 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
 
   TempDir dir;
   const auto table_path = dir / "table.bin";
-  ASSERT_TRUE(save_table(table_path, web_testing::reference_table(3, 2000), TableMetadata{}));
+  const web_testing::ReferenceTable reference = web_testing::reference_stored_table(3, 2000);
+  ASSERT_TRUE(save_table(table_path, reference.table, reference.metadata));
   const std::string vision = testing::unique_group(testing::free_udp_port());
   const std::string predictions = testing::unique_group(testing::free_udp_port());
   const std::uint16_t port = web_testing::free_tcp_port();

@@ -76,6 +76,8 @@ try {
       steps: steps.map((s) => ({ step: Number(s.dataset.step), confidence: Number(s.dataset.confidence),
         opacity: Number(s.getAttribute('opacity')) })),
       stepItems: [...document.querySelectorAll('#steps li')].map((li) => li.textContent),
+      stepLabels: [...document.querySelectorAll('#predictions .step-label')].map((t) => t.textContent),
+      lastPacket: document.getElementById('status-last-packet').textContent,
       arrows: document.querySelectorAll('#predictions .arrow').length,
       centroid: document.getElementById('centroid-cell').dataset.cell,
       centroidVisible: document.getElementById('centroid-cell').getAttribute('visibility'),
@@ -95,13 +97,23 @@ try {
   if (live.opponent !== 6 || live.ours !== 6) fail(`robots: ${live.opponent} opponent, ${live.ours} ours`);
   if (live.steps.length !== 2 || live.stepItems.length !== 2) fail(`steps ${JSON.stringify(live.steps)}`);
   if (!live.stepItems[0].includes('conf')) fail(`no confidence number: ${live.stepItems[0]}`);
+  // Steps are labelled with their horizon in seconds: 2 s apart by default.
+  if (!live.stepItems[0].startsWith('+2.0 s') || !live.stepItems[1].startsWith('+4.0 s')) {
+    fail(`step items not labelled by horizon: ${JSON.stringify(live.stepItems)}`);
+  }
+  if (live.stepLabels.length !== 2 || !live.stepLabels.includes('+2.0 s') || !live.stepLabels.includes('+4.0 s')) {
+    fail(`step labels ${JSON.stringify(live.stepLabels)}`);
+  }
+  // The age of the last packet is the predictor's own, never negative.
+  if (!/^\d+\.\d s ago$/.test(live.lastPacket)) fail(`last packet: ${live.lastPacket}`);
   for (const s of live.steps) {
     if (!(s.opacity >= 0.3 && s.opacity <= 1)) fail(`opacity ${s.opacity} for confidence ${s.confidence}`);
   }
   if (live.centroidVisible !== 'visible' || !/^\d,\d$/.test(live.centroid)) fail(`centroid ${live.centroid}`);
   if (live.predictedCentroids !== 2) fail(`predicted centroids ${live.predictedCentroids}`);
   if (!/packets\/s/.test(live.packets) || /^0\.0 /.test(live.packets)) fail(`packets: ${live.packets}`);
-  if (!/transitions \/ \d+ formations/.test(live.table)) fail(`table: ${live.table}`);
+  // The table the test saved: the formations it was trained on, not 0.
+  if (!/transitions \/ [1-9]\d* formations/.test(live.table)) fail(`table: ${live.table}`);
   if (live.banner) fail(`unexpected banner: ${live.banner}`);
   // Each prediction drawn within 100 ms of its arrival.
   const worst = Math.max(...live.latencies);
@@ -116,6 +128,55 @@ try {
   await page.waitForTimeout(1200);
   await page.screenshot({ path: `${out}/field-view-no-vision.png` });
   console.log('banner:', await page.textContent('#banner'));
+  const stale = await page.textContent('#status-last-packet');
+  if (!/^\d+\.\d s ago$/.test(stale) || parseFloat(stale) < 1) fail(`last packet without vision: ${stale}`);
+
+  // The motion model's drawing, fed to the page as its WebSocket would (no prediction comes
+  // while the feed is stopped): the last prediction with a position and radii per robot.
+  const motion = await page.evaluate(async () => {
+    const view = window.fieldView;
+    const m = JSON.parse(JSON.stringify(view.prediction));
+    m.model = 'motion';
+    m.step_seconds = 0.5;
+    m.steps.forEach((step, k) => {
+      step.horizon_s = 0.5 * (k + 1);
+      for (const robot of step.robots) {
+        robot.position = [robot.centre[0] + 123, robot.centre[1] - 45];
+        robot.radius_50_mm = 200 * (k + 1);
+        robot.radius_90_mm = 450 * (k + 1);
+      }
+    });
+    view.prediction = m;
+    view.predictionArrivedAt = performance.now();
+    view.dirty = true;
+    await new Promise((resolve) => requestAnimationFrame(() => requestAnimationFrame(resolve)));
+    const circles = [...document.querySelectorAll('#predictions .radius-90')];
+    const dots = [...document.querySelectorAll('#predictions .predicted-position')];
+    return {
+      robots: m.steps.reduce((n, s) => n + s.robots.length, 0),
+      circles: circles.length,
+      radii: circles.map((c) => Number(c.getAttribute('r'))),
+      dots: dots.length,
+      // Drawn where the message says, in mm (the screen's y grows downwards).
+      placed: dots.every((d) => {
+        const step = m.steps.find((st) => String(st.step) === d.closest('.step').dataset.step);
+        const robot = step.robots.find((r) => String(r.id) === d.dataset.robotId);
+        return Number(d.getAttribute('cx')) === robot.position[0] &&
+          Number(d.getAttribute('cy')) === -robot.position[1];
+      }),
+      labels: [...document.querySelectorAll('#predictions .step-label')].map((t) => t.textContent),
+      items: [...document.querySelectorAll('#steps .horizon')].map((t) => t.textContent),
+      now: document.getElementById('now').textContent,
+    };
+  });
+  console.log('motion:', JSON.stringify(motion));
+  if (motion.circles !== motion.robots || motion.dots !== motion.robots) fail(`motion circles ${JSON.stringify(motion)}`);
+  if (!motion.radii.includes(450) || !motion.radii.includes(900)) fail(`90% radii ${motion.radii}`);
+  if (!motion.placed) fail('predicted positions not where the message puts them');
+  if (JSON.stringify(motion.items) !== JSON.stringify(['+0.5 s', '+1.0 s'])) fail(`horizons ${motion.items}`);
+  if (!motion.labels.includes('+0.5 s')) fail(`labels ${motion.labels}`);
+  if (!motion.now.includes('motion model')) fail(`now: ${motion.now}`);
+  await page.screenshot({ path: `${out}/field-view-motion.png` });
   phase('no-vision');
 
   // 3. The feed restarts (its clock from the start): predictions come back, the banner goes.

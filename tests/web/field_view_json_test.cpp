@@ -64,12 +64,55 @@ TEST(FieldViewJson, PredictionCarriesFieldGridRobotsAndStepsInFeedCoordinates) {
   EXPECT_NE(json.find(R"("ours":[{"id":0,"x":1000,"y":250.5}])"), std::string::npos) << json;
   EXPECT_NE(
       json.find(
-          R"("steps":[{"step":1,"centroid":{"cell":[2,1],"centre":[-3000,-1500]},"centroid_p":0.5,)"
+          R"("steps":[{"step":1,"horizon_s":2,"centroid":{"cell":[2,1],"centre":[-3000,-1500]},)"
+          R"("centroid_p":0.5,)"
           R"("centroid_unseen":false,"formation_p":0.25,"confidence":0.125,)"
           R"("robots":[{"id":4,"cell":[2,1],"centre":[-3000,-1500],"p":1,"unseen":true}]}])"),
       std::string::npos)
       << json;
   EXPECT_TRUE(json.ends_with("]}"));
+  // A message without a model (an older predictor) is the paper's; its robots state no position.
+  EXPECT_NE(json.find(R"("model":"paper")"), std::string::npos) << json;
+  EXPECT_EQ(json.find(R"("position")"), std::string::npos) << json;
+  EXPECT_EQ(json.find(R"("radius_90_mm")"), std::string::npos) << json;
+}
+
+TEST(FieldViewJson, TheMotionModelsRobotsCarryPositionsAndRadiiAndStepsTheirHorizons) {
+  proto::FormationPrediction m = sample_message();
+  m.set_model("motion");
+  m.set_step_seconds(0.1);
+  proto::PredictedStep& first = *m.mutable_steps(0);
+  first.set_horizon_seconds(0.1);
+  proto::PredictedRobot& robot = *first.mutable_robots(0);
+  robot.mutable_position()->set_x(-2750.5F);
+  robot.mutable_position()->set_y(1234.0F);
+  robot.set_radius_50_mm(150.25F);
+  robot.set_radius_90_mm(420.0F);
+  proto::PredictedStep& second = *m.add_steps();
+  second = first;
+  second.set_step(2);
+  second.set_horizon_seconds(2 * 0.1);
+  second.mutable_robots(0)->set_radius_90_mm(900.0F);
+  const std::string json = prediction_json(m, FieldViewSetup{}, {});
+  EXPECT_NE(json.find(R"("model":"motion")"), std::string::npos) << json;
+  EXPECT_NE(json.find(R"({"step":1,"horizon_s":0.1,)"), std::string::npos) << json;
+  EXPECT_NE(json.find(R"({"step":2,"horizon_s":0.2,)"), std::string::npos) << json;
+  EXPECT_NE(
+      json.find(R"("robots":[{"id":4,"cell":[2,1],"centre":[-3000,-1500],"p":1,"unseen":true,)"
+                R"("position":[-2750.5,1234],"radius_50_mm":150.25,"radius_90_mm":420}])"),
+      std::string::npos)
+      << json;
+  EXPECT_NE(json.find(R"("radius_90_mm":900})"), std::string::npos) << json;
+}
+
+TEST(FieldViewJson, AStepWithoutItsHorizonIsTheStepTimesTheStepSeconds) {
+  proto::FormationPrediction m = sample_message();
+  m.set_step_seconds(0.25);
+  *m.add_steps() = m.steps(0);
+  m.mutable_steps(1)->set_step(2);
+  const std::string json = prediction_json(m, FieldViewSetup{}, {});
+  EXPECT_NE(json.find(R"({"step":1,"horizon_s":0.25,)"), std::string::npos) << json;
+  EXPECT_NE(json.find(R"({"step":2,"horizon_s":0.5,)"), std::string::npos) << json;
 }
 
 TEST(FieldViewJson, StatusCarriesTheStreamAndTheTable) {
@@ -85,18 +128,49 @@ TEST(FieldViewJson, StatusCarriesTheStreamAndTheTable) {
   status.table_error = "bad \"file\"";
   const std::string json = status_json(status);
   EXPECT_NE(
-      json.find(R"("packets":1234,"packets_per_s":40.5,"since_packet_s":null,"parse_errors":2)"),
+      json.find(R"("packets":1234,"packets_per_s":40.5,"since_packet_s":null,)"
+                R"("last_packet_unix_ms":null,"server_unix_ms":null,"parse_errors":2)"),
       std::string::npos)
       << json;
   EXPECT_NE(
       json.find(
-          R"("table":{"loaded":true,"transitions":9000,"formations":1500,"states_seen":0,"reloads":3,)"
+          R"("table":{"loaded":true,"transitions":9000,"formations":1500,"motion_instances":null,)"
+          R"("states_seen":0,"reloads":3,)"
           R"("loaded_unix_ms":1700000000123,"error":"bad \"file\""})"),
       std::string::npos)
       << json;
   EXPECT_NE(json.find(R"("ours":[])"), std::string::npos);
   status.since_packet_s = 3.25;
   EXPECT_NE(status_json(status).find(R"("since_packet_s":3.25)"), std::string::npos);
+}
+
+TEST(FieldViewJson, TheAgeOfTheLastPacketIsTheServersOwnAndNeverNegative) {
+  FieldViewStatus status;
+  status.since_packet_s = 0.25;
+  status.last_packet_unix_ms = 1700000000000;
+  status.server_unix_ms = 1700000000250;
+  EXPECT_NE(status_json(status).find(
+                R"("since_packet_s":0.25,"last_packet_unix_ms":1700000000000,)"
+                R"("server_unix_ms":1700000000250,)"),
+            std::string::npos)
+      << status_json(status);
+  // Two clock reads racing each other: a hair below zero is written as zero.
+  status.since_packet_s = -1e-7;
+  EXPECT_NE(status_json(status).find(R"("since_packet_s":0,)"), std::string::npos)
+      << status_json(status);
+}
+
+TEST(FieldViewJson, StatusCarriesTheTablesFormationsAndMotionInstances) {
+  FieldViewStatus status;
+  status.table_loaded = true;
+  status.table_transitions = 12;
+  status.table_formations = 34567;
+  status.table_motion_instances = 890123;
+  const std::string json = status_json(status);
+  EXPECT_NE(json.find(R"("table":{"loaded":true,"transitions":12,"formations":34567,)"
+                      R"("motion_instances":890123,)"),
+            std::string::npos)
+      << json;
 }
 
 }  // namespace

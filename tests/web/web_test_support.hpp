@@ -20,6 +20,7 @@
 #include "formation_prediction.pb.h"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
+#include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -49,6 +50,26 @@ inline TransitionTable reference_table(std::uint64_t seed, int count) {
     for (const auto& packet : vision.next().packets) training.add(packet);
   }
   return training.table();
+}
+
+// The same table with its metadata as the trainer would save it: the formations it sampled.
+struct ReferenceTable {
+  TransitionTable table;
+  TableMetadata metadata;
+};
+inline ReferenceTable reference_stored_table(std::uint64_t seed, int count) {
+  sim::SimulationConfig config;
+  config.seed = seed;
+  sim::SimulatedVision vision(config);
+  Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
+  for (int i = 0; i < count; ++i) {
+    for (const auto& packet : vision.next().packets) training.add(packet);
+  }
+  TableMetadata metadata;
+  metadata.field = training.sampler().field();
+  metadata.step_s = training.sampler().config().step_s;
+  metadata.samples = training.samples();
+  return ReferenceTable{training.table(), metadata};
 }
 
 // How many datagrams the simulated producer with `seed` sends for `count` formations (geometry
