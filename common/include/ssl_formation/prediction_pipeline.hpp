@@ -20,8 +20,8 @@ namespace ssl_formation {
 
 struct PredictionConfig {
   SamplerConfig sampler;
-  ModelKind model = ModelKind::paper;
   int horizon = 2;  // formations predicted ahead, 1 to max_horizon
+  ModelKind model = ModelKind::paper;
   static constexpr int max_horizon = 100;
 };
 

@@ -1,0 +1,332 @@
+// The motion model: features, counting, back-off, the worked example of a position and its radii,
+// calibration, and the pipeline predicting with it.
+#include "ssl_formation/motion_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "ssl_formation/motion_predictor.hpp"
+#include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/training.hpp"
+#include "ssl_formation/vision_packet.hpp"
+
+namespace sf = ssl_formation;
+
+namespace {
+
+const sf::Grid grid{12, 9};
+const sf::FieldSize field{12000.0, 9000.0};
+
+sf::MotionConfig one_second(int horizons = 1) {
+  sf::MotionConfig config;
+  config.step_s = 1.0;
+  config.horizons = horizons;
+  return config;
+}
+
+// A row of `count` instances of a robot moving at `velocity`, each displaced by `d`.
+sf::MotionRow row_of(int count, sf::Point velocity, sf::Point d, double horizon_s = 1.0) {
+  sf::MotionRow row;
+  sf::MotionKinematics kinematics;
+  kinematics.velocity = velocity;
+  const sf::MotionRegressors x = sf::motion_regressors_of(kinematics, horizon_s);
+  std::array<std::array<std::int64_t, 2>, sf::motion_regressors> whole{};
+  for (int i = 0; i < sf::motion_regressors; ++i) {
+    whole[i] = {sf::whole_mm(x[i].x), sf::whole_mm(x[i].y)};
+  }
+  for (int i = 0; i < count; ++i) row.add({sf::whole_mm(d.x), sf::whole_mm(d.y)}, whole);
+  return row;
+}
+
+sf::MotionKey key_of(std::uint32_t robot_id, sf::Point position, sf::Point velocity,
+                     sf::MotionLevel level = sf::MotionLevel::robot) {
+  sf::MotionKeyParts parts;
+  parts.level = level;
+  parts.robot_slot = sf::MotionFeatures::robot_slot(robot_id);
+  parts.cell = sf::MotionFeatures::cell(position);
+  parts.velocity_class = sf::MotionFeatures::velocity_class(velocity);
+  return sf::encode_motion_key(parts);
+}
+
+sf::MotionRobot moving_robot(std::uint32_t id, sf::Point position, sf::Point velocity) {
+  sf::MotionRobot robot;
+  robot.robot_id = id;
+  robot.position = position;
+  robot.kinematics.velocity = velocity;
+  robot.has_velocity = true;
+  return robot;
+}
+
+}  // namespace
+
+TEST(MotionFeatures, VelocityClassesSplitSpeedIntoBandsAndDirectionIntoEightSectors) {
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({0.0, 0.0}), 0);
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({200.0, 100.0}), 0);  // under 250 mm/s: standing
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({500.0, 0.0}), 1);   // band 1, +x
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({0.0, 500.0}), 3);   // band 1, +y
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({-500.0, 0.0}), 5);  // band 1, -x
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({400.0, -400.0}), 8);  // band 1, +x-y
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({1000.0, 0.0}), 9);  // band 2
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({2000.0, 0.0}), 17);  // band 3
+  EXPECT_LT(sf::MotionFeatures::velocity_class({-3000.0, -3000.0}),
+            sf::MotionFeatures::velocity_classes);
+}
+
+TEST(MotionFeatures, CellsCoverTheFieldWithItsBoundaryAndClampBeyond) {
+  EXPECT_EQ(sf::MotionFeatures::cell({-7000.0, -5000.0}), 0);
+  EXPECT_EQ(sf::MotionFeatures::cell({-99999.0, -99999.0}), 0);
+  EXPECT_EQ(sf::MotionFeatures::cell({99999.0, 99999.0}), sf::MotionFeatures::cell_count - 1);
+  EXPECT_NE(sf::MotionFeatures::cell({0.0, 0.0}), sf::MotionFeatures::cell({600.0, 0.0}));
+}
+
+TEST(MotionKey, EachLevelKeepsItsFeaturesAndTheCoarserKeyDropsThem) {
+  const sf::MotionKey robot = key_of(3, {1000.0, 500.0}, {1000.0, 0.0});
+  const sf::MotionKeyParts parts = sf::decode_motion_key(robot);
+  EXPECT_EQ(parts.level, sf::MotionLevel::robot);
+  EXPECT_EQ(parts.robot_slot, 3);
+  const sf::MotionKeyParts cell = sf::decode_motion_key(sf::coarser_motion_key(robot));
+  EXPECT_EQ(cell.level, sf::MotionLevel::cell);
+  EXPECT_EQ(cell.robot_slot, 0);
+  EXPECT_EQ(cell.cell, parts.cell);
+  const sf::MotionKeyParts velocity =
+      sf::decode_motion_key(sf::coarser_motion_key(sf::coarser_motion_key(robot)));
+  EXPECT_EQ(velocity.level, sf::MotionLevel::velocity);
+  EXPECT_EQ(velocity.cell, 0);
+  EXPECT_EQ(velocity.velocity_class, parts.velocity_class);
+}
+
+TEST(MotionModel, AnEmptyTablePredictsDampedConstantVelocity) {
+  const sf::MotionTable table(one_second(2));
+  const sf::MotionModelSettings settings;
+  const sf::MotionModel model(table, grid, field, settings);
+  const sf::MotionRobot robot = moving_robot(1, {0.0, 0.0}, {1000.0, 0.0});
+  for (int h = 0; h < 2; ++h) {
+    const double horizon_s = h + 1.0;
+    const double tau = settings.prior_time_constant_s;
+    const double damping = tau / horizon_s * (1.0 - std::exp(-horizon_s / tau));
+    const sf::MotionForecast f = model.forecast(h, robot);
+    EXPECT_NEAR(f.position.x, damping * 1000.0 * horizon_s, 1e-9) << "horizon " << horizon_s;
+    EXPECT_NEAR(f.position.y, 0.0, 1e-9);
+    EXPECT_FALSE(f.from_counts);
+    // Gaussian radii from the prior spread.
+    const double rms = settings.prior_error_mm + settings.prior_error_mm_per_s * horizon_s;
+    EXPECT_NEAR(f.radius50_mm, std::sqrt(std::log(2.0)) * rms, 1e-6);
+    EXPECT_NEAR(f.radius90_mm, std::sqrt(std::log(10.0)) * rms, 1e-6);
+  }
+}
+
+TEST(MotionModel, WorkedExampleOfAPositionAndItsRadii) {
+  // One robot at (1000, 500) moving at 1 m/s along +x: half the time it went 400 mm in the next
+  // second, half the time 600 mm. With no shrinkage the row predicts the mean, 500 mm ahead, and
+  // its spread is 100 mm root-mean-square; without held-out data the radii are a 2-D Gaussian's.
+  sf::MotionTable table(one_second());
+  const sf::Point position{1000.0, 500.0}, velocity{1000.0, 0.0};
+  sf::MotionRow row = row_of(500, velocity, {400.0, 0.0});
+  row.add(row_of(500, velocity, {600.0, 0.0}));
+  table.add_row(key_of(4, position, velocity), row);
+  sf::MotionModelSettings exact;
+  exact.shrinkage = 1e-9;
+  const sf::MotionModel model(table, grid, field, exact);
+
+  const sf::MotionForecast f = model.forecast(0, moving_robot(4, position, velocity));
+  EXPECT_EQ(f.level, sf::MotionLevel::robot);
+  EXPECT_NEAR(f.position.x, 1500.0, 1e-3);
+  EXPECT_NEAR(f.position.y, 500.0, 1e-3);
+  EXPECT_NEAR(f.mean_square_mm2, 100.0 * 100.0, 1e-2);
+  EXPECT_NEAR(f.radius50_mm, 100.0 * std::sqrt(std::log(2.0)), 1e-3);   // 83.3 mm
+  EXPECT_NEAR(f.radius90_mm, 100.0 * std::sqrt(std::log(10.0)), 1e-3);  // 151.7 mm
+
+  // Through predict(): the same position in the feed's coordinates, rotated back for an opponent
+  // attacking -x, its cell and the state built from it.
+  sf::Prediction prediction;
+  const sf::StateCodec codec(grid);
+  model.predict({moving_robot(4, position, velocity)}, 1, codec, field,
+                sf::AttackDirection::negative_x, prediction);
+  ASSERT_EQ(prediction.steps.size(), 1u);
+  const sf::RobotPrediction& p = prediction.steps[0].robots.at(0);
+  EXPECT_EQ(p.robot_id, 4u);
+  EXPECT_NEAR(p.feed_position.x, -1500.0, 1e-3);
+  EXPECT_NEAR(p.feed_position.y, -500.0, 1e-3);
+  EXPECT_EQ(p.position, grid.cell_of({1500.0, 500.0}, field));
+  EXPECT_EQ(p.previous, grid.cell_of(position, field));
+  EXPECT_NEAR(p.radius90_mm, f.radius90_mm, 1e-9);
+  EXPECT_GT(p.probability, 0.0);
+  EXPECT_LE(p.probability, 1.0);
+}
+
+TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
+  const sf::Point position{-2000.0, 1000.0}, velocity{1000.0, 0.0};
+  // Every robot in this cell and velocity class stopped dead (displacement 0), thousands of
+  // times; robot 7 was seen twice going 800 mm sideways.
+  sf::MotionTable table(one_second());
+  table.add_row(key_of(2, position, velocity), row_of(5000, velocity, {0.0, 0.0}));
+  const sf::MotionRow rare = row_of(2, velocity, {0.0, 800.0});
+  table.add_row(key_of(7, position, velocity), rare);
+  const sf::MotionModel model(table, grid, field);
+
+  const sf::MotionForecast few = model.forecast(0, moving_robot(7, position, velocity));
+  EXPECT_EQ(few.level, sf::MotionLevel::robot);
+  // Two instances against a shrinkage of 240: the robot's own row barely moves the forecast
+  // off the cell's (which says: it stops).
+  EXPECT_LT(std::abs(few.position.y - position.y), 50.0);
+  EXPECT_LT(std::abs(few.position.x - position.x), 50.0);
+
+  // With thousands of its own instances the robot's row wins.
+  sf::MotionTable rich(one_second());
+  rich.add_row(key_of(2, position, velocity), row_of(5000, velocity, {0.0, 0.0}));
+  rich.add_row(key_of(7, position, velocity), row_of(20000, velocity, {0.0, 800.0}));
+  const sf::MotionModel rich_model(rich, grid, field);
+  const sf::MotionForecast many = rich_model.forecast(0, moving_robot(7, position, velocity));
+  EXPECT_NEAR(many.position.y - position.y, 800.0, 20.0);
+
+  // A robot never seen in that cell gets the cell's row (every robot): it stops.
+  const sf::MotionForecast stranger = model.forecast(0, moving_robot(9, position, velocity));
+  EXPECT_EQ(stranger.level, sf::MotionLevel::cell);
+  EXPECT_LT(std::hypot(stranger.position.x - position.x, stranger.position.y - position.y), 30.0);
+
+  // Elsewhere on the field only the velocity class is known.
+  const sf::MotionForecast far = model.forecast(0, moving_robot(9, {4000.0, -3000.0}, velocity));
+  EXPECT_EQ(far.level, sf::MotionLevel::velocity);
+}
+
+TEST(MotionModel, HeldOutInstancesCalibrateTheRadii) {
+  // Every instance: a robot standing still that then moved 300 mm in a random direction. The
+  // model's rows say "it moves about 300 mm, mean displacement 0", so its rms is 300 mm; the
+  // held-out sample shows every robot exactly 300 mm away: the calibrated 50% and 90% radii are
+  // both 300 mm, where a Gaussian would say 250 and 455.
+  sf::MotionConfig config = one_second();
+  config.calibration_one_in = 2;  // half the blocks held out, for a fast test
+  sf::MotionTable table(config);
+  std::uint32_t id = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const double angle = 0.001 + i * 2.399963;  // golden angle: directions spread evenly
+    sf::MotionInstance instance;
+    instance.robot_id = id++ % 11;
+    instance.x = 0;
+    instance.y = 0;
+    instance.d_x = sf::whole_mm(300.0 * std::cos(angle));
+    instance.d_y = sf::whole_mm(300.0 * std::sin(angle));
+    table.add(0, i * 0.37, instance);
+  }
+  ASSERT_GT(table.held_out(), 500u);
+  ASSERT_GT(table.instances(), 500u);
+  const sf::MotionModel model(table, grid, field);
+  const sf::MotionForecast f = model.forecast(0, moving_robot(3, {0.0, 0.0}, {0.0, 0.0}));
+  EXPECT_NEAR(f.radius50_mm, 300.0, 15.0);
+  EXPECT_NEAR(f.radius90_mm, 300.0, 15.0);
+}
+
+TEST(MotionTable, CountsAreSumsSoMergingEqualsAddingEverythingToOne) {
+  sf::MotionConfig config = one_second(2);
+  config.calibration_capacity = 16;  // small, so that the merge must choose what to keep
+  sf::MotionTable both(config), first(config), second(config);
+  for (int i = 0; i < 3000; ++i) {
+    sf::MotionInstance instance;
+    instance.robot_id = static_cast<std::uint32_t>(i % 6);
+    instance.x = (i * 37) % 9000 - 4500;
+    instance.y = (i * 53) % 6000 - 3000;
+    instance.v_x = (i * 11) % 2000 - 1000;
+    instance.d_x = (i * 7) % 900 - 450;
+    instance.d_y = (i * 13) % 700 - 350;
+    const double t = i * 0.05;
+    both.add(i % 2, t, instance);
+    (i < 1700 ? first : second).add(i % 2, t, instance);
+  }
+  ASSERT_GT(both.held_out(), 16u);
+  sf::MotionTable merged = first;
+  merged.merge(second);
+  EXPECT_TRUE(merged == both);
+  EXPECT_EQ(merged.calibration(0), both.calibration(0));
+  EXPECT_EQ(merged.sorted_rows(), both.sorted_rows());
+
+  sf::MotionConfig other = config;
+  other.step_s = 0.5;
+  EXPECT_THROW(merged.merge(sf::MotionTable(other)), std::invalid_argument);
+}
+
+namespace {
+
+// Eleven robots driving along straight lines at constant speeds, one camera at 60 Hz.
+sf::VisionFrame straight_lines(int i) {
+  sf::DetectionFrameSpec spec;
+  spec.frame_number = static_cast<std::uint32_t>(i);
+  spec.t_capture = 100.0 + i / 60.0;
+  const double t = i / 60.0;
+  for (std::uint32_t id = 0; id < 11; ++id) {
+    const double speed = 200.0 + 100.0 * id;  // mm/s
+    // Back and forth over 4 s legs, so the table sees every direction.
+    const double leg = std::fmod(t, 8.0);
+    const double along = leg < 4.0 ? speed * leg : speed * (8.0 - leg);
+    spec.yellow.push_back({id, {-4000.0 + along, -3500.0 + 700.0 * id}});
+  }
+  sf::VisionFrame frame;
+  sf::to_vision_frame(sf::make_detection_packet(spec), frame);
+  return frame;
+}
+
+}  // namespace
+
+TEST(MotionPipeline, PredictsPositionsWithRadiiFromATrainedTable) {
+  sf::PredictionConfig config;
+  config.sampler.grid = grid;
+  config.sampler.field = field;
+  config.sampler.step_s = 0.5;
+  config.sampler.sampling = sf::Sampling::frame;
+  config.model = sf::ModelKind::motion;
+  config.horizon = 2;
+  sf::MotionConfig motion = one_second(2);
+  motion.step_s = 0.5;
+  sf::Training training(config.sampler, sf::TransitionTable(grid), 0, sf::MotionTable(motion));
+  for (int i = 0; i < 60 * 120; ++i) training.add(straight_lines(i));
+  ASSERT_TRUE(training.motion());
+  EXPECT_GT(training.motion()->instances(), 10000u);
+
+  sf::TableMetadata metadata;
+  metadata.field = field;
+  metadata.step_s = 0.5;
+  double worst_error = 0.0;
+  std::uint64_t predictions = 0;
+  sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& p) {
+    ++predictions;
+    ASSERT_EQ(p.prediction.steps.size(), 2u);
+    EXPECT_EQ(p.context.model, sf::ModelKind::motion);
+    for (const sf::RobotPrediction& robot : p.prediction.steps[0].robots) {
+      EXPECT_GT(robot.radius90_mm, robot.radius50_mm);
+      EXPECT_GT(robot.radius50_mm, 0.0);
+      // Robot i is at y = -3500 + 700 i and keeps its line.
+      worst_error = std::max(worst_error,
+                             std::abs(robot.feed_position.y - (-3500.0 + 700.0 * robot.robot_id)));
+    }
+  });
+  pipeline.set_table(std::make_shared<const sf::StoredTable>(
+      sf::StoredTable{training.table(), metadata, training.motion()}));
+  for (int i = 0; i < 600; ++i) pipeline.add(straight_lines(60 * 200 + i));
+  EXPECT_GT(predictions, 500u);
+  EXPECT_LT(worst_error, 50.0);
+}
+
+TEST(MotionPipeline, AVersionOneTableServesOnlyThePapersModelAndSaysSo) {
+  sf::PredictionConfig config;
+  config.sampler.sampling = sf::Sampling::frame;
+  config.model = sf::ModelKind::motion;
+  sf::PredictionPipeline pipeline(config, nullptr);
+  const auto paper_only =
+      std::make_shared<const sf::StoredTable>(sf::StoredTable{sf::TransitionTable(config.sampler.grid), {}, {}});
+  try {
+    pipeline.set_table(paper_only);
+    FAIL() << "a table without the motion model's counts was accepted";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("--model paper"), std::string::npos) << error.what();
+  }
+  // The paper's model takes it.
+  config.model = sf::ModelKind::paper;
+  sf::PredictionPipeline paper(config, nullptr);
+  EXPECT_NO_THROW(paper.set_table(paper_only));
+
+  // The motion model needs frame sampling.
+  config.model = sf::ModelKind::motion;
+  config.sampler.sampling = sf::Sampling::step;
+  EXPECT_THROW(sf::PredictionPipeline(config, nullptr), std::invalid_argument);
+}
