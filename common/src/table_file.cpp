@@ -176,6 +176,12 @@ class ChunkReader {
     value = get_u32(bytes);
     return 0;
   }
+  int read_u64(std::uint64_t& value) {
+    std::uint8_t bytes[8];
+    if (const int error = read(bytes, 8); error != 0) return error;
+    value = get_u64(bytes);
+    return 0;
+  }
   // Exposes each chunk in turn until `end`; used to checksum a range.
   template <typename Visit>
   int for_each_chunk(Visit&& visit) {
@@ -324,6 +330,211 @@ BodyProblem read_sparse_body(ChunkReader& reader, const Header& header, Transiti
   return {};
 }
 
+// ---- The motion section (version 2)
+
+// The fields of a row and of a calibration instance, in file order, are MotionRow::sums and
+// motion_instance_values (motion_model.hpp; motion_table_file_test.cpp checks that no field of
+// the structs is left out).
+
+constexpr std::uint64_t motion_config_size = 60;
+constexpr std::uint64_t motion_fixed_size = motion_config_size + 3 * 8;  // + instances, seen, rows
+constexpr std::uint64_t motion_row_size = 8 + 8 * MotionRow::size;
+// hash, robot_id, the values, context
+constexpr std::uint64_t held_out_size = 8 + 4 + 4 * motion_instance_values.size() + 4;
+constexpr std::uint64_t motion_horizons_offset = 8;  // in the configuration
+constexpr std::uint64_t motion_rows_offset = motion_config_size + 16;  // the row count
+
+MotionConfig decode_motion_config(const std::uint8_t* in, std::uint32_t& horizons) {
+  MotionConfig config;
+  config.step_s = std::bit_cast<double>(get_u64(&in[0]));
+  horizons = get_u32(&in[8]);
+  config.horizons = static_cast<int>(std::min<std::uint32_t>(
+      horizons, static_cast<std::uint32_t>(MotionConfig::max_horizons) + 1));
+  config.velocity_window_s = std::bit_cast<double>(get_u64(&in[12]));
+  config.tolerance_s = std::bit_cast<double>(get_u64(&in[20]));
+  config.calibration_block_s = std::bit_cast<double>(get_u64(&in[28]));
+  config.calibration_one_in = get_u32(&in[36]);
+  config.calibration_capacity = get_u32(&in[40]);
+  config.settle_window_s = std::bit_cast<double>(get_u64(&in[44]));
+  config.long_settle_window_s = std::bit_cast<double>(get_u64(&in[52]));
+  return config;
+}
+
+MotionRow decode_motion_row(const std::uint8_t* in) {
+  MotionRow row;
+  for (std::size_t i = 0; i < MotionRow::size; ++i) {
+    row.sums[i] = static_cast<std::int64_t>(get_u64(&in[8 * i]));
+  }
+  return row;
+}
+
+HeldOutInstance decode_held_out(const std::uint8_t* in) {
+  HeldOutInstance held;
+  held.hash = get_u64(&in[0]);
+  held.instance.robot_id = get_u32(&in[8]);
+  for (std::size_t i = 0; i < motion_instance_values.size(); ++i) {
+    held.instance.*motion_instance_values[i] = static_cast<std::int32_t>(get_u32(&in[12 + 4 * i]));
+  }
+  held.instance.context = get_u32(&in[12 + 4 * motion_instance_values.size()]);
+  return held;
+}
+
+// What a stored row must satisfy (the same check keeps save_table from writing a row that
+// load_table would reject); a reason if it does not.
+std::optional<std::string> motion_row_problem(MotionKey key, const MotionRow& row,
+                                              const MotionConfig& config) {
+  const MotionKeyParts parts = decode_motion_key(key);
+  if (parts.level != MotionLevel::robot) return std::string("not a robot-level key");
+  if (parts.horizon_index >= config.horizons) return std::string("horizon out of range");
+  if (parts.robot_slot >= MotionFeatures::robot_slots || parts.cell >= MotionFeatures::cell_count ||
+      parts.velocity_class >= MotionFeatures::velocity_classes) {
+    return std::string("feature out of range");
+  }
+  if (row.n() < 1) return "count " + std::to_string(row.n());
+  if (row.dd() < 0) return std::string("negative sum of squares");
+  for (int i = 0; i < MotionRow::r; ++i) {
+    if (row.xx(i, i) < 0) return std::string("negative sum of squares");
+  }
+  return std::nullopt;
+}
+
+// Where the motion section that starts at `begin` ends, from its sizes, or why that is unknown.
+struct MotionExtent {
+  std::uint64_t end = 0;       // the first byte after it, when known
+  bool known = false;          // false: its horizons are invalid (the content check says so)
+  bool past_end = false;       // its sizes say it runs into or past the file's checksum
+  std::uint64_t at_least = 0;  // with past_end: the file size the sizes read so far imply
+  int read_error = 0;
+};
+
+MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t file_size) {
+  MotionExtent extent;
+  const std::uint64_t limit = file_size - checksum_size;  // where the checksum starts
+  std::array<std::uint8_t, motion_fixed_size> fixed{};
+  {
+    ChunkReader reader(fd, begin, begin + motion_fixed_size);
+    if ((extent.read_error = reader.read(fixed.data(), fixed.size())) != 0) return extent;
+  }
+  const std::uint32_t horizons = get_u32(&fixed[motion_horizons_offset]);
+  if (horizons < 1 || horizons > static_cast<std::uint32_t>(MotionConfig::max_horizons)) {
+    return extent;
+  }
+  std::uint64_t pos = begin + motion_fixed_size;
+  const auto past = [&](std::uint64_t needed) {
+    extent.past_end = true;
+    extent.at_least = pos + needed + checksum_size;
+    return extent;
+  };
+  const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
+  if (rows > (limit - pos) / motion_row_size) {
+    // at_least saturates rather than overflows for an absurd row count.
+    return past(rows > (UINT64_MAX / 2) / motion_row_size ? UINT64_MAX / 2 : rows * motion_row_size);
+  }
+  pos += rows * motion_row_size;
+  for (std::uint32_t h = 0; h < horizons; ++h) {
+    if (limit - pos < 4) return past(4);
+    std::uint8_t bytes[4];
+    {
+      ChunkReader reader(fd, pos, pos + 4);
+      if ((extent.read_error = reader.read(bytes, 4)) != 0) return extent;
+    }
+    pos += 4;
+    const std::uint64_t count = get_u32(bytes);
+    if (count > (limit - pos) / held_out_size) return past(count * held_out_size);
+    pos += count * held_out_size;
+  }
+  extent.end = pos;
+  extent.known = true;
+  return extent;
+}
+
+// Reads the motion section into `out`; a reason on inconsistent content or an errno on a
+// failed read.
+BodyProblem read_motion_section(ChunkReader& reader, double header_step_s,
+                                std::optional<MotionTable>& out) {
+  std::array<std::uint8_t, motion_fixed_size> fixed{};
+  if (const int error = reader.read(fixed.data(), fixed.size()); error != 0) {
+    return {std::nullopt, error};
+  }
+  std::uint32_t horizons = 0;
+  const MotionConfig config = decode_motion_config(fixed.data(), horizons);
+  if (horizons > static_cast<std::uint32_t>(MotionConfig::max_horizons) || !config.valid()) {
+    return {std::string("invalid motion model configuration"), 0};
+  }
+  if (config.step_s != header_step_s) {
+    return {"the motion model's step " + std::to_string(config.step_s) +
+                " s differs from the header's " + std::to_string(header_step_s) + " s",
+            0};
+  }
+  const std::uint64_t instances = get_u64(&fixed[motion_config_size]);
+  const std::uint64_t seen = get_u64(&fixed[motion_config_size + 8]);
+  const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
+
+  MotionTable table(config);
+  std::uint64_t sum = 0;
+  std::optional<MotionKey> previous_key;
+  std::array<std::uint8_t, motion_row_size> row_bytes{};
+  for (std::uint64_t i = 0; i < rows; ++i) {
+    if (const int error = reader.read(row_bytes.data(), row_bytes.size()); error != 0) {
+      return {std::nullopt, error};
+    }
+    const MotionKey key = get_u64(&row_bytes[0]);
+    const MotionRow row = decode_motion_row(&row_bytes[8]);
+    const std::string where = "motion row " + std::to_string(i);
+    if (previous_key && key <= *previous_key) return {where + ": rows out of order", 0};
+    previous_key = key;
+    if (const auto problem = motion_row_problem(key, row, config)) {
+      return {where + ": " + *problem, 0};
+    }
+    if (static_cast<std::uint64_t>(row.n()) > instances - sum) {
+      return {"the motion rows hold more than the " + std::to_string(instances) +
+                  " instances the section says",
+              0};
+    }
+    sum += static_cast<std::uint64_t>(row.n());
+    table.add_row(key, row);
+  }
+  if (sum != instances) {
+    return {"the motion rows hold " + std::to_string(sum) + " instances, the section says " +
+                std::to_string(instances),
+            0};
+  }
+
+  std::uint64_t held_out = 0;
+  std::array<std::uint8_t, held_out_size> held_bytes{};
+  for (int h = 0; h < config.horizons; ++h) {
+    std::uint32_t count = 0;
+    if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+    const std::string where = "calibration sample of horizon " + std::to_string(h + 1);
+    if (count > config.calibration_capacity) {
+      return {where + ": " + std::to_string(count) + " instances, more than its capacity " +
+                  std::to_string(config.calibration_capacity),
+              0};
+    }
+    std::vector<HeldOutInstance> sample;
+    sample.reserve(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (const int error = reader.read(held_bytes.data(), held_bytes.size()); error != 0) {
+        return {std::nullopt, error};
+      }
+      sample.push_back(decode_held_out(held_bytes.data()));
+      table.add_held_out(h, sample.back());
+    }
+    // Within its capacity every instance is kept, so the file's order must be the table's
+    // (equal neighbours are allowed: merging tables trained on the same stream keeps both).
+    if (table.calibration(h) != sample) return {where + ": instances out of order", 0};
+    held_out += count;
+  }
+  if (held_out > seen) {
+    return {"the calibration samples hold " + std::to_string(held_out) +
+                " instances, more than the " + std::to_string(seen) + " held out",
+            0};
+  }
+  table.restore_held_out_seen(seen);
+  out.emplace(std::move(table));
+  return {};
+}
+
 // ---- Saving
 
 // Writes through a fixed buffer, keeping the CRC of everything written and the first error,
@@ -347,6 +558,11 @@ class BufferedWriter {
     std::uint8_t bytes[4];
     put_u32(bytes, value);
     write(bytes, 4);
+  }
+  void write_u64(std::uint64_t value) {
+    std::uint8_t bytes[8];
+    put_u64(bytes, value);
+    write(bytes, 8);
   }
   void write_zero_u32s(std::uint64_t n) {
     static const std::array<std::uint8_t, 4096> zeros{};
@@ -484,12 +700,14 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                             " bytes, the header is cut off before the format version");
   }
   const std::uint32_t version = get_u32(&header_bytes[version_offset]);
-  if (version != table_file_version) {
+  if (version != table_file_version && version != table_file_motion_version) {
     return load_failure(TableFileError::wrong_version, path,
                         "format version " + std::to_string(version) +
                             ", but this program reads version " +
-                            std::to_string(table_file_version));
+                            std::to_string(table_file_version) + " or " +
+                            std::to_string(table_file_motion_version));
   }
+  const bool has_motion = version == table_file_motion_version;
 
   // Header.
   if (file_size < header_size) {
@@ -514,11 +732,42 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
   }
 
   // Length.
-  const std::uint64_t expected_size = header_size + body_size(header) + checksum_size;
+  const std::uint64_t counts_end = header_size + body_size(header);
+  std::uint64_t expected_size = counts_end + (has_motion ? motion_fixed_size : 0) + checksum_size;
   if (file_size < expected_size) {
     return load_failure(TableFileError::truncated, path,
                         "truncated: " + std::to_string(file_size) + " bytes, its header says " +
-                            std::to_string(expected_size));
+                            (has_motion ? "at least " : "") + std::to_string(expected_size));
+  }
+  if (has_motion) {
+    // The motion section's sizes are not covered by the header checksum: see table_file.hpp.
+    const MotionExtent extent = motion_extent(fd.get(), counts_end, file_size);
+    if (extent.read_error != 0) return read_failure(path, extent.read_error);
+    if (extent.past_end) {
+      // A file whose checksum matches is whole: its sizes themselves are wrong.
+      std::uint32_t crc = static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0));
+      ChunkReader reader(fd.get(), 0, file_size - checksum_size);
+      const int error = reader.for_each_chunk(
+          [&crc](const std::uint8_t* data, std::size_t size) { crc = crc_update(crc, data, size); });
+      if (error != 0) return read_failure(path, error);
+      std::uint32_t stored_crc = 0;
+      ChunkReader crc_reader(fd.get(), file_size - checksum_size, file_size);
+      if (const int read_error = crc_reader.read_u32(stored_crc); read_error != 0) {
+        return read_failure(path, read_error);
+      }
+      if (crc == stored_crc) {
+        return load_failure(TableFileError::corrupt, path,
+                            "corrupt: the motion section's sizes run past the end of the file");
+      }
+      return load_failure(TableFileError::truncated, path,
+                          "truncated: " + std::to_string(file_size) +
+                              " bytes, the file ends inside its motion section (its sizes say "
+                              "at least " +
+                              std::to_string(extent.at_least) + ")");
+    }
+    // Invalid horizons leave the extent unknown: the whole file is checksummed as it is, and
+    // the configuration is rejected after the checksum.
+    expected_size = extent.known ? extent.end + checksum_size : file_size;
   }
   if (file_size > expected_size) {
     return load_failure(TableFileError::corrupt, path,
@@ -547,7 +796,8 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
     return load_failure(TableFileError::corrupt, path, "checksum mismatch: the file is corrupt");
   }
 
-  // Counts. Both checksums matched, so a problem here comes from the writer, not the disk.
+  // Counts, then the motion section. Both checksums matched, so a problem here comes from the
+  // writer, not the disk.
   StoredTable stored{TransitionTable(grid, storage), header.metadata, std::nullopt};
   std::uint64_t sum = 0;
   ChunkReader reader(fd.get(), header_size, checksum_offset);
@@ -562,20 +812,84 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                         "corrupt: the counts sum to " + std::to_string(sum) +
                             " transitions, the header says " + std::to_string(header.transitions));
   }
+  if (has_motion) {
+    const BodyProblem motion_problem =
+        read_motion_section(reader, header.metadata.step_s, stored.motion);
+    if (motion_problem.read_error != 0) return read_failure(path, motion_problem.read_error);
+    if (motion_problem.content) {
+      return load_failure(TableFileError::corrupt, path, "corrupt: " + *motion_problem.content);
+    }
+  }
 
   return stored;
 }
 
-Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
-                              const TableMetadata& metadata, const SaveHooks& hooks) {
+namespace {
+
+void write_motion_section(BufferedWriter& writer, const MotionConfig& config,
+                          const MotionTable& motion,
+                          const std::vector<std::pair<MotionKey, MotionRow>>& rows) {
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.step_s));
+  writer.write_u32(static_cast<std::uint32_t>(config.horizons));
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.velocity_window_s));
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.tolerance_s));
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.calibration_block_s));
+  writer.write_u32(config.calibration_one_in);
+  writer.write_u32(config.calibration_capacity);
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.settle_window_s));
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.long_settle_window_s));
+  writer.write_u64(motion.instances());
+  writer.write_u64(motion.held_out());
+  writer.write_u64(rows.size());
+  for (const auto& [key, row] : rows) {
+    writer.write_u64(key);
+    for (const std::int64_t sum : row.sums) writer.write_u64(static_cast<std::uint64_t>(sum));
+  }
+  for (int h = 0; h < config.horizons; ++h) {
+    const std::vector<HeldOutInstance> sample = motion.calibration(h);
+    writer.write_u32(static_cast<std::uint32_t>(sample.size()));
+    for (const HeldOutInstance& held : sample) {
+      const MotionInstance& i = held.instance;
+      writer.write_u64(held.hash);
+      writer.write_u32(i.robot_id);
+      for (const auto value : motion_instance_values) {
+        writer.write_u32(static_cast<std::uint32_t>(i.*value));
+      }
+      writer.write_u32(i.context);
+    }
+  }
+}
+
+Result<TableSaved> save_any_table(const std::filesystem::path& path, const TransitionTable& table,
+                                  const TableMetadata& metadata, const MotionTable* motion,
+                                  const SaveHooks& hooks) {
   // Never write a file that load_table would reject.
   if (!metadata.field.valid()) return save_failure(path, "invalid field size");
   if (!valid_step(metadata.step_s)) return save_failure(path, "invalid step");
+  std::vector<std::pair<MotionKey, MotionRow>> motion_rows;
+  if (motion) {
+    const MotionConfig& config = motion->config();
+    if (!config.valid()) return save_failure(path, "invalid motion model configuration");
+    if (config.step_s != metadata.step_s) {
+      return save_failure(path, "the motion model's step differs from the table's");
+    }
+    motion_rows = motion->sorted_rows();
+    std::uint64_t sum = 0;
+    for (const auto& [key, row] : motion_rows) {
+      if (const auto problem = motion_row_problem(key, row, config)) {
+        return save_failure(path, "invalid motion row: " + *problem);
+      }
+      sum += static_cast<std::uint64_t>(row.n());
+    }
+    if (sum != motion->instances()) {
+      return save_failure(path, "the motion rows do not add up to the motion table's instances");
+    }
+  }
 
   const bool dense = table.is_dense();
   const std::uint64_t states = table.codec().state_count();
   Header header;
-  header.version = table_file_version;
+  header.version = motion ? table_file_motion_version : table_file_version;
   header.length = static_cast<std::uint32_t>(table.grid().length());
   header.width = static_cast<std::uint32_t>(table.grid().width());
   header.encoding = dense ? encoding_dense : encoding_sparse;
@@ -648,6 +962,7 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const Transitio
     });
     write_row();
   }
+  if (motion) write_motion_section(writer, motion->config(), *motion, motion_rows);
   writer.write_u32(writer.crc());
   writer.flush();
   if (writer.error() != 0) {
@@ -691,6 +1006,25 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const Transitio
                                  "; a crash of the machine now may restore the old file"};
   }
   return TableSaved{};
+}
+
+}  // namespace
+
+Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                              const TableMetadata& metadata, const SaveHooks& hooks) {
+  return save_any_table(path, table, metadata, nullptr, hooks);
+}
+
+Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                              const TableMetadata& metadata, const MotionTable& motion,
+                              const SaveHooks& hooks) {
+  return save_any_table(path, table, metadata, &motion, hooks);
+}
+
+Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
+                              const SaveHooks& hooks) {
+  return save_any_table(path, stored.table, stored.metadata,
+                        stored.motion ? &*stored.motion : nullptr, hooks);
 }
 
 }  // namespace ssl_formation

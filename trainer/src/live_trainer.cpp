@@ -18,11 +18,16 @@ namespace {
 void log_status(const Training& training, const net::VisionReceiver& receiver,
                 SamplerCounters& reported) {
   const SamplerCounters& c = training.sampler().counters();
+  const auto& motion = training.motion();
   spdlog::info(
-      "status: {} formations={} transitions={} table_transitions={} states_seen={} "
+      "status: {} formations={} transitions={} table_transitions={} states_seen={}{} "
       "rejected_robots={} late_frames={} attacks={} | {}",
       app::describe_reception(receiver), c.samples, c.transitions, training.table().transitions(),
-      training.table().rows_seen(), c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id,
+      training.table().rows_seen(),
+      motion ? fmt::format(" motion_instances={} motion_held_out={} motion_rows={}",
+                           motion->instances(), motion->held_out(), motion->rows())
+             : std::string(),
+      c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id,
       c.frames_late,
       app::describe_attacks(training.sampler().attacks(), training.sampler().config().infer_attacks),
       describe_rejections(c));
@@ -40,7 +45,8 @@ int run_live(const TrainerOptions& options) {
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
 
   const std::filesystem::path table_path = options.table;
-  std::unique_ptr<Training> training = open_training(table_path, config, options.reset);
+  const std::optional<MotionConfig> motion = motion_config(options);
+  std::unique_ptr<Training> training = open_training(table_path, config, options.reset, motion);
 
   boost::asio::io_context io;
   app::ReadyFile ready(options.daemon.ready_file);
@@ -53,10 +59,12 @@ int run_live(const TrainerOptions& options) {
     if (config.infer_attacks) attack_log.update(training->sampler().attacks());
   });
   spdlog::info(
-      "training: opponent {} attacking {}; grid {}, step {} s, {} sampling; table {} saved every "
-      "{} s",
-      to_string(config.opponent_color), options.model.opponent_attacks, config.grid.to_string(),
-      config.step_s, to_string(config.sampling), table_path.string(), options.flush_interval_s);
+      "training: opponent {} attacking {}; model {}; grid {}, step {} s, {} sampling; table {} "
+      "saved every {} s",
+      to_string(config.opponent_color), options.model.opponent_attacks,
+      motion ? fmt::format("motion ({} steps ahead)", motion->horizons) : std::string("paper"),
+      config.grid.to_string(), config.step_s, to_string(config.sampling), table_path.string(),
+      options.flush_interval_s);
 
   app::RepeatingTimer flush(io, flush_period, [&] {
     if (training->changed_since_save()) save_training(table_path, *training);

@@ -1,4 +1,5 @@
-// ssl-trainer merge: tables of the same grid and step added up, saved atomically.
+// ssl-trainer merge: tables of the same grid, step and model added up, saved atomically. The
+// paper's counts add up entry by entry; version-2 files also add up their motion tables.
 
 #include <spdlog/spdlog.h>
 
@@ -8,6 +9,13 @@
 #include "ssl_formation/trainer/trainer.hpp"
 
 namespace ssl_formation::trainer {
+
+namespace {
+std::string describe_version(const StoredTable& table) {
+  return table.motion ? "a version-2 table (the paper's counts and the motion model's)"
+                      : "a version-1 table (the paper's counts only)";
+}
+}  // namespace
 
 void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output) {
   if (inputs.empty()) throw app::UsageError("merge needs at least one input table");
@@ -28,15 +36,40 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
           "{} was trained with a step of {} s, {} with {} s: their transitions cannot be added up",
           inputs[i], next->metadata.step_s, inputs.front(), merged.metadata.step_s));
     }
+    if (next->motion.has_value() != merged.motion.has_value()) {
+      throw std::runtime_error(fmt::format(
+          "{} is {}, {} is {}: tables of the two models cannot be merged (train them with the "
+          "same --model)",
+          inputs[i], describe_version(*next), inputs.front(), describe_version(merged)));
+    }
+    if (merged.motion && !(merged.motion->config() == next->motion->config())) {
+      const MotionConfig& a = next->motion->config();
+      const MotionConfig& b = merged.motion->config();
+      throw std::runtime_error(
+          a.horizons != b.horizons
+              ? fmt::format("{} learned {} steps ahead (--horizon), {} {}: their motion tables "
+                            "cannot be added up",
+                            inputs[i], a.horizons, inputs.front(), b.horizons)
+              : fmt::format("{} and {} were trained with other motion model settings: their "
+                            "motion tables cannot be added up",
+                            inputs[i], inputs.front()));
+    }
     merged.table.merge(next->table);
     merged.metadata.samples += next->metadata.samples;
+    if (merged.motion) merged.motion->merge(*next->motion);
   }
-  const auto saved = save_table(output, merged.table, merged.metadata);
+  const auto saved = save_table(output, merged);
   if (!saved) throw std::runtime_error(saved.error().message);
   if (!saved->durable) spdlog::warn("{}", saved->warning);
   spdlog::info("merged {} tables into {}: grid {}, {} transitions from {} formations",
                inputs.size(), output.string(), merged.table.grid().to_string(),
                merged.table.transitions(), merged.metadata.samples);
+  if (merged.motion) {
+    spdlog::info("merged motion model: {} horizons, motion_instances={} motion_held_out={} "
+                 "motion_rows={}",
+                 merged.motion->config().horizons, merged.motion->instances(),
+                 merged.motion->held_out(), merged.motion->rows());
+  }
 }
 
 }  // namespace ssl_formation::trainer

@@ -21,7 +21,8 @@ constexpr std::uint64_t progress_bar_bytes = 4 << 20;
 int run_offline(const TrainerOptions& options) {
   const SamplerConfig config = options.model.sampler_config();
   const std::filesystem::path table_path = options.table;
-  std::unique_ptr<Training> training = open_training(table_path, config, options.reset);
+  std::unique_ptr<Training> training =
+      open_training(table_path, config, options.reset, motion_config(options));
   bool every_file_whole = true;
   SSL_WrapperPacket packet;
   for (const std::string& file : options.from_logs) {
@@ -74,6 +75,12 @@ int run_offline(const TrainerOptions& options) {
   if (!save_training(table_path, *training)) return 1;
   spdlog::info("saved {}: {} transitions from {} formations, {} states seen", table_path.string(),
                training->table().transitions(), training->samples(), training->table().rows_seen());
+  if (const auto& motion = training->motion()) {
+    spdlog::info("saved {}: motion model, {} horizons: motion_instances={} motion_held_out={} "
+                 "motion_rows={}",
+                 table_path.string(), motion->config().horizons, motion->instances(),
+                 motion->held_out(), motion->rows());
+  }
   return every_file_whole ? 0 : 1;
 }
 

@@ -33,20 +33,33 @@ void remove_stale_temporaries(const std::filesystem::path& table_path) {
     }
   }
 }
+
+std::string describe_motion(const MotionConfig& config) {
+  return fmt::format("horizons={} step={} velocity_window={} tolerance={} calibration_block={} "
+                     "calibration_one_in={} calibration_capacity={}",
+                     config.horizons, config.step_s, config.velocity_window_s, config.tolerance_s,
+                     config.calibration_block_s, config.calibration_one_in,
+                     config.calibration_capacity);
+}
 }  // namespace
 
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
-                                        const SamplerConfig& config, bool reset) {
+                                        const SamplerConfig& config, bool reset,
+                                        const std::optional<MotionConfig>& motion) {
   remove_stale_temporaries(table_path);
+  std::optional<MotionTable> empty_motion;
+  if (motion) empty_motion.emplace(*motion);
   std::error_code ignored;
   if (reset || !std::filesystem::exists(table_path, ignored)) {
+    const std::string what =
+        config.grid.to_string() + (motion ? " table with the motion model" : " table");
     if (reset)
-      spdlog::info("--reset: starting an empty {} table; {} will be replaced at the first save",
-                   config.grid.to_string(), table_path.string());
+      spdlog::info("--reset: starting an empty {}; {} will be replaced at the first save", what,
+                   table_path.string());
     else
-      spdlog::info("no table at {} yet: starting an empty {} table", table_path.string(),
-                   config.grid.to_string());
-    return std::make_unique<Training>(config, TransitionTable(config.grid));
+      spdlog::info("no table at {} yet: starting an empty {}", table_path.string(), what);
+    return std::make_unique<Training>(config, TransitionTable(config.grid), 0,
+                                      std::move(empty_motion));
   }
   auto loaded = load_table(table_path, config.grid);
   if (!loaded) {
@@ -61,10 +74,45 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
         "same --step, another --table, or --reset",
         table_path.string(), stored.metadata.step_s, config.step_s));
   }
-  spdlog::info("resumed {}: grid {}, {} transitions, {} formations, {} states seen",
-               table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),
-               stored.metadata.samples, stored.table.rows_seen());
-  return std::make_unique<Training>(config, std::move(stored.table), stored.metadata.samples);
+  if (motion && !stored.motion) {
+    throw std::runtime_error(fmt::format(
+        "{} holds only the paper's counts (a version-1 table), not the motion model's: pass "
+        "--model paper to go on training it, or give a new --table (or --reset to replace it) "
+        "for --model motion",
+        table_path.string()));
+  }
+  if (!motion && stored.motion) {
+    throw std::runtime_error(fmt::format(
+        "{} also holds the motion model's table (a version-2 table), which --model paper would "
+        "drop: pass --model motion to go on training it, or give a new --table (or --reset to "
+        "replace it) for --model paper",
+        table_path.string()));
+  }
+  if (motion && !(stored.motion->config() == *motion)) {
+    const MotionConfig& saved = stored.motion->config();
+    throw std::runtime_error(
+        saved.horizons != motion->horizons
+            ? fmt::format("{} was trained with --horizon {}, not {}: use the same --horizon, "
+                          "another --table, or --reset",
+                          table_path.string(), saved.horizons, motion->horizons)
+            : fmt::format("{} was trained with other motion model settings ({}) than this "
+                          "program's ({}): give another --table, or --reset",
+                          table_path.string(), describe_motion(saved), describe_motion(*motion)));
+  }
+  if (stored.motion) {
+    spdlog::info(
+        "resumed {}: grid {}, {} transitions, {} formations, {} states seen; motion model: {} "
+        "horizons, {} instances, {} held out",
+        table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),
+        stored.metadata.samples, stored.table.rows_seen(), stored.motion->config().horizons,
+        stored.motion->instances(), stored.motion->held_out());
+  } else {
+    spdlog::info("resumed {}: grid {}, {} transitions, {} formations, {} states seen",
+                 table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),
+                 stored.metadata.samples, stored.table.rows_seen());
+  }
+  return std::make_unique<Training>(config, std::move(stored.table), stored.metadata.samples,
+                                    std::move(stored.motion));
 }
 
 bool save_training(const std::filesystem::path& table_path, Training& training) {
@@ -72,7 +120,9 @@ bool save_training(const std::filesystem::path& table_path, Training& training) 
   metadata.field = training.sampler().field();
   metadata.step_s = training.sampler().config().step_s;
   metadata.samples = training.samples();
-  const auto saved = save_table(table_path, training.table(), metadata);
+  const auto saved = training.motion()
+                         ? save_table(table_path, training.table(), metadata, *training.motion())
+                         : save_table(table_path, training.table(), metadata);
   if (!saved) {
     spdlog::error("{}", saved.error().message);
     return false;

@@ -1,12 +1,17 @@
 #pragma once
 // The table file of DESIGN.md §4: a transition table with what its counts mean (grid, field
-// size, step, totals), saved atomically and loaded with every field checked.
+// size, step, totals), and optionally the motion model's table, saved atomically and loaded with
+// every field checked.
+//
+// Two format versions. Version 1 holds the paper's counts only; a table without a motion table
+// is still saved as version 1, byte for byte as before version 2 existed. Version 2 is version 1
+// with 2 in its version field and the motion section between the counts and the file checksum.
 //
 // Layout, all integers little-endian, doubles as their IEEE-754 bits in a little-endian u64:
 //
 //   offset size  field
 //        0    8  magic "SSLFTABL"
-//        8    4  u32 format version (table_file_version)
+//        8    4  u32 format version: 1 (table_file_version) or 2 (table_file_motion_version)
 //       12    4  u32 grid length L (cells along x)
 //       16    4  u32 grid width W (cells along y)
 //       20    4  u32 encoding: 0 dense, 1 sparse
@@ -23,11 +28,32 @@
 //                  sparse: `rows` records in increasing FROM order, each
 //                          u32 from, u32 n (>= 1), then n pairs u32 to, u32 count (> 0)
 //                          in increasing TO order
+//        M       version 2 only, the motion section (M = 84 + the counts' size):
+//                  MotionConfig: f64 step_s (equal to the header's step), u32 horizons,
+//                                f64 velocity_window_s, f64 tolerance_s,
+//                                f64 calibration_block_s, u32 calibration_one_in,
+//                                u32 calibration_capacity, f64 settle_window_s,
+//                                f64 long_settle_window_s                       (60 bytes)
+//                  u64 instances (the sum of the rows' n)
+//                  u64 held-out instances seen (>= the calibration instances stored)
+//                  u64 row count, then the rows in increasing key order, each
+//                    u64 MotionKey (a finest, robot-level key of a horizon < horizons),
+//                    then MotionRow::size (26) i64 sums in MotionRow::sums order: n (>= 1),
+//                    d_x, d_y, each regressor's x and y (2 x motion_regressors), dd (>= 0),
+//                    each d.x_i, then x_i.x_j for i <= j (x_i.x_i >= 0)         (216 bytes)
+//                  per horizon 0..horizons-1: u32 count (<= calibration_capacity), then
+//                    `count` HeldOutInstances in MotionTable::calibration's order (by hash,
+//                    then content): u64 hash, u32 robot_id, the 12 i32 of
+//                    motion_instance_values (x, y, d_x, d_y, v_x, v_y, a_x, a_y, g_x, g_y,
+//                    s_x, s_y), u32 context                                    (64 bytes)
 //      end-4   4  u32 CRC-32 of every byte before it (the file checksum)
 //
 // The header has its own checksum so that the size fields can be trusted before the file
 // length is compared with them: that is what tells a truncated file (shorter than its trusted
-// header says) from a corrupt one (a flipped byte anywhere, including in a size field).
+// header says) from a corrupt one (a flipped byte anywhere, including in a size field). The
+// motion section's sizes have no checksum of their own: a file that ends inside the motion
+// section is truncated, and so reads a corrupt motion size that points past the end of a file
+// whose checksum does not match; one that points short of the end is corrupt (trailing bytes).
 
 #include <cstdint>
 #include <filesystem>
@@ -43,7 +69,10 @@
 
 namespace ssl_formation {
 
+// The version of a file without a motion table (the paper's counts only).
 inline constexpr std::uint32_t table_file_version = 1;
+// The version of a file with a motion table.
+inline constexpr std::uint32_t table_file_motion_version = 2;
 
 // What the counts mean, saved next to them.
 struct TableMetadata {
@@ -58,7 +87,7 @@ struct StoredTable {
   TableMetadata metadata;
   // The motion model's counts (format version 2); none in a version-1 file, which serves only
   // the paper's model.
-  std::optional<MotionTable> motion;
+  std::optional<MotionTable> motion = std::nullopt;
 };
 
 enum class TableFileError {
@@ -80,13 +109,15 @@ struct TableLoadError {
   std::string message;
 };
 
-// Reads a table file without ever writing to it. The checks run in this order, and the first
-// that fails decides the error: open; magic (not_a_table, or truncated for a file that is a
-// strict prefix of the magic, including an empty file); version (wrong_version, checked before
-// any checksum because another version may lay out or checksum its header differently); header
-// length and header checksum (truncated, corrupt); header fields (corrupt); expected_grid
-// (wrong_grid, naming both grids); file length against the header (truncated if shorter,
-// corrupt if longer); file checksum (corrupt); then every count (corrupt).
+// Reads a table file (version 1 or 2) without ever writing to it. The checks run in this order,
+// and the first that fails decides the error: open; magic (not_a_table, or truncated for a file
+// that is a strict prefix of the magic, including an empty file); version (wrong_version,
+// checked before any checksum because another version may lay out or checksum its header
+// differently); header length and header checksum (truncated, corrupt); header fields
+// (corrupt); expected_grid (wrong_grid, naming both grids); file length against the header and,
+// for version 2, the motion section's sizes (truncated if shorter, corrupt if longer); file
+// checksum (corrupt); then every count and the motion section (corrupt). A version-1 file
+// loads with `motion` empty.
 // `storage` chooses the in-memory layout of the loaded table; `automatic` keeps large grids
 // sparse, so loading a sparse 12x9 file never allocates S*S.
 Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path,
@@ -118,7 +149,16 @@ struct SaveHooks {
 // path and the cause) the temporary file is removed and `path` is left as it was. Once the
 // rename has succeeded the save succeeds: a folder that cannot be synced then is reported in
 // TableSaved::warning, not as a failure. Dense tables are written densely, sparse ones as rows.
+// Without a motion table the file is version 1.
 Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
                               const TableMetadata& metadata, const SaveHooks& hooks = {});
+// The same with the motion model's table: a version-2 file. Fails (writing nothing) if the
+// motion table's step differs from metadata.step_s.
+Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
+                              const TableMetadata& metadata, const MotionTable& motion,
+                              const SaveHooks& hooks = {});
+// `stored` as it is: version 2 if it has a motion table, else version 1.
+Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
+                              const SaveHooks& hooks = {});
 
 }  // namespace ssl_formation

@@ -1,9 +1,10 @@
 #pragma once
 // Where the trainer's table comes from and goes to: resume an existing table file (or refuse
-// one of another grid or step unless --reset), and save it atomically with its metadata.
+// one of another grid, step or model unless --reset), and save it atomically with its metadata.
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/table_file.hpp"
@@ -12,14 +13,19 @@
 namespace ssl_formation::trainer {
 
 // Opens the training for `table_path`: resumes its counts if the file exists, or starts empty.
-// Throws std::runtime_error, with the file's own message and what to do, when the file cannot
-// be resumed (corrupt, another grid or step) and `reset` is false. With `reset` the old file is
-// left alone until the first save replaces it.
+// With `motion` (--model motion) the training also counts the motion model's table of that
+// configuration, resumed from a version-2 file; without it (--model paper) only the paper's
+// counts, resumed from a version-1 file. Throws std::runtime_error, with the file's own message
+// and what to do, when the file cannot be resumed (corrupt, another grid or step, the other
+// model's file, other motion settings) and `reset` is false. With `reset` the old file is left
+// alone until the first save replaces it.
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
-                                        const SamplerConfig& config, bool reset);
+                                        const SamplerConfig& config, bool reset,
+                                        const std::optional<MotionConfig>& motion = std::nullopt);
 
-// Saves the training's table atomically; logs and returns false on failure. A save whose folder
-// could not be synced after the rename is a success, logged as a warning.
+// Saves the training's table atomically (version 2 with its motion table, else version 1); logs
+// and returns false on failure. A save whose folder could not be synced after the rename is a
+// success, logged as a warning.
 bool save_training(const std::filesystem::path& table_path, Training& training);
 
 }  // namespace ssl_formation::trainer

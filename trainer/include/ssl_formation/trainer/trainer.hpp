@@ -1,13 +1,15 @@
 #pragma once
 // ssl-trainer's three modes: live training from the vision feed, offline training from log
-// files, and merging tables. main.cpp parses the options; everything else is here, linkable by
-// the tests. All three count through the core's Training and save through table_store.
+// files, and merging tables. main.cpp wires them up; everything else (options included) is
+// here, linkable by the tests. All three count through the core's Training and save through table_store.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/net/multicast.hpp"
 
 namespace ssl_formation::trainer {
@@ -16,6 +18,8 @@ struct TrainerOptions {
   app::ModelOptions model;
   app::NetworkOptions network;
   app::DaemonOptions daemon;
+  // --model motion: the steps ahead the motion model learns (--horizon, as the predictor's).
+  int horizon = 3;
   std::string table = app::default_table;
   double flush_interval_s = 10.0;
   double status_interval_s = 5.0;
@@ -28,13 +32,23 @@ struct TrainerOptions {
   bool strict = false;
 };
 
+// Parses ssl-trainer's command line (not merge's) into `options`. Returns false when --help was
+// printed and the program should exit 0; throws app::UsageError for anything wrong.
+bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& options);
+
+// The motion model's configuration the options ask for: none with --model paper. Throws
+// app::UsageError for a bad --model or --horizon.
+std::optional<MotionConfig> motion_config(const TrainerOptions& options);
+
 // Each returns the exit status. Throws app::UsageError for bad options and std::runtime_error
 // when the table cannot be resumed.
 int run_live(const TrainerOptions& options);     // live_trainer.cpp
 int run_offline(const TrainerOptions& options);  // offline_training.cpp
 
-// Adds up tables of the same grid and step into `output` (atomically). Throws
-// std::runtime_error naming the file and the reason when one cannot be read or added.
+// Adds up tables of the same grid and step into `output` (atomically): the paper's counts and,
+// when every input is a version-2 file, the motion tables (saved as version 2). Throws
+// std::runtime_error naming the file and the reason when one cannot be read or added, including
+// a mix of version-1 and version-2 files or motion tables of other settings.
 void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output);
 
 }  // namespace ssl_formation::trainer

@@ -1,0 +1,347 @@
+// ssl-trainer with the motion model: --model motion (the default) trains and saves a version-2
+// table and resumes only one, --model paper stays on version 1, --horizon, merging version-2
+// tables, and the refusals of a table of the other model. Run in-process through the trainer
+// library: the options as ssl-trainer parses them, then run_offline or merge_tables.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "scratch_dir.hpp"
+#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/trainer/table_store.hpp"
+#include "ssl_formation/trainer/trainer.hpp"
+#include "ssl_formation/vision_packet.hpp"
+#include "ssl_vision_wrapper.pb.h"
+
+namespace ssl_formation::trainer {
+namespace {
+
+namespace fs = std::filesystem;
+
+class TempDir : public testing::ScratchDir {
+ public:
+  TempDir() : ScratchDir("sslf-motion-training") {}
+};
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+std::uint32_t version_of(const fs::path& path) {
+  const std::string bytes = read_bytes(path);
+  if (bytes.size() < 12) return 0;
+  std::uint32_t value = 0;
+  for (int i = 0; i < 4; ++i) value |= std::uint32_t{static_cast<std::uint8_t>(bytes[8 + i])} << (8 * i);
+  return value;
+}
+
+using Entries = std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>>;
+Entries entries(const TransitionTable& table) {
+  Entries out;
+  table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count count) {
+    out.emplace_back(from, to, count);
+  });
+  return out;
+}
+
+StoredTable load(const fs::path& path) {
+  auto loaded = load_table(path);
+  if (!loaded) throw std::runtime_error(loaded.error().message);
+  return std::move(*loaded);
+}
+
+// Four yellow robots driving circles, one frame every 1/30 s for `seconds` from `t0`.
+std::vector<SSL_WrapperPacket> circling_stream(double t0, double seconds, int seed) {
+  std::vector<SSL_WrapperPacket> packets;
+  const int frames = static_cast<int>(seconds * 30.0);
+  for (int f = 0; f < frames; ++f) {
+    const double t = t0 + f / 30.0;
+    DetectionFrameSpec spec;
+    spec.frame_number = static_cast<std::uint32_t>(f);
+    spec.t_capture = t;
+    for (std::uint32_t id = 0; id < 4; ++id) {
+      const double radius = 600.0 + 300.0 * id + 100.0 * seed;
+      const double omega = (0.5 + 0.2 * id) * (seed % 2 == 0 ? 1.0 : -1.0);
+      const double phase = 0.7 * id + 1.3 * seed + omega * (t - t0);
+      const Point centre{-2500.0 + 1600.0 * id, (id % 2 == 0 ? -1000.0 : 1000.0)};
+      spec.yellow.push_back(
+          {id, {centre.x + radius * std::cos(phase), centre.y + radius * std::sin(phase)}});
+    }
+    packets.push_back(make_detection_packet(spec));
+  }
+  return packets;
+}
+
+void write_log(const fs::path& path, const std::vector<SSL_WrapperPacket>& packets) {
+  auto writer = LogWriter::create(path);
+  ASSERT_TRUE(writer) << writer.error().message;
+  for (const auto& packet : packets) {
+    const auto t_ns = static_cast<std::int64_t>(packet.detection().t_capture() * 1e9);
+    ASSERT_TRUE(writer->write_vision(packet, t_ns)) << writer->error();
+  }
+  ASSERT_TRUE(writer->close());
+}
+
+// ssl-trainer's command line, parsed as main() parses it.
+TrainerOptions parse(std::vector<std::string> args) {
+  args.insert(args.begin(), "ssl-trainer");
+  std::vector<const char*> argv;
+  for (const auto& arg : args) argv.push_back(arg.c_str());
+  TrainerOptions options;
+  if (!parse_trainer_options(static_cast<int>(argv.size()), argv.data(), options)) {
+    throw std::runtime_error("--help");
+  }
+  return options;
+}
+
+// `ssl-trainer ARGS`, --from-log mode, in-process: the exit status.
+int train_from_logs(const std::vector<std::string>& args) { return run_offline(parse(args)); }
+
+// What Training computes from the same streams with the options' model, one stream per file.
+std::unique_ptr<Training> library_training(const TrainerOptions& options,
+                                           const std::vector<std::vector<SSL_WrapperPacket>>& streams) {
+  const auto motion = motion_config(options);
+  auto training = std::make_unique<Training>(
+      options.model.sampler_config(), TransitionTable(options.model.parsed_grid()), 0,
+      motion ? std::optional<MotionTable>(MotionTable(*motion)) : std::nullopt);
+  for (const auto& stream : streams) {
+    training->start_new_stream();
+    for (const auto& packet : stream) training->add(packet);
+  }
+  return training;
+}
+
+class MotionTraining : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    a_ = circling_stream(10.0, 20.0, 1);
+    b_ = circling_stream(200.0, 25.0, 2);
+    write_log(dir_.path() / "a.log", a_);
+    write_log(dir_.path() / "b.log.gz", b_);
+  }
+  fs::path at(const std::string& name) const { return dir_.path() / name; }
+
+  TempDir dir_;
+  std::vector<SSL_WrapperPacket> a_;
+  std::vector<SSL_WrapperPacket> b_;
+};
+
+TEST_F(MotionTraining, FromLogWritesAVersionTwoTableByDefault) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string()}),
+            0);
+  EXPECT_EQ(version_of(at("t.bin")), table_file_motion_version);
+  const StoredTable stored = load(at("t.bin"));
+  ASSERT_TRUE(stored.motion.has_value());
+  EXPECT_EQ(stored.motion->config().horizons, 3) << "--horizon defaults to 3";
+  EXPECT_EQ(stored.motion->config().step_s, 2.0);
+  EXPECT_GT(stored.motion->instances(), 0u);
+
+  const auto expected = library_training(parse({}), {a_});
+  EXPECT_TRUE(*stored.motion == *expected->motion());
+  EXPECT_EQ(entries(stored.table), entries(expected->table()));
+  EXPECT_EQ(stored.metadata.samples, expected->samples());
+}
+
+TEST_F(MotionTraining, ModelPaperWritesTheVersionOneTableOfBefore) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string(),
+                             "--model", "paper"}),
+            0);
+  EXPECT_EQ(version_of(at("t.bin")), table_file_version);
+  const StoredTable stored = load(at("t.bin"));
+  EXPECT_FALSE(stored.motion.has_value());
+
+  // The bytes the paper's training saves: step sampling, counts only.
+  const TrainerOptions paper = parse({"--model", "paper"});
+  EXPECT_EQ(paper.model.sampler_config().sampling, Sampling::step);
+  const auto expected = library_training(paper, {a_});
+  ASSERT_GT(expected->table().transitions(), 0u);
+  ASSERT_TRUE(save_training(at("expected.bin"), *expected));
+  EXPECT_EQ(read_bytes(at("t.bin")), read_bytes(at("expected.bin")));
+}
+
+TEST_F(MotionTraining, HorizonOption) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string(),
+                             "--horizon", "5", "--step", "1"}),
+            0);
+  const StoredTable stored = load(at("t.bin"));
+  ASSERT_TRUE(stored.motion.has_value());
+  EXPECT_EQ(stored.motion->config().horizons, 5);
+  EXPECT_EQ(stored.motion->config().step_s, 1.0);
+  const auto expected = library_training(parse({"--horizon", "5", "--step", "1"}), {a_});
+  EXPECT_TRUE(*stored.motion == *expected->motion());
+
+  EXPECT_THROW((void)motion_config(parse({"--horizon", "0"})), app::UsageError);
+  EXPECT_THROW((void)motion_config(parse({"--horizon", "17"})), app::UsageError);
+  EXPECT_NO_THROW((void)motion_config(parse({"--horizon", "16"})));
+  EXPECT_FALSE(motion_config(parse({"--model", "paper", "--horizon", "0"})).has_value())
+      << "--horizon means nothing to the paper's model";
+  EXPECT_THROW((void)motion_config(parse({"--model", "markov"})), app::UsageError);
+}
+
+TEST_F(MotionTraining, ResumesAVersionTwoTableAndGoesOn) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string()}),
+            0);
+  ASSERT_EQ(
+      train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("t.bin").string()}),
+      0);
+  const StoredTable stored = load(at("t.bin"));
+  ASSERT_TRUE(stored.motion.has_value());
+  const auto expected = library_training(parse({}), {a_, b_});
+  EXPECT_TRUE(*stored.motion == *expected->motion());
+  EXPECT_EQ(entries(stored.table), entries(expected->table()));
+  EXPECT_EQ(stored.metadata.samples, expected->samples());
+}
+
+// The refusal names the file and what to do, and leaves the file byte for byte as it was.
+void expect_refused(const fs::path& path, const TrainerOptions& options,
+                    const std::vector<std::string>& in_message) {
+  const std::string before = read_bytes(path);
+  try {
+    (void)open_training(path, options.model.sampler_config(), false, motion_config(options));
+    ADD_FAILURE() << "open_training accepted " << path;
+  } catch (const std::runtime_error& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(path.string()), std::string::npos) << message;
+    for (const std::string& part : in_message) {
+      EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' in: " << message;
+    }
+  }
+  EXPECT_EQ(read_bytes(path), before) << "a refused file must be left as it was";
+}
+
+TEST_F(MotionTraining, RefusesToResumeAVersionOneTableWithTheMotionModel) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string(),
+                             "--model", "paper"}),
+            0);
+  expect_refused(at("t.bin"), parse({}), {"only the paper's counts", "--model paper", "--table"});
+  // run_offline refuses it the same way, before reading any log.
+  EXPECT_THROW(
+      train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("t.bin").string()}),
+      std::runtime_error);
+  EXPECT_EQ(version_of(at("t.bin")), table_file_version);
+  // --reset replaces it at the first save.
+  auto training = open_training(at("t.bin"), parse({}).model.sampler_config(), true,
+                                motion_config(parse({})));
+  EXPECT_TRUE(training->motion().has_value());
+}
+
+TEST_F(MotionTraining, RefusesToResumeAVersionTwoTableWithThePaperModel) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string()}),
+            0);
+  expect_refused(at("t.bin"), parse({"--model", "paper"}), {"motion model", "--model motion"});
+}
+
+TEST_F(MotionTraining, RefusesToResumeAnotherHorizon) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string()}),
+            0);
+  expect_refused(at("t.bin"), parse({"--horizon", "4"}), {"--horizon 3, not 4", "--reset"});
+}
+
+TEST_F(MotionTraining, SavesAndResumesInProcess) {
+  const TrainerOptions options = parse({"--horizon", "2"});
+  auto training = open_training(at("t.bin"), options.model.sampler_config(), false,
+                                motion_config(options));
+  ASSERT_TRUE(training->motion().has_value());
+  for (const auto& packet : a_) training->add(packet);
+  ASSERT_TRUE(training->changed_since_save());
+  ASSERT_TRUE(save_training(at("t.bin"), *training));
+  EXPECT_FALSE(training->changed_since_save());
+  EXPECT_EQ(version_of(at("t.bin")), table_file_motion_version);
+
+  auto resumed = open_training(at("t.bin"), options.model.sampler_config(), false,
+                               motion_config(options));
+  ASSERT_TRUE(resumed->motion().has_value());
+  EXPECT_TRUE(*resumed->motion() == *training->motion());
+  EXPECT_EQ(entries(resumed->table()), entries(training->table()));
+  EXPECT_FALSE(resumed->changed_since_save());
+}
+
+// Two tables trained from two logs and merged equal the table trained on both logs at once,
+// the motion tables bit for bit.
+TEST_F(MotionTraining, MergeOfVersionTwoTablesEqualsTrainingOnBothLogs) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("ta.bin").string()}),
+            0);
+  ASSERT_EQ(
+      train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("tb.bin").string()}),
+      0);
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), at("b.log.gz").string(),
+                             "--table", at("tab.bin").string()}),
+            0);
+  merge_tables({at("ta.bin").string(), at("tb.bin").string()}, at("merged.bin"));
+  EXPECT_EQ(version_of(at("merged.bin")), table_file_motion_version);
+
+  const StoredTable merged = load(at("merged.bin"));
+  const StoredTable together = load(at("tab.bin"));
+  ASSERT_TRUE(merged.motion && together.motion);
+  EXPECT_TRUE(*merged.motion == *together.motion);
+  EXPECT_EQ(merged.motion->held_out(), together.motion->held_out());
+  EXPECT_GT(merged.motion->held_out(), 0u);
+  EXPECT_EQ(entries(merged.table), entries(together.table));
+  EXPECT_EQ(merged.metadata.samples, together.metadata.samples);
+  const auto expected = library_training(parse({}), {a_, b_});
+  EXPECT_TRUE(*merged.motion == *expected->motion());
+}
+
+TEST_F(MotionTraining, MergeOfVersionOneTablesStaysVersionOne) {
+  for (const auto& [log, table] : {std::pair{"a.log", "ta.bin"}, std::pair{"b.log.gz", "tb.bin"}}) {
+    ASSERT_EQ(train_from_logs({"--from-log", at(log).string(), "--table", at(table).string(),
+                               "--model", "paper"}),
+              0);
+  }
+  merge_tables({at("ta.bin").string(), at("tb.bin").string()}, at("merged.bin"));
+  EXPECT_EQ(version_of(at("merged.bin")), table_file_version);
+  EXPECT_FALSE(load(at("merged.bin")).motion.has_value());
+}
+
+TEST_F(MotionTraining, MergeRefusesToMixTheModels) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("v2.bin").string()}),
+            0);
+  ASSERT_EQ(train_from_logs({"--from-log", at("b.log.gz").string(), "--table",
+                             at("v1.bin").string(), "--model", "paper"}),
+            0);
+  for (const auto& inputs : {std::vector<std::string>{at("v2.bin").string(), at("v1.bin").string()},
+                             std::vector<std::string>{at("v1.bin").string(), at("v2.bin").string()}}) {
+    try {
+      merge_tables(inputs, at("merged.bin"));
+      ADD_FAILURE() << "merged a version-1 and a version-2 table";
+    } catch (const std::runtime_error& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(at("v1.bin").string()), std::string::npos) << message;
+      EXPECT_NE(message.find(at("v2.bin").string()), std::string::npos) << message;
+      EXPECT_NE(message.find("version-1"), std::string::npos) << message;
+      EXPECT_NE(message.find("version-2"), std::string::npos) << message;
+    }
+    EXPECT_FALSE(fs::exists(at("merged.bin")));
+  }
+}
+
+TEST_F(MotionTraining, MergeRefusesOtherHorizons) {
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t3.bin").string()}),
+            0);
+  ASSERT_EQ(train_from_logs({"--from-log", at("b.log.gz").string(), "--table",
+                             at("t4.bin").string(), "--horizon", "4"}),
+            0);
+  try {
+    merge_tables({at("t3.bin").string(), at("t4.bin").string()}, at("merged.bin"));
+    ADD_FAILURE() << "merged tables of other horizons";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("--horizon"), std::string::npos) << error.what();
+  }
+  EXPECT_FALSE(fs::exists(at("merged.bin")));
+}
+
+}  // namespace
+}  // namespace ssl_formation::trainer

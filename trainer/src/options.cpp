@@ -1,0 +1,60 @@
+// ssl-trainer's options (the merge subcommand parses its own in main.cpp).
+
+#include <string>
+
+#include "ssl_formation/trainer/trainer.hpp"
+
+namespace ssl_formation::trainer {
+
+namespace po = boost::program_options;
+
+bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o) {
+  po::options_description general("Options");
+  // clang-format off
+  general.add_options()
+      ("table", po::value(&o.table)->default_value(o.table),
+       "table file to resume and save (written atomically)")
+      ("reset", po::bool_switch(&o.reset),
+       "start an empty table even if --table holds one of another grid, step or model")
+      ("horizon", po::value(&o.horizon)->default_value(o.horizon),
+       "--model motion: steps ahead to learn (1 to 16), as many as ssl-predictor --horizon "
+       "predicts")
+      ("flush-interval", po::value(&o.flush_interval_s)->default_value(o.flush_interval_s),
+       "seconds between saves of the table (it is also saved on SIGINT/SIGTERM)")
+      ("status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
+       "seconds between status lines on stderr")
+      ("receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
+       "socket receive buffer (SO_RCVBUF) to request, bytes")
+      ("verbose", po::bool_switch(&o.verbose), "log every save")
+      ("from-log", po::value(&o.from_logs)->multitoken(),
+       "train from these official SSL log files (.log or .log.gz) instead of the network, "
+       "save the table and exit")
+      ("strict", po::bool_switch(&o.strict),
+       "--from-log: exit 1 also when a log only ends inside its last message (by default that "
+       "is a warning: a recorder killed mid-write leaves such files)");
+  // clang-format on
+  app::add_vision_options(general, o.network);
+  app::add_model_options(general, o.model);
+  app::add_daemon_options(general, o.daemon);
+  return app::parse_command_line(
+      argc, argv, general,
+      "ssl-trainer [options]\n       ssl-trainer --from-log FILE... [options]\n"
+      "       ssl-trainer merge TABLE... -o OUT",
+      "Counts the opponent's formation transitions (and, with --model motion, how each robot "
+      "moves) from the vision feed (or from logs) into a table file.");
+}
+
+std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
+  if (options.model.parsed_model() == ModelKind::paper) return std::nullopt;
+  if (options.horizon < 1 || options.horizon > MotionConfig::max_horizons) {
+    throw app::UsageError("--horizon must be 1 to " + std::to_string(MotionConfig::max_horizons) +
+                          ", not " + std::to_string(options.horizon));
+  }
+  MotionConfig config;
+  config.step_s = options.model.step_s;
+  config.horizons = options.horizon;
+  if (!config.valid()) throw app::UsageError("invalid --step for the motion model");
+  return config;
+}
+
+}  // namespace ssl_formation::trainer
