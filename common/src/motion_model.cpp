@@ -42,7 +42,66 @@ bool ranks_before(const HeldOutInstance& a, const HeldOutInstance& b) {
 }  // namespace
 
 std::int32_t whole_mm(double value) {
-  return static_cast<std::int32_t>(std::clamp(std::round(value), -1.0e9, 1.0e9));
+  // Round half away from zero without std::round's call: this runs for every value of every
+  // instance trained.
+  const double clamped = std::clamp(value, -1.0e9, 1.0e9);
+  return static_cast<std::int32_t>(clamped < 0.0 ? clamped - 0.5 : clamped + 0.5);
+}
+
+namespace {
+std::size_t row_slot(MotionKey key, std::size_t mask) {
+  key ^= key >> 31;
+  key *= 0x7fb5d329728ea185ULL;
+  key ^= key >> 27;
+  return static_cast<std::size_t>(key) & mask;
+}
+}  // namespace
+
+MotionRow& MotionRowMap::operator[](MotionKey key) {
+  if (2 * (size_ + 1) > keys_.size()) grow();
+  const std::size_t mask = keys_.size() - 1;
+  for (std::size_t slot = row_slot(key, mask);; slot = (slot + 1) & mask) {
+    if (keys_[slot] == key) return rows_[slot];
+    if (keys_[slot] == empty_key) {
+      keys_[slot] = key;
+      ++size_;
+      return rows_[slot];
+    }
+  }
+}
+
+const MotionRow* MotionRowMap::find(MotionKey key) const {
+  if (keys_.empty()) return nullptr;
+  const std::size_t mask = keys_.size() - 1;
+  for (std::size_t slot = row_slot(key, mask);; slot = (slot + 1) & mask) {
+    if (keys_[slot] == key) return &rows_[slot];
+    if (keys_[slot] == empty_key) return nullptr;
+  }
+}
+
+void MotionRowMap::grow() {
+  std::vector<MotionKey> keys(std::max<std::size_t>(64, keys_.size() * 2), empty_key);
+  std::vector<MotionRow> rows(keys.size());
+  const std::size_t mask = keys.size() - 1;
+  for (std::size_t i = 0; i < keys_.size(); ++i) {
+    if (keys_[i] == empty_key) continue;
+    std::size_t slot = row_slot(keys_[i], mask);
+    while (keys[slot] != empty_key) slot = (slot + 1) & mask;
+    keys[slot] = keys_[i];
+    rows[slot] = rows_[i];
+  }
+  keys_ = std::move(keys);
+  rows_ = std::move(rows);
+}
+
+bool operator==(const MotionRowMap& a, const MotionRowMap& b) {
+  if (a.size_ != b.size_) return false;
+  bool equal = true;
+  a.for_each([&](MotionKey key, const MotionRow& row) {
+    const MotionRow* other = b.find(key);
+    equal = equal && other && *other == row;
+  });
+  return equal;
 }
 
 std::optional<ModelKind> parse_model(std::string_view text) {
@@ -217,10 +276,8 @@ void MotionTable::add(int horizon_index, double time_s, const MotionInstance& i)
   for (int r = 0; r < motion_regressors; ++r) {
     x[r] = {whole_mm(regressors[r].x), whole_mm(regressors[r].y)};
   }
-  MotionRow row;
-  row.add({i.d_x, i.d_y}, x);
   ++instances_;
-  rows_[encode_motion_key(motion_key_parts(horizon_index, i))].add(row);
+  rows_[encode_motion_key(motion_key_parts(horizon_index, i))].add({i.d_x, i.d_y}, x);
 }
 
 void MotionTable::add_row(MotionKey key, const MotionRow& row) {
@@ -246,7 +303,7 @@ void MotionTable::merge(const MotionTable& other) {
   if (!(other.config_ == config_)) {
     throw std::invalid_argument("the motion tables were trained with different settings");
   }
-  for (const auto& [key, row] : other.rows_) rows_[key].add(row);
+  other.rows_.for_each([&](MotionKey key, const MotionRow& row) { rows_[key].add(row); });
   instances_ += other.instances_;
   const std::uint64_t seen = held_out_seen_ + other.held_out_seen_;
   for (std::size_t h = 0; h < held_out_.size(); ++h) {
@@ -256,13 +313,15 @@ void MotionTable::merge(const MotionTable& other) {
 }
 
 std::size_t MotionTable::memory_bytes() const {
-  std::size_t bytes = rows_.size() * (sizeof(MotionKey) + sizeof(MotionRow) + 2 * sizeof(void*));
+  std::size_t bytes = rows_.capacity() * (sizeof(MotionKey) + sizeof(MotionRow));
   for (const auto& heap : held_out_) bytes += heap.capacity() * sizeof(HeldOutInstance);
   return bytes;
 }
 
 std::vector<std::pair<MotionKey, MotionRow>> MotionTable::sorted_rows() const {
-  std::vector<std::pair<MotionKey, MotionRow>> rows(rows_.begin(), rows_.end());
+  std::vector<std::pair<MotionKey, MotionRow>> rows;
+  rows.reserve(rows_.size());
+  rows_.for_each([&](MotionKey key, const MotionRow& row) { rows.emplace_back(key, row); });
   std::sort(rows.begin(), rows.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   return rows;
@@ -298,10 +357,40 @@ MotionHistory::MotionHistory(const MotionConfig& config)
                         config.long_settle_window_s}) +
               2.0 * config.tolerance_s) {}
 
+void MotionHistory::Track::push(const Entry& entry) {
+  if (end - begin == ring.size()) {
+    std::vector<Entry> grown(std::max<std::size_t>(64, ring.size() * 2));
+    for (std::uint64_t seq = begin; seq < end; ++seq) grown[seq & (grown.size() - 1)] = at(seq);
+    ring = std::move(grown);
+  }
+  at(end++) = entry;
+}
+
+void MotionHistory::Track::clear() {
+  begin = end;
+  velocity_cursor = settle_cursor = long_settle_cursor = end;
+  horizon_cursor.fill(end);
+  still_since_s.reset();
+}
+
 void MotionHistory::clear() {
-  for (auto& entries : by_id_) entries.clear();
-  for (Stillness& still : stillness_) still = {};
+  for (Track& track : tracks_) track.clear();
   last_time_s_.reset();
+}
+
+const MotionHistory::Entry* MotionHistory::nearest(const Track& track, std::uint64_t after,
+                                                   double time_s) const {
+  // `after` is the first entry at or after time_s: it or the one before it is the nearest.
+  const Entry* best = nullptr;
+  double best_gap = config_.tolerance_s + 1e-9;
+  if (after < track.end && track.at(after).time_s - time_s <= best_gap) {
+    best = &track.at(after);
+    best_gap = track.at(after).time_s - time_s;
+  }
+  if (after > track.begin && time_s - track.at(after - 1).time_s <= best_gap) {
+    best = &track.at(after - 1);
+  }
+  return best;
 }
 
 void MotionHistory::add(const Formation& formation) {
@@ -312,20 +401,31 @@ void MotionHistory::add(const Formation& formation) {
   }
   last_time_s_ = t;
   attacks_ = formation.opponent_attacks;
+  const double limit = MotionFeatures::speed_limits_mm_s[0];
   for (const FormationRobot& robot : formation.robots) {
-    if (robot.robot_id >= by_id_.size()) {
-      by_id_.resize(robot.robot_id + 1);
-      stillness_.resize(robot.robot_id + 1);
+    if (robot.robot_id >= tracks_.size()) tracks_.resize(robot.robot_id + 1);
+    Track& track = tracks_[robot.robot_id];
+    while (track.begin < track.end && track.at(track.begin).time_s < t - keep_s_) ++track.begin;
+    // Cursors: the first entry at or after each window's start.
+    const auto advance = [&](std::uint64_t& cursor, double from_s) {
+      cursor = std::max(cursor, track.begin);
+      while (cursor < track.end && track.at(cursor).time_s < from_s) ++cursor;
+    };
+    advance(track.velocity_cursor, t - config_.velocity_window_s);
+    advance(track.settle_cursor, t - config_.settle_window_s);
+    advance(track.long_settle_cursor, t - config_.long_settle_window_s);
+    for (int k = 1; k <= config_.horizons; ++k) {
+      advance(track.horizon_cursor[static_cast<std::size_t>(k - 1)], t - k * config_.step_s);
     }
-    std::deque<Entry>& entries = by_id_[robot.robot_id];
-    while (!entries.empty() && entries.front().time_s < t - keep_s_) entries.pop_front();
+
+    const Entry* last = track.end > track.begin ? &track.at(track.end - 1) : nullptr;
     Entry entry;
     entry.time_s = t;
     entry.position = robot.position;
-    entry.sum_x = robot.position.x + (entries.empty() ? 0.0 : entries.back().sum_x);
-    entry.sum_y = robot.position.y + (entries.empty() ? 0.0 : entries.back().sum_y);
-    entry.count = 1 + (entries.empty() ? 0 : entries.back().count);
-    const Entry* then = near(robot.robot_id, t - config_.velocity_window_s);
+    entry.sum_x = robot.position.x + (last ? last->sum_x : 0.0);
+    entry.sum_y = robot.position.y + (last ? last->sum_y : 0.0);
+    entry.count = 1 + (last ? last->count : 0);
+    const Entry* then = nearest(track, track.velocity_cursor, t - config_.velocity_window_s);
     if (then && t - then->time_s > config_.velocity_window_s / 2.0) {
       const double dt = t - then->time_s;
       MotionKinematics& k = entry.kinematics;
@@ -336,69 +436,68 @@ void MotionHistory::add(const Formation& formation) {
         k.velocity_change = {k.velocity.x - then->kinematics.velocity.x,
                              k.velocity.y - then->kinematics.velocity.y};
       }
-      // From the robot to its mean position since the first entry at or after t - window.
-      const auto to_mean_since = [&](double window_s) {
-        const auto first = std::lower_bound(
-            entries.begin(), entries.end(), t - window_s,
-            [](const Entry& e, double time) { return e.time_s < time; });
-        if (first == entries.end()) return Point{};
-        const double n = static_cast<double>(entry.count - first->count + 1);
-        return Point{(entry.sum_x - first->sum_x + first->position.x) / n - robot.position.x,
-                     (entry.sum_y - first->sum_y + first->position.y) / n - robot.position.y};
+      // From the robot to its mean position since the window's first entry (the new one
+      // included), from the running sums.
+      const auto to_mean_since = [&](std::uint64_t first_seq) {
+        if (first_seq >= track.end) return Point{};
+        const Entry& first = track.at(first_seq);
+        const double n = static_cast<double>(entry.count - first.count + 1);
+        return Point{(entry.sum_x - first.sum_x + first.position.x) / n - robot.position.x,
+                     (entry.sum_y - first.sum_y + first.position.y) / n - robot.position.y};
       };
-      k.to_recent_mean = to_mean_since(config_.settle_window_s);
-      k.to_settled_mean = to_mean_since(config_.long_settle_window_s);
+      k.to_recent_mean = to_mean_since(track.settle_cursor);
+      k.to_settled_mean = to_mean_since(track.long_settle_cursor);
+      // How long a standing robot has stood: one that has held its place for a while is about
+      // to leave it (set plays hold each position for a second or two).
+      const bool standing = k.velocity.x * k.velocity.x + k.velocity.y * k.velocity.y < limit * limit;
+      if (!standing) {
+        track.still_since_s.reset();
+      } else if (!track.still_since_s) {
+        track.still_since_s = t;
+      }
+      entry.context = standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0;
     }
-    entries.push_back(entry);
-  }
-  // How long each standing robot has stood: a robot that has held its place for a while is
-  // about to leave it (set plays hold each position for a second or two).
-  for (const FormationRobot& robot : formation.robots) {
-    Entry& entry = by_id_[robot.robot_id].back();
-    if (!entry.has_velocity) continue;
-    const Point& velocity = entry.kinematics.velocity;
-    Stillness& still = stillness_[robot.robot_id];
-    const double limit = MotionFeatures::speed_limits_mm_s[0];
-    const bool standing =
-        velocity.x * velocity.x + velocity.y * velocity.y < limit * limit;
-    if (!standing) {
-      still.since_s.reset();
-    } else if (!still.since_s) {
-      still.since_s = t;
-    }
-    entry.context = standing ? MotionFeatures::standing_context(t - *still.since_s) : 0;
+    track.push(entry);
   }
 }
 
 const MotionHistory::Entry* MotionHistory::latest(std::uint32_t robot_id) const {
-  if (robot_id >= by_id_.size() || by_id_[robot_id].empty()) return nullptr;
-  return &by_id_[robot_id].back();
+  if (robot_id >= tracks_.size()) return nullptr;
+  const Track& track = tracks_[robot_id];
+  return track.end > track.begin ? &track.at(track.end - 1) : nullptr;
+}
+
+const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t robot_id,
+                                                               int steps) const {
+  if (robot_id >= tracks_.size() || steps < 1 || steps > config_.horizons) return nullptr;
+  const Track& track = tracks_[robot_id];
+  if (track.end == track.begin) return nullptr;
+  // The cursor was advanced before the latest entry was pushed, to its time minus the steps.
+  const double time_s = track.at(track.end - 1).time_s - steps * config_.step_s;
+  return nearest(track, track.horizon_cursor[static_cast<std::size_t>(steps - 1)], time_s);
 }
 
 const MotionHistory::Entry* MotionHistory::near(std::uint32_t robot_id, double time_s) const {
-  if (robot_id >= by_id_.size()) return nullptr;
-  const std::deque<Entry>& entries = by_id_[robot_id];
-  const auto it = std::lower_bound(entries.begin(), entries.end(), time_s,
-                                   [](const Entry& e, double t) { return e.time_s < t; });
-  const Entry* best = nullptr;
-  double best_gap = config_.tolerance_s + 1e-9;
-  if (it != entries.end() && it->time_s - time_s <= best_gap) {
-    best = &*it;
-    best_gap = it->time_s - time_s;
+  if (robot_id >= tracks_.size()) return nullptr;
+  const Track& track = tracks_[robot_id];
+  // Binary search for the first entry at or after time_s.
+  std::uint64_t low = track.begin, high = track.end;
+  while (low < high) {
+    const std::uint64_t middle = low + (high - low) / 2;
+    if (track.at(middle).time_s < time_s) {
+      low = middle + 1;
+    } else {
+      high = middle;
+    }
   }
-  if (it != entries.begin()) {
-    const Entry& before = *std::prev(it);
-    if (time_s - before.time_s <= best_gap) best = &before;
-  }
-  return best;
+  return nearest(track, low, time_s);
 }
 
 void learn_motion(MotionTable& table, const MotionHistory& history, const Formation& now) {
   const MotionConfig& config = table.config();
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= config.horizons; ++k) {
-      const double horizon_s = k * config.step_s;
-      const MotionHistory::Entry* then = history.near(robot.robot_id, now.time_s - horizon_s);
+      const MotionHistory::Entry* then = history.steps_before_latest(robot.robot_id, k);
       if (!then || !then->has_velocity || then->time_s >= now.time_s) continue;
       MotionInstance instance;
       instance.robot_id = robot.robot_id;

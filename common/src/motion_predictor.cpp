@@ -62,14 +62,15 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
   // The coarser levels are sums of the finest rows.
   std::vector<MotionRow> roots(static_cast<std::size_t>(horizons));
   std::unordered_map<MotionKey, MotionRow> coarse;
-  const auto& rows = table.row_map();
-  for (const auto& [key, row] : rows) {
+  std::unordered_map<MotionKey, MotionRow> rows;
+  table.row_map().for_each([&](MotionKey key, const MotionRow& row) {
+    rows.emplace(key, row);
     roots[static_cast<std::size_t>(decode_motion_key(key).horizon_index)].add(row);
     for (MotionKey parent = coarser_motion_key(key);
          decode_motion_key(parent).level != MotionLevel::all; parent = coarser_motion_key(parent)) {
       coarse[parent].add(row);
     }
-  }
+  });
 
   for (int h = 0; h < horizons; ++h) {
     Horizon& horizon = horizon_[static_cast<std::size_t>(h)];

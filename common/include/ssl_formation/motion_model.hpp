@@ -17,11 +17,9 @@
 // merges exactly too) is what MotionModel fits its calibration on.
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <optional>
 #include <string_view>
-#include <unordered_map>
 #include <vector>
 
 #include "ssl_formation/formation.hpp"
@@ -41,6 +39,9 @@ struct MotionConfig {
   double step_s = 2.0;              // the table's step
   int horizons = 3;                 // steps learned: k x step_s ahead for k = 1..horizons
   double velocity_window_s = 0.1;   // a robot's velocity is its displacement over this window
+  // Instances are learned at most this often per robot: frames 16 ms apart say almost the same
+  // thing, and learning every one cost four times the time for no better forecast.
+  double learn_interval_s = 1.0 / 15.0;
   double settle_window_s = 0.5;     // MotionKinematics::to_recent_mean's window
   double long_settle_window_s = 2.0;  // MotionKinematics::to_settled_mean's
   double tolerance_s = 0.05;        // how far from an instant a position may be taken for it
@@ -166,6 +167,32 @@ inline constexpr std::array<std::int32_t MotionInstance::*, 12> motion_instance_
     &MotionInstance::v_x, &MotionInstance::v_y, &MotionInstance::a_x, &MotionInstance::a_y,
     &MotionInstance::g_x, &MotionInstance::g_y, &MotionInstance::s_x, &MotionInstance::s_y};
 
+// Rows by key in one open-addressing table (linear probing, at most half full): training adds
+// to a row per robot, horizon and frame, and a node map's allocation and pointer chase per row
+// was most of the training time.
+class MotionRowMap {
+ public:
+  MotionRow& operator[](MotionKey key);
+  const MotionRow* find(MotionKey key) const;
+  std::size_t size() const { return size_; }
+  std::size_t capacity() const { return keys_.size(); }
+  // Every row, in no particular order.
+  template <typename Visit>
+  void for_each(Visit&& visit) const {
+    for (std::size_t i = 0; i < keys_.size(); ++i) {
+      if (keys_[i] != empty_key) visit(keys_[i], rows_[i]);
+    }
+  }
+  friend bool operator==(const MotionRowMap& a, const MotionRowMap& b);
+
+ private:
+  static constexpr MotionKey empty_key = ~MotionKey{0};  // no key has every bit set
+  void grow();
+  std::vector<MotionKey> keys_;
+  std::vector<MotionRow> rows_;
+  std::size_t size_ = 0;
+};
+
 // A calibration instance and its rank (lower is kept).
 struct HeldOutInstance {
   std::uint64_t hash = 0;
@@ -204,14 +231,14 @@ class MotionTable {
   std::vector<std::pair<MotionKey, MotionRow>> sorted_rows() const;
   // The held-out sample of one horizon, in increasing hash order.
   std::vector<HeldOutInstance> calibration(int horizon_index) const;
-  const std::unordered_map<MotionKey, MotionRow>& row_map() const { return rows_; }
+  const MotionRowMap& row_map() const { return rows_; }
 
   bool is_held_out(double time_s) const;
   friend bool operator==(const MotionTable& a, const MotionTable& b);
 
  private:
   MotionConfig config_;
-  std::unordered_map<MotionKey, MotionRow> rows_;
+  MotionRowMap rows_;
   // Per horizon a max-heap (by hash, then content) of the kept calibration instances.
   std::vector<std::vector<HeldOutInstance>> held_out_;
   std::uint64_t instances_ = 0;
@@ -241,17 +268,32 @@ class MotionHistory {
   const Entry* latest(std::uint32_t robot_id) const;
   // The entry nearest `time_s` within the tolerance.
   const Entry* near(std::uint32_t robot_id, double time_s) const;
+  // The same for the latest entry's time minus `steps` (1 to config().horizons) steps.
+  const Entry* steps_before_latest(std::uint32_t robot_id, int steps) const;
 
   const MotionConfig& config() const { return config_; }
 
  private:
+  // One robot's entries in a ring buffer addressed by absolute sequence numbers, with cursors
+  // that only move forward (time does): every frame adds an entry per robot, and the searches
+  // for "one velocity window ago" and "the start of the settle windows" are a step or two, not
+  // a binary search.
+  struct Track {
+    std::vector<Entry> ring;  // a power-of-two size
+    std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
+    std::uint64_t velocity_cursor = 0, settle_cursor = 0, long_settle_cursor = 0;
+    std::array<std::uint64_t, MotionConfig::max_horizons> horizon_cursor{};  // k steps ago
+    std::optional<double> still_since_s;  // when the robot last came to a stand, if it stands
+    const Entry& at(std::uint64_t seq) const { return ring[seq & (ring.size() - 1)]; }
+    Entry& at(std::uint64_t seq) { return ring[seq & (ring.size() - 1)]; }
+    void push(const Entry& entry);
+    void clear();
+  };
+  const Entry* nearest(const Track& track, std::uint64_t after, double time_s) const;
+
   MotionConfig config_;
   double keep_s_;
-  std::vector<std::deque<Entry>> by_id_;
-  struct Stillness {
-    std::optional<double> since_s;  // when the robot last came to a stand, if it stands
-  };
-  std::vector<Stillness> stillness_;
+  std::vector<Track> tracks_;  // by robot id
   std::optional<double> last_time_s_;
   AttackDirection attacks_ = AttackDirection::positive_x;
 };

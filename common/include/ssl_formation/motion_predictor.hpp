@@ -18,7 +18,7 @@ namespace ssl_formation {
 struct MotionModelSettings {
   // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
   // are far from independent, so this is a few seconds of one robot's frames.
-  double shrinkage = 240.0;
+  double shrinkage = 60.0;
   // The damping of constant velocity before any data, as robots that brake with this time
   // constant (s): k(h) = tau / h x (1 - exp(-h / tau)).
   double prior_time_constant_s = 0.7;
