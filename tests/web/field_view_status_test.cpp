@@ -160,5 +160,95 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
 }
 
+// A version-2 table (the paper's counts and the motion model's) from the simulated feed, sampled
+// at every frame as the motion model needs.
+StoredTable motion_reference_table(std::uint64_t seed, int count) {
+  sim::SimulationConfig config;
+  config.seed = seed;
+  sim::SimulatedVision vision(config);
+  SamplerConfig sampler;
+  sampler.sampling = Sampling::frame;
+  MotionConfig motion;
+  motion.step_s = sampler.step_s;
+  Training training(sampler, TransitionTable(Grid(3, 2)), 0, MotionTable(motion));
+  for (int i = 0; i < count; ++i) {
+    for (const auto& packet : vision.next().packets) training.add(packet);
+  }
+  TableMetadata metadata;
+  metadata.field = training.sampler().field();
+  metadata.step_s = sampler.step_s;
+  metadata.samples = training.samples();
+  return StoredTable{training.table(), metadata, training.motion()};
+}
+
+TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRadii) {
+  TempDir dir;
+  const auto table_path = dir / "motion.bin";
+  const StoredTable table = motion_reference_table(3, 300);
+  ASSERT_TRUE(table.motion.has_value());
+  ASSERT_TRUE(save_table(table_path, table));
+  const std::string vision = testing::unique_group(testing::free_udp_port());
+  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::uint16_t port = web_testing::free_tcp_port();
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--prediction-address", predictions,
+                          "--table", table_path.string(), "--model", "motion", "--http-port",
+                          std::to_string(port), "--quiet"},
+                         dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
+
+  RawClient view(port);
+  ASSERT_TRUE(view.upgrade());
+  ChildProcess producer(producer_program,
+                        {"--vision-address", vision, "--seed", "5", "--count", "40", "--period",
+                         "0.05", "--status-interval", "100"},
+                        dir.path(), "producer");
+  std::string bytes;
+  for (const auto deadline = std::chrono::steady_clock::now() + 15s;
+       std::chrono::steady_clock::now() < deadline;) {
+    bytes += view.read_until("\x01", 100ms);
+    if (!json_messages(bytes, "status").empty() && json_messages(bytes, "prediction").size() >= 2)
+      break;
+  }
+  const std::vector<std::string> statuses = json_messages(bytes, "status");
+  ASSERT_FALSE(statuses.empty()) << predictor.stderr_text();
+  EXPECT_NE(statuses.back().find(R"(,"formations":)" + std::to_string(table.metadata.samples) +
+                                 R"(,"motion_instances":)" +
+                                 std::to_string(table.motion->instances()) + ","),
+            std::string::npos)
+      << statuses.back();
+
+  const std::vector<std::string> seen = json_messages(bytes, "prediction");
+  ASSERT_FALSE(seen.empty()) << predictor.stderr_text();
+  const std::string& prediction = seen.back();
+  EXPECT_NE(prediction.find(R"("model":"motion")"), std::string::npos) << prediction;
+  EXPECT_NE(prediction.find(R"({"step":1,"horizon_s":2,)"), std::string::npos) << prediction;
+  // Every predicted robot states its position and radii, 0 < r50 < r90.
+  const std::regex robot(
+      R"re("p":[^,]+,"unseen":(true|false),"position":\[(-?[0-9.e+-]+),(-?[0-9.e+-]+)\],)re"
+      R"re("radius_50_mm":([0-9.e+-]+),"radius_90_mm":([0-9.e+-]+)\})re");
+  std::size_t robots = 0;
+  for (auto it = std::sregex_iterator(prediction.begin(), prediction.end(), robot);
+       it != std::sregex_iterator(); ++it) {
+    ++robots;
+    const double r50 = std::stod((*it)[4]);
+    const double r90 = std::stod((*it)[5]);
+    EXPECT_GT(r50, 0.0) << it->str();
+    EXPECT_GT(r90, r50) << it->str();
+  }
+  std::size_t stated = 0;
+  for (std::size_t at = prediction.find(R"("unseen":)"); at != std::string::npos;
+       at = prediction.find(R"("unseen":)", at + 1)) {
+    ++stated;
+  }
+  EXPECT_GT(robots, 0u) << prediction;
+  EXPECT_EQ(robots, stated) << prediction;
+
+  ASSERT_TRUE(producer.wait(20s).has_value());
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
+}
+
 }  // namespace
 }  // namespace ssl_formation
