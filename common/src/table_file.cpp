@@ -336,7 +336,7 @@ BodyProblem read_sparse_body(ChunkReader& reader, const Header& header, Transiti
 // motion_instance_values (motion_model.hpp; motion_table_file_test.cpp checks that no field of
 // the structs is left out).
 
-constexpr std::uint64_t motion_config_size = 60;
+constexpr std::uint64_t motion_config_size = 68;
 constexpr std::uint64_t motion_fixed_size = motion_config_size + 3 * 8;  // + instances, seen, rows
 constexpr std::uint64_t motion_row_size = 8 + 8 * MotionRow::size;
 // hash, robot_id, the values, context
@@ -357,7 +357,13 @@ MotionConfig decode_motion_config(const std::uint8_t* in, std::uint32_t& horizon
   config.calibration_capacity = get_u32(&in[40]);
   config.settle_window_s = std::bit_cast<double>(get_u64(&in[44]));
   config.long_settle_window_s = std::bit_cast<double>(get_u64(&in[52]));
+  config.learn_interval_s = std::bit_cast<double>(get_u64(&in[60]));
   return config;
+}
+
+// MotionConfig::valid(), and what it leaves to the model but a file must not hold.
+bool valid_motion_config(const MotionConfig& config) {
+  return config.valid() && std::isfinite(config.learn_interval_s) && config.learn_interval_s >= 0.0;
 }
 
 MotionRow decode_motion_row(const std::uint8_t* in) {
@@ -458,7 +464,8 @@ BodyProblem read_motion_section(ChunkReader& reader, double header_step_s,
   }
   std::uint32_t horizons = 0;
   const MotionConfig config = decode_motion_config(fixed.data(), horizons);
-  if (horizons > static_cast<std::uint32_t>(MotionConfig::max_horizons) || !config.valid()) {
+  if (horizons > static_cast<std::uint32_t>(MotionConfig::max_horizons) ||
+      !valid_motion_config(config)) {
     return {std::string("invalid motion model configuration"), 0};
   }
   if (config.step_s != header_step_s) {
@@ -838,6 +845,7 @@ void write_motion_section(BufferedWriter& writer, const MotionConfig& config,
   writer.write_u32(config.calibration_capacity);
   writer.write_u64(std::bit_cast<std::uint64_t>(config.settle_window_s));
   writer.write_u64(std::bit_cast<std::uint64_t>(config.long_settle_window_s));
+  writer.write_u64(std::bit_cast<std::uint64_t>(config.learn_interval_s));
   writer.write_u64(motion.instances());
   writer.write_u64(motion.held_out());
   writer.write_u64(rows.size());
@@ -869,7 +877,9 @@ Result<TableSaved> save_any_table(const std::filesystem::path& path, const Trans
   std::vector<std::pair<MotionKey, MotionRow>> motion_rows;
   if (motion) {
     const MotionConfig& config = motion->config();
-    if (!config.valid()) return save_failure(path, "invalid motion model configuration");
+    if (!valid_motion_config(config)) {
+      return save_failure(path, "invalid motion model configuration");
+    }
     if (config.step_s != metadata.step_s) {
       return save_failure(path, "the motion model's step differs from the table's");
     }

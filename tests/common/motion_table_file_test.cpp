@@ -44,7 +44,7 @@ std::string message_of(const LoadResult& result) {
 constexpr std::size_t version_offset = 8;
 constexpr std::size_t header_checksum_offset = 80;
 constexpr std::size_t header_size = 84;
-constexpr std::size_t config_size = 60;
+constexpr std::size_t config_size = 68;
 constexpr std::size_t instances_offset = config_size;  // within the motion section
 constexpr std::size_t seen_offset = config_size + 8;
 constexpr std::size_t row_count_offset = config_size + 16;
@@ -240,7 +240,7 @@ TEST(MotionTableFileLayout, CoversEveryFieldOfTheMotionStructs) {
   EXPECT_EQ(sizeof(MotionInstance), (2 + motion_instance_values.size()) * sizeof(std::uint32_t))
       << "MotionInstance has a field motion_instance_values leaves out";
   EXPECT_EQ(sizeof(MotionConfig),
-            6 * sizeof(double) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t))
+            7 * sizeof(double) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t))
       << "MotionConfig changed: update the motion section of table_file.cpp/.hpp";
   // The sizes table_file.hpp documents.
   EXPECT_EQ(row_size, 216u) << "update the layout in table_file.hpp";
@@ -287,6 +287,13 @@ TEST_F(MotionTableFile, SparseGridAndSyntheticInstancesRoundTrip) {
   config.horizons = MotionConfig::max_horizons;
   config.calibration_one_in = 3;
   config.calibration_capacity = 7;
+  // Every other setting away from its default, so that each is seen to be saved.
+  config.velocity_window_s = 0.2;
+  config.settle_window_s = 0.7;
+  config.long_settle_window_s = 3.0;
+  config.learn_interval_s = 0.25;
+  config.tolerance_s = 0.04;
+  config.calibration_block_s = 2.0;
   const MotionTable motion = synthetic_motion_table(config);
   ASSERT_GT(motion.held_out(), 7u) << "some calibration instances must have been dropped";
 
@@ -303,6 +310,7 @@ TEST_F(MotionTableFile, SparseGridAndSyntheticInstancesRoundTrip) {
   EXPECT_FALSE(loaded->table.is_dense());
   EXPECT_EQ(entries_of(loaded->table), entries_of(table));
   ASSERT_TRUE(loaded->motion.has_value());
+  EXPECT_EQ(loaded->motion->config(), config);
   EXPECT_TRUE(*loaded->motion == motion);
 }
 
@@ -471,6 +479,11 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
   {
     Bytes bytes = saved.bytes;
     put_u32(bytes, m + 36, 1);  // calibration_one_in 1
+    expect_corrupt(bytes, "invalid motion model configuration");
+  }
+  {
+    Bytes bytes = saved.bytes;
+    put_u64(bytes, m + 60, std::bit_cast<std::uint64_t>(-1.0));  // learn_interval_s
     expect_corrupt(bytes, "invalid motion model configuration");
   }
   {

@@ -33,7 +33,7 @@
 //                                f64 velocity_window_s, f64 tolerance_s,
 //                                f64 calibration_block_s, u32 calibration_one_in,
 //                                u32 calibration_capacity, f64 settle_window_s,
-//                                f64 long_settle_window_s                       (60 bytes)
+//                                f64 long_settle_window_s, f64 learn_interval_s (68 bytes)
 //                  u64 instances (the sum of the rows' n)
 //                  u64 held-out instances seen (>= the calibration instances stored)
 //                  u64 row count, then the rows in increasing key order, each
