@@ -108,32 +108,47 @@ sf::net::InterfaceChoice interface_option(const std::string& text) {
 // ---------------------------------------------------------------------------------------------
 // make-table
 
+// The paper's model: a formation every `step_s` of the simulated opponent, a version-1 table.
+// The motion model (what the predictor runs by default): the same opponent sampled at 60 Hz, a
+// formation per frame, into a version-2 table of the predictor's default motion step.
 int make_table(const std::string& path, std::uint64_t formations, std::uint64_t seed,
-               double step_s) {
+               double step_s, sf::ModelKind model) {
+  const bool motion = model == sf::ModelKind::motion;
   sf::sim::SimulationConfig simulation;
   simulation.seed = seed;
-  simulation.step_s = step_s;
+  simulation.step_s = motion ? 1.0 / 60.0 : step_s;
   sf::sim::SimulatedVision vision(simulation);
   sf::SamplerConfig config;
-  config.step_s = step_s;
+  config.step_s = motion ? sf::app::ModelOptions::motion_step_s : step_s;
   config.field = simulation.field;
-  sf::Training training(config, sf::TransitionTable(config.grid));
+  std::optional<sf::MotionTable> motion_table;
+  if (motion) {
+    config.sampling = sf::Sampling::frame;
+    sf::MotionConfig motion_config;
+    motion_config.step_s = config.step_s;
+    motion_table.emplace(motion_config);
+  }
+  sf::Training training(config, sf::TransitionTable(config.grid), 0, std::move(motion_table));
   for (std::uint64_t i = 0; i < formations; ++i) {
     for (const SSL_WrapperPacket& packet : vision.next().packets) training.add(packet);
   }
   sf::TableMetadata metadata;
   metadata.field = training.sampler().field();
-  metadata.step_s = step_s;
+  metadata.step_s = config.step_s;
   metadata.samples = training.samples();
-  const auto saved = sf::save_table(path, training.table(), metadata);
+  const auto saved = training.motion()
+                         ? sf::save_table(path, training.table(), metadata, *training.motion())
+                         : sf::save_table(path, training.table(), metadata);
   if (!saved) {
     std::cerr << "e2e_bench make-table: " << saved.error().message << '\n';
     return 1;
   }
   if (!saved->durable) std::cerr << "e2e_bench make-table: " << saved->warning << '\n';
-  std::cout << "make-table path=" << path << " formations=" << training.samples()
+  std::cout << "make-table path=" << path << " model=" << sf::to_string(model)
+            << " formations=" << training.samples()
             << " transitions=" << training.table().transitions()
-            << " states_seen=" << training.table().rows_seen() << '\n';
+            << " states_seen=" << training.table().rows_seen() << " motion_instances="
+            << (training.motion() ? training.motion()->instances() : 0) << '\n';
   return 0;
 }
 
@@ -408,9 +423,15 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
 
   // The predictor's per-packet path: net::VisionReceiver's decode, then the PredictionPipeline
   // and the encoding the daemon runs, with their buffers reused the same way.
+  // The model the table serves (a version-2 table: the motion model, the daemon's default), at
+  // the table's own step; `step_s` is the data-clock time between packets.
   sf::PredictionConfig config;
   config.sampler.grid = stored.table.grid();
-  config.sampler.step_s = step_s;
+  config.sampler.step_s = stored.metadata.step_s;
+  if (stored.motion) {
+    config.model = sf::ModelKind::motion;
+    config.sampler.sampling = sf::Sampling::frame;
+  }
   std::string encoded;
   encoded.reserve(2048);
   std::uint64_t predictions = 0;
@@ -558,6 +579,7 @@ int main(int argc, char** argv) {
     std::uint64_t formations = 3000;
     std::uint64_t seed = 0;
     double step_s = 2.0;
+    std::string model = "motion";
     std::string echo_in = kEchoInGroup;
     std::string echo_out = kEchoOutGroup;
     double seconds = 0.0;
@@ -592,7 +614,12 @@ int main(int argc, char** argv) {
         "(default 300)")("warmup", po::value(&latency.warmup)->default_value(latency.warmup),
                          "latency: first packets of each path left out of the figures")(
         "step", po::value(&step_s)->default_value(step_s),
-        "make-table, latency: data-clock seconds per formation (the predictor's --step)")(
+        "latency, pipeline: data-clock seconds between packets (1/60 for the motion model's "
+        "frames; the predictor's --step for the paper's); make-table --model paper: the "
+        "table's step")(
+        "model", po::value(&model)->default_value(model),
+        "make-table: motion (a version-2 table at the predictor's default motion step, trained "
+        "on 60 Hz frames) or paper (a version-1 table)")(
         "spin-us", po::value(&latency.spin_us)->default_value(latency.spin_us),
         "latency: microseconds spun before each send instead of slept")(
         "drain", po::value(&latency.drain_s)->default_value(latency.drain_s),
@@ -623,7 +650,11 @@ int main(int argc, char** argv) {
     sf::app::init_logging("e2e_bench", verbose);
     if (!verbose) spdlog::set_level(spdlog::level::warn);
 
-    if (mode == "make-table") return make_table(table, formations, seed ? seed : 1, step_s);
+    if (mode == "make-table") {
+      const auto kind = sf::parse_model(model);
+      if (!kind) throw sf::app::UsageError("--model must be motion or paper, not '" + model + "'");
+      return make_table(table, formations, seed ? seed : 1, step_s, *kind);
+    }
     if (mode == "pipeline") {
       if (pipeline_packets < 1 || pipeline_packets > 100000)
         throw sf::app::UsageError("--packets must be 1 to 100000");

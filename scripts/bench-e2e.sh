@@ -95,6 +95,10 @@ row() { rows+=("$(printf '%-40s %7s %6s %5s %8s %8s %8s %8s  %-22s %s' "$@")"); 
 # judge OK: sets $result to PASS (OK = 1) or FAIL, and counts failures.
 judge() { if [ "$1" = 1 ]; then result=PASS; else result=FAIL; failures=$((failures + 1)); fi; }
 
+# The predictor runs its default model, the motion model: a version-2 table at its default
+# step, and vision packets one 60 Hz frame apart on the data clock (frame sampling: a prediction
+# at every packet, every robot with a velocity).
+frame_s=0.0166667
 "$bench" make-table --table "$work/table.bin" --formations 3000 >"$work/make-table.out"
 
 latency_run() {
@@ -108,7 +112,7 @@ latency_run() {
   local epid=$started
   wait_for "$plog" "loaded table" "$ppid"
   wait_for "$elog" "listening on" "$epid"
-  "$bench" latency --rate "$rate" --seconds "$seconds" --vision-address "$vision" \
+  "$bench" latency --rate "$rate" --seconds "$seconds" --step "$frame_s" --vision-address "$vision" \
     --prediction-address "$predictions" --echo-in "$echo_in" --echo-out "$echo_out" \
     --interface 127.0.0.1 >"$work/latency-$rate.out"
   stop "$ppid"
@@ -149,7 +153,7 @@ latency_run 60 "$slow_seconds"
 latency_run 1000 "$fast_seconds"
 
 # The predictor's own work per packet, in-process: back to back, and after idling a 60/s period.
-"$bench" pipeline --table "$work/table.bin" >"$work/pipeline.out"
+"$bench" pipeline --table "$work/table.bin" --step "$frame_s" >"$work/pipeline.out"
 pipeline="$(grep '^pipeline packets' "$work/pipeline.out")"
 row "predictor work in-process, back to back" "" "$(value "$pipeline" packets)" "" \
   "$(value "$pipeline" warm_p50_us)" "" "$(value "$pipeline" warm_p99_us)" "" "(for diagnosis)" ""
@@ -167,7 +171,8 @@ start "$plog" "$predictor" --quiet --table "$work/table.bin" --vision-address "$
 ppid=$started
 wait_for "$tlog" "listening on" "$tpid"
 wait_for "$plog" "loaded table" "$ppid"
-"$bench" load --rate "$load_rate" --seconds "$load_seconds" --cameras 4 --vision-address "$vision" \
+"$bench" load --rate "$load_rate" --seconds "$load_seconds" --cameras 4 --frame-dt "$frame_s" \
+  --vision-address "$vision" \
   --interface 127.0.0.1 >"$work/load.out"
 sleep 1  # let both finish what is queued
 stop "$tpid"

@@ -18,15 +18,20 @@ ModelKind ModelOptions::parsed_model() const {
   return *parsed;
 }
 
-SamplerConfig ModelOptions::sampler_config() const {
-  SamplerConfig config;
-  config.grid = parsed_grid();
+double ModelOptions::step() const {
+  if (step_s == 0.0) return parsed_model() == ModelKind::motion ? motion_step_s : paper_step_s;
   if (!std::isfinite(step_s) || step_s <= 0.0) {
     std::ostringstream text;
     text << "--step must be a positive number of seconds, not " << step_s;
     throw UsageError(text.str());
   }
-  config.step_s = step_s;
+  return step_s;
+}
+
+SamplerConfig ModelOptions::sampler_config() const {
+  SamplerConfig config;
+  config.grid = parsed_grid();
+  config.step_s = step();
   const auto color = parse_team_color(opponent_color);
   if (!color)
     throw UsageError("--opponent-color must be yellow or blue, not '" + opponent_color + "'");
@@ -65,8 +70,9 @@ SamplerConfig ModelOptions::sampler_config() const {
 void add_model_options(po::options_description& options, ModelOptions& model) {
   options.add_options()("grid", po::value(&model.grid)->default_value(model.grid),
                         "grid LxW: L cells along the field length, W along its width")(
-      "step", po::value(&model.step_s)->default_value(model.step_s),
-      "seconds of data time (t_capture) between two formations")(
+      "step", po::value(&model.step_s)->default_value(model.step_s, "auto"),
+      "seconds of data time (t_capture) between two formations, the unit of --horizon; auto: "
+      "0.5 for --model motion, 2 (the paper's) for --model paper")(
       "opponent-color", po::value(&model.opponent_color)->default_value(model.opponent_color),
       "the opponent's colour: yellow or blue")(
       "opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),

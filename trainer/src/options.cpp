@@ -51,7 +51,7 @@ std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
                           ", not " + std::to_string(options.horizon));
   }
   MotionConfig config;
-  config.step_s = options.model.step_s;
+  config.step_s = options.model.step();
   config.horizons = options.horizon;
   if (!config.valid()) throw app::UsageError("invalid --step for the motion model");
   return config;

@@ -29,7 +29,11 @@ inline constexpr const char* default_table = "formation-table.bin";
 // The model's options: what the sampler and the table need to agree on.
 struct ModelOptions {
   std::string grid = "3x2";
-  double step_s = 2.0;
+  // 0: the model's own, motion_step_s for the motion model and the paper's 2 s for paper.
+  double step_s = 0.0;
+  static constexpr double motion_step_s = 0.5;
+  static constexpr double paper_step_s = 2.0;
+  double step() const;  // the effective step; throws UsageError
   std::string opponent_color = "yellow";
   std::string opponent_attacks = "+x";
   double field_length_mm = 9000.0;
