@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
 # Runs the whole system on this machine's loopback: ssl-producer sends the paper's simulated
-# opponent, ssl-trainer learns the table, ssl-predictor predicts the next formations and prints
-# one line per prediction (rolling: a prediction at every frame, --sampling frame). Stops all
-# three on Ctrl-C or after --duration seconds.
+# opponent (or replays a recorded match with --replay), ssl-trainer learns the table,
+# ssl-predictor predicts and prints one line per prediction (a prediction at every frame). Stops
+# all three on Ctrl-C or after --duration seconds.
 #
 #   scripts/demo.sh [--duration SECONDS] [--period SECONDS] [--grid LxW] [--horizon N]
-#                   [--cameras N] [--keep-table] [--http-port PORT]
+#                   [--cameras N] [--keep-table] [--http-port PORT] [--replay LOG] [--model M]
+#
+# The paper's simulated opponent jumps from formation to formation every 2 s of data time, so
+# the demo runs the paper's model on it (--model paper). --replay LOG (an official log of a real
+# or simulated match, e.g. ../shared/data/grsim-match-A-600s.log.gz, yellow attacking +x) loops
+# the recording instead and runs the motion model, the daemons' default.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -16,7 +21,9 @@ horizon=2
 cameras=4
 keep_table=0
 http_port=8080
-usage() { sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; }
+replay=""
+model=""
+usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --duration) duration="$2"; shift 2 ;;
@@ -26,10 +33,20 @@ while [ $# -gt 0 ]; do
     --cameras) cameras="$2"; shift 2 ;;
     --keep-table) keep_table=1; shift ;;
     --http-port) http_port="$2"; shift 2 ;;
+    --replay) replay="$2"; shift 2 ;;
+    --model) model="$2"; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "demo.sh: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
+
+if [ -n "$replay" ]; then
+  [ -f "$replay" ] || { echo "demo.sh: no such log: $replay" >&2; exit 2; }
+  replay="$(cd "$(dirname "$replay")" && pwd)/$(basename "$replay")"
+  model="${model:-motion}"
+else
+  model="${model:-paper}"
+fi
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 sslf_install_packages
@@ -60,11 +77,12 @@ trap 'exit 0' INT TERM
 
 rm -f "$run_dir"/*.ready
 "$build_dir/trainer/ssl-trainer" --vision-address "$vision" --table "$table" --grid "$grid" \
-  --sampling frame --flush-interval 1 --status-interval 5 --ready-file "$run_dir/trainer.ready" \
+  --model "$model" --sampling frame --flush-interval 1 --status-interval 5 --ready-file "$run_dir/trainer.ready" \
   2>"$run_dir/trainer.log" &
 pids+=($!)
 "$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
-  --table "$table" --grid "$grid" --horizon "$horizon" --sampling frame --reload-interval 0.5 \
+  --table "$table" --grid "$grid" --model "$model" --horizon "$horizon" --sampling frame \
+  --reload-interval 0.5 \
   --http-port "$http_port" --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
   2>"$run_dir/predictor.log" &
 pids+=($!)
@@ -76,17 +94,28 @@ for _ in $(seq 100); do
   done
   sleep 0.1
 done
-"$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
-  --cameras "$cameras" 2>"$run_dir/producer.log" &
+if [ -n "$replay" ]; then
+  "$build_dir/producer/ssl-producer" --vision-address "$vision" --replay "$replay" --loop \
+    2>"$run_dir/producer.log" &
+else
+  "$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
+    --cameras "$cameras" 2>"$run_dir/producer.log" &
+fi
 pids+=($!)
 
 echo "Live field view: open http://127.0.0.1:$http_port/"
+if [ -n "$replay" ]; then
+  source_line="Replaying $replay in a loop; the $model model, grid $grid."
+else
+  source_line="One formation every $period s (2 s of data time each), grid $grid, $cameras cameras; the $model model."
+fi
 cat <<EOT
 ssl-producer -> $vision -> ssl-trainer + ssl-predictor -> predictions on $predictions
-One formation every $period s (2 s of data time each), grid $grid, $cameras cameras.
+$source_line
 Each line: the sample time, the opponent's centroid cell and robot cells now, then for each
-predicted step the centroid, its probability and the robots' predicted cells ('?' = never seen
-that state: it holds its cell) and the confidence. Ctrl-C stops everything.
+predicted step (+ its horizon) the centroid, its probability and the robots' predictions (the
+paper's model: cells, '?' = a state never seen; the motion model: each robot's cell, position in
+mm and 90% radius) and the confidence. Ctrl-C stops everything.
 EOT
 sleep 0.2
 for pid in "${pids[@]}"; do
