@@ -22,6 +22,7 @@
 #include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
+#include "circling_robots.hpp"
 #include "ssl_formation/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -111,27 +112,7 @@ SamplerConfig frame_config(double step_s) {
   return config;
 }
 
-// `seconds` of frames from `t0`; `seed` sets each robot's circle, speed and phase.
-std::vector<SSL_WrapperPacket> circling_stream(double t0, double seconds, int seed) {
-  std::vector<SSL_WrapperPacket> packets;
-  const int frames = static_cast<int>(seconds * 30.0);
-  for (int f = 0; f < frames; ++f) {
-    const double t = t0 + f / 30.0;
-    DetectionFrameSpec spec;
-    spec.frame_number = static_cast<std::uint32_t>(f);
-    spec.t_capture = t;
-    for (std::uint32_t id = 0; id < 4; ++id) {
-      const double radius = 600.0 + 300.0 * id + 100.0 * seed;
-      const double omega = (0.6 + 0.25 * id) * (seed % 2 == 0 ? 1.0 : -1.0);
-      const double phase = 0.7 * id + 1.3 * seed + omega * (t - t0);
-      const Point centre{-2500.0 + 1600.0 * id, (id % 2 == 0 ? -1000.0 : 1000.0)};
-      spec.yellow.push_back(
-          {id, {centre.x + radius * std::cos(phase), centre.y + radius * std::sin(phase)}});
-    }
-    packets.push_back(make_detection_packet(spec));
-  }
-  return packets;
-}
+using ssl_formation::testing::circling_stream;
 
 MotionConfig small_calibration_config(double step_s) {
   MotionConfig config;

@@ -22,6 +22,7 @@
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
+#include "circling_robots.hpp"
 #include "ssl_formation/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -63,27 +64,7 @@ StoredTable load(const fs::path& path) {
   return std::move(*loaded);
 }
 
-// Four yellow robots driving circles, one frame every 1/30 s for `seconds` from `t0`.
-std::vector<SSL_WrapperPacket> circling_stream(double t0, double seconds, int seed) {
-  std::vector<SSL_WrapperPacket> packets;
-  const int frames = static_cast<int>(seconds * 30.0);
-  for (int f = 0; f < frames; ++f) {
-    const double t = t0 + f / 30.0;
-    DetectionFrameSpec spec;
-    spec.frame_number = static_cast<std::uint32_t>(f);
-    spec.t_capture = t;
-    for (std::uint32_t id = 0; id < 4; ++id) {
-      const double radius = 600.0 + 300.0 * id + 100.0 * seed;
-      const double omega = (0.5 + 0.2 * id) * (seed % 2 == 0 ? 1.0 : -1.0);
-      const double phase = 0.7 * id + 1.3 * seed + omega * (t - t0);
-      const Point centre{-2500.0 + 1600.0 * id, (id % 2 == 0 ? -1000.0 : 1000.0)};
-      spec.yellow.push_back(
-          {id, {centre.x + radius * std::cos(phase), centre.y + radius * std::sin(phase)}});
-    }
-    packets.push_back(make_detection_packet(spec));
-  }
-  return packets;
-}
+using ssl_formation::testing::circling_stream;
 
 void write_log(const fs::path& path, const std::vector<SSL_WrapperPacket>& packets) {
   auto writer = LogWriter::create(path);
@@ -146,7 +127,7 @@ TEST_F(MotionTraining, FromLogWritesAVersionTwoTableByDefault) {
   const StoredTable stored = load(at("t.bin"));
   ASSERT_TRUE(stored.motion.has_value());
   EXPECT_EQ(stored.motion->config().horizons, 3) << "--horizon defaults to 3";
-  EXPECT_EQ(stored.motion->config().step_s, 2.0);
+  EXPECT_EQ(stored.motion->config().step_s, 0.5) << "--step auto is 0.5 s for the motion model";
   EXPECT_GT(stored.motion->instances(), 0u);
 
   const auto expected = library_training(parse({}), {a_});

@@ -31,16 +31,17 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
                ? " (the grid of " + inputs.front() + "): tables of different grids cannot be merged"
                : std::string()));
     }
-    if (next->metadata.step_s != merged.metadata.step_s) {
-      throw std::runtime_error(fmt::format(
-          "{} was trained with a step of {} s, {} with {} s: their transitions cannot be added up",
-          inputs[i], next->metadata.step_s, inputs.front(), merged.metadata.step_s));
-    }
     if (next->motion.has_value() != merged.motion.has_value()) {
       throw std::runtime_error(fmt::format(
           "{} is {}, {} is {}: tables of the two models cannot be merged (train them with the "
           "same --model)",
           inputs[i], describe_version(*next), inputs.front(), describe_version(merged)));
+    }
+    // The model first: tables of the two models usually differ in step too.
+    if (next->metadata.step_s != merged.metadata.step_s) {
+      throw std::runtime_error(fmt::format(
+          "{} was trained with a step of {} s, {} with {} s: their transitions cannot be added up",
+          inputs[i], next->metadata.step_s, inputs.front(), merged.metadata.step_s));
     }
     if (merged.motion && !(merged.motion->config() == next->motion->config())) {
       const MotionConfig& a = next->motion->config();

@@ -68,12 +68,6 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                              "replace it with an empty table");
   }
   StoredTable& stored = *loaded;
-  if (stored.metadata.step_s != config.step_s) {
-    throw std::runtime_error(fmt::format(
-        "{} was trained with --step {}, not {}: its transitions mean another time scale; use the "
-        "same --step, another --table, or --reset",
-        table_path.string(), stored.metadata.step_s, config.step_s));
-  }
   if (motion && !stored.motion) {
     throw std::runtime_error(fmt::format(
         "{} holds only the paper's counts (a version-1 table), not the motion model's: pass "
@@ -87,6 +81,13 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
         "drop: pass --model motion to go on training it, or give a new --table (or --reset to "
         "replace it) for --model paper",
         table_path.string()));
+  }
+  // The model first: a table of the other model also has the other model's default step.
+  if (stored.metadata.step_s != config.step_s) {
+    throw std::runtime_error(fmt::format(
+        "{} was trained with --step {}, not {}: its transitions mean another time scale; use the "
+        "same --step, another --table, or --reset",
+        table_path.string(), stored.metadata.step_s, config.step_s));
   }
   if (motion && !(stored.motion->config() == *motion)) {
     const MotionConfig& saved = stored.motion->config();
