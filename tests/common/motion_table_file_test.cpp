@@ -359,7 +359,9 @@ TEST_F(MotionTableFile, TruncatedMotionSectionIsTruncated) {
   ASSERT_GT(size, saved.motion_begin + 1000);
   std::vector<std::size_t> cuts;
   for (std::size_t n = saved.motion_begin - 8; n < saved.motion_begin + 200; ++n) cuts.push_back(n);
-  for (std::size_t n = saved.motion_begin + 200; n < size; n += 53) cuts.push_back(n);
+  // Past the section's start, about 300 cuts spread over the rest (the file is large).
+  const std::size_t stride = std::max<std::size_t>(53, (size - saved.motion_begin) / 300 | 1);
+  for (std::size_t n = saved.motion_begin + 200; n < size; n += stride) cuts.push_back(n);
   for (std::size_t n = size - 8; n < size; ++n) cuts.push_back(n);
   for (const std::size_t n : cuts) {
     const Bytes cut(saved.bytes.begin(), saved.bytes.begin() + static_cast<std::ptrdiff_t>(n));
@@ -389,7 +391,10 @@ TEST_F(MotionTableFile, FlippedByteInTheMotionSectionIsDetected) {
     for (std::size_t i = 0; i < 4; ++i) sizes.push_back(at + i);
     at += 4 + saved.stored.motion->calibration(h).size() * held_out_size;
   }
-  for (std::size_t offset = m; offset < size; offset += (offset < m + 200 ? 1 : 41)) {
+  // Every byte of the section's start, then about 300 flips spread over the rest (an odd
+  // stride, so they fall on every byte of a field somewhere).
+  const std::size_t stride = std::max<std::size_t>(41, (size - m) / 300 | 1);
+  for (std::size_t offset = m; offset < size; offset += (offset < m + 200 ? 1 : stride)) {
     for (const std::uint8_t mask : {0x01, 0x80}) {
       Bytes bytes = saved.bytes;
       bytes[offset] ^= mask;
