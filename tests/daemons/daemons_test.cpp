@@ -1,5 +1,8 @@
 // End-to-end tests of the three daemons: the real binaries as processes, real multicast sockets
-// on 127.0.0.1 (each test on its own group and port), real table files.
+// on 127.0.0.1 (each test on its own group and port), real table files. The simulated producer's
+// opponent jumps between formations every 2 s of data time, the paper's scenario: the trainers and
+// predictors fed by it run --model paper, and the library's references are the paper's model
+// (motion_daemons_test.cpp runs the default motion model on robots that really move).
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -33,7 +36,8 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 using testing::new_group;
 using testing::PredictionListener;
 
-// The table the library computes from the producer's stream for `seed`.
+// The table the library computes from the producer's stream for `seed`: the paper's model
+// (SamplerConfig's defaults: step sampling every 2 s, no motion table).
 TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
                                 std::uint64_t* samples = nullptr) {
   sim::SimulationConfig config;
@@ -53,7 +57,7 @@ const auto entries = testing::table_entries;
 std::vector<std::string> trainer_args(const std::string& group,
                                       const std::filesystem::path& table) {
   return {"--vision-address",  group, "--table",          table.string(),
-          "--status-interval", "0.1", "--flush-interval", "60"};
+          "--status-interval", "0.1", "--flush-interval", "60", "--model", "paper"};
 }
 
 // Runs the producer to the end on `group`.
@@ -119,7 +123,7 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   const std::string predictions = new_group();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--horizon", "3"},
+                          "--table", table_path.string(), "--horizon", "3", "--model", "paper"},
                          dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
@@ -133,6 +137,7 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   std::vector<std::string> expected;
   PredictionConfig config;
   config.horizon = 3;
+  config.model = ModelKind::paper;  // the daemon's --model
   PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
     proto::FormationPrediction message;
     fill_prediction_message(predicted.formation(), predicted.prediction, predicted.context,
@@ -284,7 +289,8 @@ TEST(Daemons, PredictorWaitsForTheTableAndPicksUpReplacements) {
   ChildProcess predictor(
       predictor_program,
       {"--vision-address", vision, "--prediction-address", predictions, "--table",
-       table_path.string(), "--reload-interval", "0.05", "--quiet", "--status-interval", "0.05"},
+       table_path.string(), "--reload-interval", "0.05", "--quiet", "--status-interval", "0.05",
+       "--model", "paper"},
       dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "0") << predictor.stderr_text();
@@ -325,11 +331,13 @@ TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
                          "trainer-b", Readiness::ready_file);
   ChildProcess predictor_a(predictor_program,
                            {"--vision-address", vision_a, "--prediction-address", predictions_a,
-                            "--table", (dir / "predict.bin").string(), "--quiet"},
+                            "--table", (dir / "predict.bin").string(), "--quiet", "--model",
+                            "paper"},
                            dir.path(), "predictor-a", Readiness::ready_file);
   ChildProcess predictor_b(predictor_program,
                            {"--vision-address", vision_b, "--prediction-address", predictions_b,
-                            "--table", (dir / "predict.bin").string(), "--quiet"},
+                            "--table", (dir / "predict.bin").string(), "--quiet", "--model",
+                            "paper"},
                            dir.path(), "predictor-b", Readiness::ready_file);
   for (ChildProcess* p : {&trainer_a, &trainer_b, &predictor_a, &predictor_b}) {
     ASSERT_TRUE(p->wait_until_ready(10s)) << p->stderr_text();
@@ -386,6 +394,10 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
     const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
     EXPECT_NE(help.out.find("--table arg (=formation-table.bin)"), std::string::npos);
     EXPECT_NE(help.out.find("--grid arg (=3x2)"), std::string::npos);
+    // The motion model by default, on the sampling it needs.
+    EXPECT_NE(help.out.find("--model arg (=motion)"), std::string::npos) << program;
+    EXPECT_NE(help.out.find("--sampling arg (=auto)"), std::string::npos) << program;
+    EXPECT_NE(help.out.find("--step arg (=auto)"), std::string::npos) << program;
   }
 }
 
@@ -400,7 +412,8 @@ TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
     daemons.push_back(std::make_unique<ChildProcess>(
         predictor_program,
         std::vector<std::string>{"--vision-address", group, "--table", (dir / "t.bin").string(),
-                                 "--prediction-address", new_group(), "--status-interval", "0.1"},
+                                 "--prediction-address", new_group(), "--status-interval", "0.1",
+                                 "--model", "paper"},
         dir.path(), "predictor", Readiness::ready_file));
     daemons.push_back(std::make_unique<ChildProcess>(
         producer_program, std::vector<std::string>{"--vision-address", group, "--period", "0.05"},

@@ -1,4 +1,7 @@
-// ssl-evaluate as a process: the paper driver on a tiny run, and determinism of every mode.
+// ssl-evaluate as a process: the paper driver on a tiny run, and determinism of every mode. The
+// simulated streams jump between formations every 2 s (the paper's scenario), so holdout and
+// grid-sweep run --model paper on them; the default motion model is evaluated on logs of robots
+// that move (HoldoutOfTheMotionModel...).
 
 #include <gtest/gtest.h>
 
@@ -8,6 +11,7 @@
 #include <sstream>
 
 #include "child_process.hpp"
+#include "moving_robots.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -56,9 +60,9 @@ TEST(Evaluate, SameSeedSameNumbersInEveryMode) {
   const std::vector<std::vector<std::string>> modes{
       {"paper", "--train-formations", "500", "--tests", "50", "--seed", "7", "--test-seed", "8"},
       {"holdout", "--train-formations", "500", "--test-formations", "200", "--seed", "7",
-       "--test-seed", "8"},
+       "--test-seed", "8", "--model", "paper"},
       {"grid-sweep", "--train-formations", "300", "--test-formations", "100", "--seed", "7",
-       "--grids", "3x2", "6x4"}};
+       "--grids", "3x2", "6x4", "--model", "paper"}};
   const std::vector<std::string> csvs{"paper-running-averages.csv", "holdout-accuracy.csv",
                                       "grid-sweep-accuracy.csv"};
   for (std::size_t m = 0; m < modes.size(); ++m) {
@@ -94,7 +98,7 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
   TempDir dir;
   const auto run = evaluate(dir,
                             {"holdout", "--train-formations", "800", "--test-formations", "300",
-                             "--horizons", "1,2"},
+                             "--horizons", "1,2", "--model", "paper"},
                             "holdout");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   // Each horizon in seconds is a model of its own, then the chains of 1-3 steps of --step (2 s).
@@ -132,11 +136,21 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
 
   const auto calibration = csv_rows(read(dir / "holdout" / "holdout-calibration.csv"));
   ASSERT_EQ(calibration.size(), 1u + 5u * 2u);
-  EXPECT_EQ(calibration[0], (std::vector<std::string>{"grid", "horizon_steps", "horizon_s",
-                                                      "method", "quantity", "brier", "ece",
-                                                      "predictions"}));
+  EXPECT_EQ(calibration[0],
+            (std::vector<std::string>{"grid", "horizon_steps", "horizon_s", "method", "quantity",
+                                      "brier", "ece", "predictions", "within_radius_50",
+                                      "within_radius_90"}));
   EXPECT_EQ(calibration[3][4], "robot");
   EXPECT_EQ(calibration[4][4], "formation");
+  // The paper's model states no radii: nothing is within them, and the report has no radii
+  // section.
+  for (std::size_t i = 1; i < calibration.size(); ++i) {
+    ASSERT_EQ(calibration[i].size(), 10u);
+    EXPECT_EQ(calibration[i][3], "model");
+    EXPECT_EQ(calibration[i][8], "0");
+    EXPECT_EQ(calibration[i][9], "0");
+  }
+  EXPECT_EQ(run.out.find("radii"), std::string::npos) << run.out;
   const std::string reliability = read(dir / "holdout" / "holdout-reliability.csv");
   EXPECT_EQ(std::count(reliability.begin(), reliability.end(), '\n'), 1 + 5 * 2 * 10);
 }
@@ -154,7 +168,8 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   }
   const auto split = evaluate(dir,
                               {"holdout", "--train-log", (dir / "a.log").string(),
-                               (dir / "b.log.gz").string(), "--split", "0.6", "--horizons", "2"},
+                               (dir / "b.log.gz").string(), "--split", "0.6", "--horizons", "2",
+                               "--model", "paper"},
                               "split");
   ASSERT_EQ(split.exit_code, 0) << split.err;
   // Two streams of 300 formations, the last 40% of each tested: 2 x 120 formations.
@@ -162,12 +177,87 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   const auto separate = evaluate(dir,
                                  {"holdout", "--train-log", (dir / "a.log").string(),
                                   (dir / "b.log.gz").string(), "--test-log",
-                                  (dir / "c.log").string(), "--horizons", "2"},
+                                  (dir / "c.log").string(), "--horizons", "2", "--model", "paper"},
                                  "separate");
   ASSERT_EQ(separate.exit_code, 0) << separate.err;
   EXPECT_NE(separate.out.find("transitions from 600 formations"), std::string::npos)
       << separate.out;
   EXPECT_NE(separate.out.find(": 300 test formations"), std::string::npos) << separate.out;
+}
+
+// The default model on logs of robots that really move (60 Hz frames): every horizon of its own
+// and every chain of --step (0.5 s) scored for every method in mm and cells, its radii checked
+// against where the robots went, the same numbers on a second run.
+TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
+  TempDir dir;
+  const auto train_log = dir / "train.log.gz";
+  const auto test_log = dir / "test.log";
+  ASSERT_EQ(testing::write_vision_log(
+                train_log, testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
+            "");
+  ASSERT_EQ(testing::write_vision_log(
+                test_log, testing::moving_robots_packets(
+                              {.seed = 2, .seconds = 20.0, .start_time_s = 1000.0})),
+            "");
+  const std::vector<std::string> args{"holdout",  "--train-log", train_log.string(), "--test-log",
+                                      test_log.string(), "--horizons", "0.5,1"};
+  const auto run = evaluate(dir, args, "motion");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("frame sampling: 1200 test formations"), std::string::npos) << run.out;
+  // --horizons 0.5 and 1 s, each a model of its own, then the chains of 1-3 steps of 0.5 s.
+  const std::vector<std::pair<std::string, std::string>> rows{
+      {"0.50 s", "1"}, {"1.00 s", "1"}, {"0.50 s", "1"}, {"1.00 s", "2"}, {"1.50 s", "3"}};
+  for (const auto& [horizon, steps] : rows) {
+    for (const std::string method :
+         {"model", "persistence", "constant velocity", "damped constant velocity"}) {
+      EXPECT_TRUE(std::regex_search(
+          run.out, std::regex(horizon + R"(\s+)" + steps + R"(\s+)" + method + R"(\s+[\d.]+%)")))
+          << horizon << " " << steps << " " << method << "\n"
+          << run.out;
+    }
+    // The radii section: how often the robot ended up within r50 and r90.
+    EXPECT_TRUE(std::regex_search(
+        run.out, std::regex(horizon + R"(\s+)" + steps + R"(\s+[\d.]+%\s+[\d.]+%\s+[1-9]\d*\n)")))
+        << horizon << " " << steps << "\n"
+        << run.out;
+  }
+  EXPECT_NE(run.out.find("The model's radii"), std::string::npos) << run.out;
+
+  const auto accuracy = csv_rows(read(dir / "motion" / "holdout-accuracy.csv"));
+  ASSERT_EQ(accuracy.size(), 1u + 5u * 4u);
+  for (std::size_t i = 1; i < accuracy.size(); i += 4) {
+    // Rows of one horizon: model, persistence, constant velocity, damped constant velocity.
+    ASSERT_EQ(accuracy[i].size(), 11u);
+    EXPECT_EQ(accuracy[i][3], "model");
+    const double model_mm = std::stod(accuracy[i][7]);
+    EXPECT_GT(std::stoull(accuracy[i][10]), 1000u) << i;
+    EXPECT_GT(model_mm, 0.0);
+    // Robots that move: the model's mean error is below every baseline's.
+    for (std::size_t b = 1; b < 4; ++b) {
+      EXPECT_EQ(accuracy[i + b][10], accuracy[i][10]);  // the same robots scored
+      EXPECT_LT(model_mm, std::stod(accuracy[i + b][7])) << accuracy[i + b][3] << " row " << i;
+    }
+  }
+  const auto calibration = csv_rows(read(dir / "motion" / "holdout-calibration.csv"));
+  ASSERT_EQ(calibration.size(), 1u + 5u * 2u);
+  EXPECT_EQ(calibration[0].back(), "within_radius_90");
+  for (std::size_t i = 1; i < calibration.size(); ++i) {
+    ASSERT_EQ(calibration[i].size(), 10u);
+    const double within50 = std::stod(calibration[i][8]);
+    const double within90 = std::stod(calibration[i][9]);
+    // Calibrated on the table's held-out frames: near 50% and 90% on another match.
+    EXPECT_GT(within50, 0.3) << i;
+    EXPECT_LT(within50, 0.7) << i;
+    EXPECT_GT(within90, 0.75) << i;
+    EXPECT_LT(within90, 0.99) << i;
+  }
+
+  const auto again = evaluate(dir, args, "again");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  for (const std::string csv : {"holdout-accuracy.csv", "holdout-calibration.csv",
+                                "holdout-reliability.csv"}) {
+    EXPECT_EQ(read(dir / "motion" / csv), read(dir / "again" / csv)) << csv;
+  }
 }
 
 TEST(Evaluate, BadModeAndOptionsExitWithTwo) {

@@ -1,18 +1,18 @@
 // ssl-predictor --from-log: logs through the same pipeline as the daemon, predictions as CSV.
 // The main check: the daemon, fed the same log by ssl-producer --replay, multicasts exactly the
-// predictions --from-log writes, line for line and number for number.
+// predictions --from-log writes, line for line and number for number. These logs are the simulated
+// producer's (formations jumping every 2 s, the paper's scenario), so the trainer and the
+// predictor run --model paper; motion_daemons_test.cpp does the same for the default motion model
+// on a log of moving robots.
 
 #include <gtest/gtest.h>
 #include <signal.h>
 
-#include <charconv>
-#include <fstream>
-#include <map>
 #include <set>
-#include <sstream>
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
+#include "prediction_rows.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -27,47 +27,9 @@ const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
 const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
-std::vector<std::string> split(const std::string& text, char separator) {
-  std::vector<std::string> out;
-  std::string field;
-  std::istringstream in(text);
-  while (std::getline(in, field, separator)) out.push_back(field);
-  return out;
-}
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// A number as the CSV must hold it: the shortest text that reads back as the same value.
-template <typename Number>
-std::string exact(Number value) {
-  char text[32];
-  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
-}
-
-// What the CSV must say for one multicast prediction, written here from the message's fields.
-std::vector<std::string> rows_of(const proto::FormationPrediction& message) {
-  std::vector<std::string> rows;
-  for (const proto::PredictedStep& step : message.steps()) {
-    for (const proto::PredictedRobot& robot : step.robots()) {
-      rows.push_back(
-          exact(message.t_capture()) + ',' + exact(message.frame_number()) + ',' +
-          exact(robot.robot_id()) + ',' + exact(step.step()) + ',' +
-          exact(static_cast<double>(step.step()) * message.step_seconds()) + ',' +
-          exact(robot.state_index()) + ',' + exact(robot.position_cell().x()) + ',' +
-          exact(robot.position_cell().y()) + ',' + exact(robot.cell_centre().x()) + ',' +
-          exact(robot.cell_centre().y()) + ',' + exact(robot.probability()) + ',' +
-          (robot.unseen() ? "1" : "0") + ',' + exact(step.centroid_cell().x()) + ',' +
-          exact(step.centroid_cell().y()) + ',' + exact(step.centroid_probability()) + ',' +
-          exact(step.formation_probability()) + ',' + exact(step.confidence()));
-    }
-  }
-  return rows;
-}
+using testing::read_text;
+using testing::rows_of;
+using testing::split;
 
 class PredictFromLog : public ::testing::Test {
  protected:
@@ -85,9 +47,17 @@ class PredictFromLog : public ::testing::Test {
     }
     const auto trained = testing::run_to_end(
         trainer_program,
-        {"--from-log", (dir / "train.log.gz").string(), "--table", table.string()}, dir.path(),
-        "train", 30s);
+        {"--from-log", (dir / "train.log.gz").string(), "--table", table.string(), "--model",
+         "paper"},
+        dir.path(), "train", 30s);
     ASSERT_EQ(trained.exit_code, 0) << trained.err;
+  }
+
+  // `ssl-predictor ARGS --model paper` run to its end.
+  testing::RunResult predict(std::vector<std::string> args, const std::string& name) const {
+    args.push_back("--model");
+    args.push_back("paper");
+    return testing::run_to_end(predictor_program, std::move(args), dir.path(), name);
   }
 
   TempDir dir;
@@ -99,7 +69,7 @@ TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
   const auto offline = testing::run_to_end(
       predictor_program,
       {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--horizon", "3",
-       "--output", csv_path.string()},
+       "--output", csv_path.string(), "--model", "paper"},
       dir.path(), "from-log", 30s);
   ASSERT_EQ(offline.exit_code, 0) << offline.err;
   std::vector<std::string> lines = split(read_text(csv_path), '\n');
@@ -107,10 +77,22 @@ TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
   EXPECT_EQ(lines.front(),
             "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,"
             "predicted_cell_y,predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,"
-            "centroid_cell_y,centroid_probability,formation_probability,confidence");
+            "centroid_cell_y,centroid_probability,formation_probability,confidence,model,"
+            "predicted_feed_x_mm,predicted_feed_y_mm,radius_50_mm,radius_90_mm");
+  EXPECT_EQ(lines.front(), testing::prediction_csv_header);
   lines.erase(lines.begin());
   std::set<std::string> instants;
-  for (const std::string& line : lines) instants.insert(split(line, ',').front());
+  for (const std::string& line : lines) {
+    const std::vector<std::string> fields = split(line, ',');
+    ASSERT_EQ(fields.size(), 22u) << line;
+    instants.insert(fields.front());
+    // The paper's model: its cell centre (columns 9-10) again, and no radii.
+    EXPECT_EQ(fields[17], "paper") << line;
+    EXPECT_EQ(fields[18], fields[8]) << line;
+    EXPECT_EQ(fields[19], fields[9]) << line;
+    EXPECT_EQ(fields[20], "0") << line;
+    EXPECT_EQ(fields[21], "0") << line;
+  }
   // 60 formations on two cameras: every one sampled and predicted, 3 steps of 6 robots each.
   ASSERT_EQ(instants.size(), 60u);
   EXPECT_EQ(lines.size(), 60u * 3u * 6u);
@@ -119,7 +101,7 @@ TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
   const std::string predictions = new_group();
   ChildProcess daemon(predictor_program,
                       {"--vision-address", vision, "--prediction-address", predictions, "--table",
-                       table.string(), "--horizon", "3", "--quiet"},
+                       table.string(), "--horizon", "3", "--quiet", "--model", "paper"},
                       dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(daemon.wait_until_ready(10s)) << daemon.stderr_text();
   EXPECT_EQ(daemon.ready_fact("table_loaded"), "1");
@@ -147,14 +129,12 @@ TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
 }
 
 TEST_F(PredictFromLog, WritesToStandardOutputAndKeepsEachFileItsOwnStream) {
-  const auto one = testing::run_to_end(
-      predictor_program, {"--from-log", (dir / "test.log").string(), "--table", table.string()},
-      dir.path(), "stdout-one");
+  const auto one =
+      predict({"--from-log", (dir / "test.log").string(), "--table", table.string()}, "stdout-one");
   ASSERT_EQ(one.exit_code, 0) << one.err;
-  const auto twice = testing::run_to_end(predictor_program,
-                                         {"--from-log", (dir / "test.log").string(),
-                                          (dir / "test.log").string(), "--table", table.string()},
-                                         dir.path(), "stdout-twice");
+  const auto twice = predict({"--from-log", (dir / "test.log").string(),
+                              (dir / "test.log").string(), "--table", table.string()},
+                             "stdout-twice");
   ASSERT_EQ(twice.exit_code, 0) << twice.err;
   // The second file starts a stream of its own, so its predictions are exactly the first's.
   const std::vector<std::string> single = split(one.out, '\n');
@@ -167,48 +147,56 @@ TEST_F(PredictFromLog, WritesToStandardOutputAndKeepsEachFileItsOwnStream) {
 }
 
 TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
-  const auto no_table = testing::run_to_end(
-      predictor_program,
+  const auto no_table = predict(
       {"--from-log", (dir / "test.log").string(), "--table", (dir / "none.bin").string()},
-      dir.path(), "no-table");
+      "no-table");
   EXPECT_EQ(no_table.exit_code, 1);
   EXPECT_NE(no_table.err.find("none.bin"), std::string::npos) << no_table.err;
   EXPECT_EQ(no_table.out, "");
 
-  const auto other_grid = testing::run_to_end(
-      predictor_program,
+  const auto other_grid = predict(
       {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--grid", "6x4"},
-      dir.path(), "other-grid");
+      "other-grid");
   EXPECT_EQ(other_grid.exit_code, 1);
   EXPECT_NE(other_grid.err.find("6x4"), std::string::npos) << other_grid.err;
 
   // A missing log among good ones: the good ones are predicted, the exit status says it.
   const auto csv_path = dir / "partial.csv";
-  const auto partial = testing::run_to_end(
-      predictor_program,
-      {"--from-log", (dir / "missing.log").string(), (dir / "test.log").string(), "--table",
-       table.string(), "--output", csv_path.string()},
-      dir.path(), "partial");
+  const auto partial = predict({"--from-log", (dir / "missing.log").string(),
+                                (dir / "test.log").string(), "--table", table.string(), "--output",
+                                csv_path.string()},
+                               "partial");
   EXPECT_EQ(partial.exit_code, 1);
   EXPECT_NE(partial.err.find("missing.log"), std::string::npos) << partial.err;
   EXPECT_EQ(split(read_text(csv_path), '\n').size(), 1u + 60u * 2u * 6u);
 
-  const auto bad_horizon = testing::run_to_end(
-      predictor_program,
+  const auto bad_horizon = predict(
       {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--horizon", "0"},
-      dir.path(), "bad-horizon");
+      "bad-horizon");
   EXPECT_EQ(bad_horizon.exit_code, 2);
+
+  // The paper's table (version 1) for the default motion model: it says which model it serves.
+  const auto wrong_model = testing::run_to_end(
+      predictor_program, {"--from-log", (dir / "test.log").string(), "--table", table.string()},
+      dir.path(), "wrong-model");
+  EXPECT_EQ(wrong_model.exit_code, 1);
+  EXPECT_NE(wrong_model.err.find("version-1"), std::string::npos) << wrong_model.err;
+  EXPECT_NE(wrong_model.err.find("--model paper"), std::string::npos) << wrong_model.err;
+  EXPECT_EQ(wrong_model.out, "");
 }
 
-// --sampling step is the paper's protocol as it was: the same table file and the same predictions,
-// byte for byte, as the code before rolling sampling made of the same log (tests/data/README.md).
+// --model paper is the paper's protocol as it was: its sampling (auto: step) and --sampling step
+// give the same table file (version 1) and the same predictions, byte for byte, as the code before
+// rolling sampling made of the same log (tests/data/README.md; the CSV's first 17 columns, the 5
+// appended since say "paper", the cell centre again and radii 0).
 TEST(StepSampling, ReproducesTheTableAndPredictionsOfBeforeByteForByte) {
   TempDir dir;
   const std::filesystem::path data = SSLF_TEST_DATA_DIR;
   const auto log = data / "step-golden.log.gz";
-  for (const std::vector<std::string> sampling : {std::vector<std::string>{},
-                                                 std::vector<std::string>{"--sampling", "step"}}) {
-    SCOPED_TRACE(sampling.empty() ? "default" : "--sampling step");
+  for (const std::vector<std::string>& sampling :
+       {std::vector<std::string>{"--model", "paper"},
+        std::vector<std::string>{"--model", "paper", "--sampling", "step"}}) {
+    SCOPED_TRACE(sampling.size() == 2 ? "--model paper" : "--model paper --sampling step");
     const auto table = dir / "table.bin";
     std::filesystem::remove(table);
     std::vector<std::string> train{"--from-log", log.string(), "--table", table.string(),
@@ -225,6 +213,19 @@ TEST(StepSampling, ReproducesTheTableAndPredictionsOfBeforeByteForByte) {
     ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
     EXPECT_EQ(predicted.out, read_text(data / "step-golden-6x4.csv"));
   }
+  // The motion model learns from every frame: step sampling is a usage error for it (the
+  // default model), in both programs, and writes nothing.
+  for (const auto& program : {trainer_program, predictor_program}) {
+    const auto refused = testing::run_to_end(
+        program,
+        {"--from-log", log.string(), "--table", (dir / "refused.bin").string(), "--sampling",
+         "step"},
+        dir.path(), "refused", 30s);
+    EXPECT_EQ(refused.exit_code, 2) << program << refused.err;
+    EXPECT_NE(refused.err.find("--model paper"), std::string::npos) << refused.err;
+    EXPECT_EQ(refused.out, "");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "refused.bin"));
 }
 
 }  // namespace

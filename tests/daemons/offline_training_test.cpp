@@ -1,4 +1,7 @@
-// ssl-trainer without the network: --from-log and merge, as processes on real files.
+// ssl-trainer without the network: --from-log and merge, as processes on real files. The logs are
+// the simulated producer's, whose opponent jumps between formations every 2 s (the paper's
+// scenario): the trainer runs --model paper on them, and the library's reference is the paper's
+// model. motion_daemons_test.cpp trains the default motion model from a log of moving robots.
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -41,7 +44,8 @@ void write_simulated_log(const std::filesystem::path& path, std::uint64_t seed, 
   ASSERT_TRUE(writer->close());
 }
 
-// What the library computes from the same files, one stream per file.
+// What the library computes from the same files, one stream per file, with the paper's model
+// (SamplerConfig's defaults: step sampling every 2 s, no motion table).
 TransitionTable library_table(const std::vector<std::filesystem::path>& logs,
                               std::uint64_t* samples = nullptr) {
   Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
@@ -56,8 +60,13 @@ TransitionTable library_table(const std::vector<std::filesystem::path>& logs,
 
 const auto entries = testing::table_entries;
 
+// `ssl-trainer ARGS --model paper` (merge takes tables of either model, and no --model).
 testing::RunResult trainer(const TempDir& dir, std::vector<std::string> args,
                            const std::string& name) {
+  if (args.empty() || args.front() != "merge") {
+    args.push_back("--model");
+    args.push_back("paper");
+  }
   return testing::run_to_end(trainer_program, std::move(args), dir.path(), name, 60s);
 }
 
@@ -172,7 +181,7 @@ TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
   const std::string group = testing::unique_group(testing::free_udp_port());
   testing::ChildProcess live(trainer_program,
                              {"--vision-address", group, "--table", (dir / "live.bin").string(),
-                              "--status-interval", "0.1"},
+                              "--status-interval", "0.1", "--model", "paper"},
                              dir.path(), "live", testing::Readiness::ready_file);
   ASSERT_TRUE(live.wait_until_ready(10s)) << live.stderr_text();
   // 300 formations of 2 s of data time at 300x: 2 s of wall time, with the recorded spacing.

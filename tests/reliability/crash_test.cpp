@@ -1,7 +1,8 @@
 // Crash safety (issue 6, part 3): the trainer is killed with SIGKILL at 50 random moments while a
 // producer feeds it and it saves every 20 ms. After each kill the table loads, its checksum holds,
 // it holds at least the last save the trainer logged, and counts never go down from one kill to
-// the next (the trainer restarts on the same table each time and resumes every count in it).
+// the next (the trainer restarts on the same table each time and resumes every count in it). The
+// simulated feed jumps between formations every 2 s: the paper's model (--model paper) counts it.
 
 #include <signal.h>
 
@@ -71,7 +72,8 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
     }
     ChildProcess trainer(trainer_program,
                          {"--vision-address", group, "--table", table_path.string(),
-                          "--flush-interval", "0.02", "--status-interval", "100", "--verbose"},
+                          "--flush-interval", "0.02", "--status-interval", "100", "--verbose",
+                          "--model", "paper"},
                          dir.path(), "trainer-" + std::to_string(round),
                          testing::Readiness::ready_file);
     ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();

@@ -234,7 +234,7 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   const auto b = train(b_packets);
   ChildProcess trainer(trainer_program,
                        {"--vision-address", group, "--table", (dir / "trainer.bin").string(),
-                        "--status-interval", "0.1", "--flush-interval", "60"},
+                        "--status-interval", "0.1", "--flush-interval", "60", "--model", "paper"},
                        dir.path(), "trainer", testing::Readiness::ready_file);
   ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   auto producer = [&](const char* seed, const char* start) {

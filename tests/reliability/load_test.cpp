@@ -73,7 +73,8 @@ int granted_buffer(const std::string& log) {
 TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted) {
   TempDir dir;
   // Every packet built before the clock starts: one burst per frame, one packet per camera, the
-  // data clock advancing a step per frame (each frame completes a formation, the worst case).
+  // data clock advancing a step per frame (each frame completes a formation, the worst case: with
+  // --model paper, whose 2 s step the simulation keeps, every frame is a sample and a prediction).
   sim::SimulationConfig simulation;
   simulation.seed = 11;
   simulation.cameras = cameras;
@@ -99,11 +100,12 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   const std::string group = new_group();
   ChildProcess trainer(trainer_program,
                        {"--vision-address", group, "--table", (dir / "trainer.bin").string(),
-                        "--status-interval", "1", "--flush-interval", "1"},
+                        "--status-interval", "1", "--flush-interval", "1", "--model", "paper"},
                        dir.path(), "trainer", testing::Readiness::ready_file);
   ChildProcess predictor(predictor_program,
                          {"--vision-address", group, "--prediction-address", new_group(), "--table",
-                          (dir / "fixed.bin").string(), "--quiet", "--status-interval", "1"},
+                          (dir / "fixed.bin").string(), "--quiet", "--status-interval", "1",
+                          "--model", "paper"},
                          dir.path(), "predictor", testing::Readiness::ready_file);
   ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();

@@ -61,6 +61,12 @@ inline std::vector<SSL_WrapperPacket> simulated_packets(sim::SimulationConfig co
   return packets;
 }
 
+// The simulated producer's opponent jumps from formation to formation every 2 s of data time: the
+// paper's scenario, with nothing for the motion model to learn (no two frames close enough for a
+// velocity). So every daemon these tests run on such streams is given --model paper, and the
+// library references below are the paper's model too (Training without a motion table, step
+// sampling every 2 s: SamplerConfig's defaults).
+
 // The library's training on a stream: the reference for a trainer's table.
 inline std::unique_ptr<Training> train(const std::vector<SSL_WrapperPacket>& packets,
                                        const SamplerConfig& config = {}) {
@@ -75,6 +81,7 @@ inline std::vector<std::string> library_predictions(const std::vector<SSL_Wrappe
   std::vector<std::string> out;
   PredictionConfig config;
   config.horizon = horizon;
+  config.model = ModelKind::paper;  // as the daemons run: --model paper
   PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
     std::string datagram;
     encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram);
@@ -114,17 +121,18 @@ void send_paced(const std::string& group, const Items& items) {
 }
 
 // A trainer and a predictor (reading `predictor_table`) on one fresh vision group, the predictions
-// on another, both status lines every 0.1 s. ready() waits for both ready files: the sockets
-// joined, and the predictor's table loaded.
+// on another, both with --model paper and status lines every 0.1 s. ready() waits for both ready
+// files: the sockets joined, and the predictor's table loaded.
 struct RunningPipeline {
   RunningPipeline(const testing::TempDir& dir, const std::filesystem::path& predictor_table)
       : trainer(trainer_program,
                 {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
-                 "--status-interval", "0.1", "--flush-interval", "60"},
+                 "--status-interval", "0.1", "--flush-interval", "60", "--model", "paper"},
                 dir.path(), "trainer", testing::Readiness::ready_file),
         predictor(predictor_program,
                   {"--vision-address", vision, "--prediction-address", predictions, "--table",
-                   predictor_table.string(), "--quiet", "--status-interval", "0.1"},
+                   predictor_table.string(), "--quiet", "--status-interval", "0.1", "--model",
+                   "paper"},
                   dir.path(), "predictor", testing::Readiness::ready_file) {}
 
   ::testing::AssertionResult ready() {
