@@ -77,7 +77,7 @@ class MotionDaemons : public ::testing::Test {
   }
 
   // `ssl-predictor --from-log test.log --table TABLE --horizon 3` with the default model: the
-  // CSV's rows (without the header), each checked for what the motion model states.
+  // CSV's rows, after its header (checked).
   std::vector<std::string> predict_csv(const std::filesystem::path& table_path,
                                        const std::string& name) {
     const auto csv_path = dir / (name + ".csv");
