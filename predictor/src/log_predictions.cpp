@@ -2,6 +2,7 @@
 // runs, as fast as the machine allows, every prediction written as CSV (prediction_csv.hpp).
 // What the daemon would have multicast during the recorded match, without any network.
 
+#include <stdexcept>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -50,7 +51,11 @@ int run_from_log(const PredictorOptions& options) {
     append_prediction_csv(predicted, text);
     if (text.size() >= flush_bytes) flush();
   });
-  pipeline.set_table(std::make_shared<const StoredTable>(std::move(*loaded)));
+  try {
+    pipeline.set_table(std::make_shared<const StoredTable>(std::move(*loaded)));
+  } catch (const std::invalid_argument& error) {
+    throw std::runtime_error(options.table + ": " + error.what());
+  }
 
   bool every_file_whole = true;
   SSL_WrapperPacket packet;

@@ -120,7 +120,8 @@ class PredictorDaemon {
         {"interface", options_.network.interface},
         {"predictions", options_.prediction_address},
         {"table", options_.table},
-        {"table_loaded", watcher_.table() ? "1" : "0"}};
+        // The table predictions come from: a table the model refused is not loaded.
+        {"table_loaded", pipeline_.table() ? "1" : "0"}};
     if (web_) facts.emplace_back("http", web_->url());
     return facts;
   }
@@ -158,7 +159,7 @@ class PredictorDaemon {
     status.kernel_drops = net.kernel_drops.load();
     status.formations = pipeline_.sampler().counters().samples;
     status.predictions = pipeline_.predictions();
-    if (const auto& table = watcher_.table()) {
+    if (const auto& table = pipeline_.table()) {
       const StoredTable& stored = *table;
       status.table_loaded = true;
       status.table_transitions = stored.table.transitions();

@@ -192,8 +192,8 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
   const std::uint16_t port = web_testing::free_tcp_port();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--model", "motion", "--http-port",
-                          std::to_string(port), "--quiet"},
+                          "--table", table_path.string(), "--model", "motion", "--step", "2",
+                          "--http-port", std::to_string(port), "--quiet"},
                          dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
