@@ -23,6 +23,7 @@
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/training.hpp"
 #include "circling_robots.hpp"
+#include "table_bytes.hpp"
 #include "ssl_formation/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -30,21 +31,8 @@ namespace ssl_formation {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
-using LoadResult = Result<StoredTable, TableLoadError>;
-
-std::optional<TableFileError> kind_of(const LoadResult& result) {
-  if (result) return std::nullopt;
-  return result.error().kind;
-}
-std::string message_of(const LoadResult& result) {
-  return result ? "(loaded)" : result.error().message;
-}
-
-// The layout of table_file.hpp.
-constexpr std::size_t version_offset = 8;
-constexpr std::size_t header_checksum_offset = 80;
-constexpr std::size_t header_size = 84;
+using namespace ssl_formation::testing;
+// The layout of table_file.hpp's motion section.
 constexpr std::size_t config_size = 68;
 constexpr std::size_t instances_offset = config_size;  // within the motion section
 constexpr std::size_t seen_offset = config_size + 8;
@@ -52,46 +40,6 @@ constexpr std::size_t row_count_offset = config_size + 16;
 constexpr std::size_t rows_offset = config_size + 24;
 constexpr std::size_t row_size = 8 + 8 * MotionRow::size;
 constexpr std::size_t held_out_size = 8 + 4 + 4 * motion_instance_values.size() + 4;
-
-Bytes read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const fs::path& path, const Bytes& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-  ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
-
-std::uint32_t get_u32(const Bytes& bytes, std::size_t offset) {
-  std::uint32_t value = 0;
-  for (int i = 0; i < 4; ++i) value |= std::uint32_t{bytes[offset + i]} << (8 * i);
-  return value;
-}
-std::uint64_t get_u64(const Bytes& bytes, std::size_t offset) {
-  std::uint64_t value = 0;
-  for (int i = 0; i < 8; ++i) value |= std::uint64_t{bytes[offset + i]} << (8 * i);
-  return value;
-}
-void put_u32(Bytes& bytes, std::size_t offset, std::uint32_t value) {
-  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-void put_u64(Bytes& bytes, std::size_t offset, std::uint64_t value) {
-  for (int i = 0; i < 8; ++i) bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-
-std::uint32_t crc(const Bytes& bytes, std::size_t size) {
-  return static_cast<std::uint32_t>(
-      ::crc32(::crc32(0L, Z_NULL, 0), bytes.data(), static_cast<uInt>(size)));
-}
-
-// Rewrites both checksums, so that a test can plant content a checksum would otherwise catch.
-void reseal(Bytes& bytes) {
-  put_u32(bytes, header_checksum_offset, crc(bytes, header_checksum_offset));
-  put_u32(bytes, bytes.size() - 4, crc(bytes, bytes.size() - 4));
-}
 
 using Entries = std::vector<std::tuple<StateIndex, StateIndex, TransitionTable::Count>>;
 Entries entries_of(const TransitionTable& table) {

@@ -17,66 +17,15 @@
 #include <tuple>
 #include <vector>
 
+#include "table_bytes.hpp"
+
 namespace ssl_formation {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
-using LoadResult = Result<StoredTable, TableLoadError>;
-
-// The kind and message of a failed load or save. A load that succeeded has no kind and the
-// message "(loaded)", so an expected failure that did not happen fails its expectation instead
-// of reading an error that is not there.
-std::optional<TableFileError> kind_of(const LoadResult& result) {
-  if (result) return std::nullopt;
-  return result.error().kind;
-}
-std::string message_of(const LoadResult& result) {
-  return result ? "(loaded)" : result.error().message;
-}
-std::string message_of(const Result<TableSaved>& result) {
-  return result ? "(saved)" : result.error().message;
-}
-
-// Offsets of the layout documented in table_file.hpp; the tests patch fields through them.
-constexpr std::size_t version_offset = 8;
-constexpr std::size_t transitions_offset = 56;
-constexpr std::size_t rows_offset = 64;
-constexpr std::size_t header_checksum_offset = 80;
-constexpr std::size_t header_size = 84;
-
-Bytes read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const fs::path& path, const Bytes& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-  ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
-
-std::uint32_t get_u32(const Bytes& bytes, std::size_t offset) {
-  std::uint32_t value = 0;
-  for (int i = 0; i < 4; ++i) value |= std::uint32_t{bytes[offset + i]} << (8 * i);
-  return value;
-}
-
-void put_u32(Bytes& bytes, std::size_t offset, std::uint32_t value) {
-  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
-
-std::uint32_t crc(const Bytes& bytes, std::size_t size) {
-  return static_cast<std::uint32_t>(
-      ::crc32(::crc32(0L, Z_NULL, 0), bytes.data(), static_cast<uInt>(size)));
-}
-
-// Rewrites both checksums, so that a test can plant content a checksum would otherwise catch.
-void reseal(Bytes& bytes) {
-  put_u32(bytes, header_checksum_offset, crc(bytes, header_checksum_offset));
-  put_u32(bytes, bytes.size() - 4, crc(bytes, bytes.size() - 4));
-}
+using namespace ssl_formation::testing;
+// The header's row count, as the tests call it.
+constexpr std::size_t rows_offset = header_rows_offset;
 
 // Deterministic pseudo-random transitions, so failures reproduce.
 TransitionTable make_table(Grid grid, int transitions, TableStorage storage,
