@@ -62,7 +62,8 @@ for variant in 0 1; do
   done
 done
 
-"$build_dir/predictor/ssl-evaluate" grid-sweep --output-dir "$work" 2>/dev/null >/dev/null
+# The paper table's memory per grid, on the paper's simulated opponent.
+"$build_dir/predictor/ssl-evaluate" grid-sweep --model paper --output-dir "$work" 2>/dev/null >/dev/null
 while IFS=, read -r grid states transitions memory prediction _; do
   [ "$grid" = grid ] && continue
   row "table memory, $grid ($states states, $transitions transitions)" "$(awk -v m="$memory" 'BEGIN { printf "%.1f KiB", m / 1024 }')"
