@@ -376,6 +376,15 @@ void MotionHistory::Track::clear() {
 void MotionHistory::clear() {
   for (Track& track : tracks_) track.clear();
   last_time_s_.reset();
+  last_learned_s_.reset();
+}
+
+bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
+  if (last_learned_s_ && time_s >= *last_learned_s_ && time_s - *last_learned_s_ < interval_s - 1e-6) {
+    return false;
+  }
+  last_learned_s_ = time_s;
+  return true;
 }
 
 const MotionHistory::Entry* MotionHistory::nearest(const Track& track, std::uint64_t after,
@@ -477,24 +486,9 @@ const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t rob
   return nearest(track, track.horizon_cursor[static_cast<std::size_t>(steps - 1)], time_s);
 }
 
-const MotionHistory::Entry* MotionHistory::near(std::uint32_t robot_id, double time_s) const {
-  if (robot_id >= tracks_.size()) return nullptr;
-  const Track& track = tracks_[robot_id];
-  // Binary search for the first entry at or after time_s.
-  std::uint64_t low = track.begin, high = track.end;
-  while (low < high) {
-    const std::uint64_t middle = low + (high - low) / 2;
-    if (track.at(middle).time_s < time_s) {
-      low = middle + 1;
-    } else {
-      high = middle;
-    }
-  }
-  return nearest(track, low, time_s);
-}
-
-void learn_motion(MotionTable& table, const MotionHistory& history, const Formation& now) {
+void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now) {
   const MotionConfig& config = table.config();
+  if (!history.take_learning_instant(now.time_s, config.learn_interval_s)) return;
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= config.horizons; ++k) {
       const MotionHistory::Entry* then = history.steps_before_latest(robot.robot_id, k);

@@ -32,13 +32,7 @@ void Training::on_sample(const FormationSample& sample) {
   for (const Transition& t : sample.transitions) table_.add(t.from, t.to);
   if (motion_) {
     motion_history_.add(sample.formation);
-    // One instant in every learn interval (a restart of the clock starts over).
-    const double t = sample.formation.time_s;
-    const double interval = motion_->config().learn_interval_s;
-    if (!last_learned_s_ || t < *last_learned_s_ || t - *last_learned_s_ >= interval - 1e-6) {
-      last_learned_s_ = t;
-      learn_motion(*motion_, motion_history_, sample.formation);
-    }
+    learn_motion(*motion_, motion_history_, sample.formation);
   }
 }
 

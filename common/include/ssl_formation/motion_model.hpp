@@ -261,17 +261,18 @@ class MotionHistory {
     std::uint64_t count = 0;
     std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
   };
-  // Records a formation; its robots' velocities are then velocity(id).
+  // Records a formation; its robots' kinematics are then latest(id)->kinematics.
   void add(const Formation& formation);
   void clear();
 
   const Entry* latest(std::uint32_t robot_id) const;
-  // The entry nearest `time_s` within the tolerance.
-  const Entry* near(std::uint32_t robot_id, double time_s) const;
-  // The same for the latest entry's time minus `steps` (1 to config().horizons) steps.
+  // The entry nearest (within the tolerance) to the latest entry's time minus `steps` steps,
+  // 1 to the configuration's horizons.
   const Entry* steps_before_latest(std::uint32_t robot_id, int steps) const;
 
-  const MotionConfig& config() const { return config_; }
+  // Whether an instant at `time_s` is one to learn from (once per `interval_s`); if so it is
+  // remembered as the last one.
+  bool take_learning_instant(double time_s, double interval_s);
 
  private:
   // One robot's entries in a ring buffer addressed by absolute sequence numbers, with cursors
@@ -295,11 +296,13 @@ class MotionHistory {
   double keep_s_;
   std::vector<Track> tracks_;  // by robot id
   std::optional<double> last_time_s_;
+  std::optional<double> last_learned_s_;
   AttackDirection attacks_ = AttackDirection::positive_x;
 };
 
 // Training's part: after `history.add(now)`, counts every robot of `now` against where it was
-// k steps earlier, for each horizon.
-void learn_motion(MotionTable& table, const MotionHistory& history, const Formation& now);
+// k steps earlier, for each horizon, at most once per learn_interval_s of the data clock (the
+// history remembers when it last learned; a clear or a clock going back starts over).
+void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now);
 
 }  // namespace ssl_formation

@@ -56,10 +56,6 @@ class MotionModel {
 
   const MotionConfig& config() const { return config_; }
   int horizons() const { return config_.horizons; }
-  // The damping of constant velocity learned for a horizon (index 0 = one step).
-  double damping(int horizon_index) const {
-    return horizon_[static_cast<std::size_t>(horizon_index)].damping;
-  }
 
   MotionForecast forecast(int horizon_index, const MotionRobot& robot) const;
   // The same with the robot's keys at horizon 0, finest first (motion_keys), computed once for

@@ -32,7 +32,6 @@ class Training {
   void start_new_stream() {
     sampler_.start_new_stream();
     motion_history_.clear();
-    last_learned_s_.reset();
   }
 
   const TransitionTable& table() const { return table_; }
@@ -60,7 +59,6 @@ class Training {
   TransitionTable table_;
   std::optional<MotionTable> motion_;
   MotionHistory motion_history_;
-  std::optional<double> last_learned_s_;  // the data-clock time motion was last learned at
   FormationSampler sampler_;
   std::uint64_t samples_before_;
   std::uint64_t saved_transitions_;
