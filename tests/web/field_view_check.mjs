@@ -21,30 +21,45 @@ if (!url || !userDataDir) {
   process.exit(2);
 }
 
-// Never outlive the test, whatever happens.
+// Never outlive the test, whatever happens. The first start of Chromium on a fresh machine
+// (a new profile, font caches) can take far longer than every later one, hence the margin.
 const overall = setTimeout(() => {
   console.log('FAIL: overall time-out');
   process.exit(1);
-}, 100_000);
+}, 300_000);
 
-const phase = (name) => console.log(`PHASE ${name} ok`);
+const startedAt = performance.now();
+const elapsed = () => `${((performance.now() - startedAt) / 1000).toFixed(1)} s`;
+const phase = (name) => console.log(`PHASE ${name} ok (${elapsed()})`);
 const fail = (message) => {
   throw new Error(message);
 };
+phase('started');
 
-const context = await chromium.launchPersistentContext(userDataDir, {
-  executablePath,
-  headless: true,
-  viewport: { width: 1400, height: 820 },
-  args: [
-    '--headless', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync',
-    '--no-first-run', '--disable-quic', '--disable-extensions', '--disable-default-apps',
-    '--no-default-browser-check', '--metrics-recording-only', '--disable-domain-reliability',
-  ],
-});
+// Chromium's and playwright's own messages go to stderr, which the C++ test shows on failure:
+// without them a browser that never comes up leaves nothing to read.
+const logger = {
+  isEnabled: (name, severity) => name === 'browser' || severity === 'error' || severity === 'warning',
+  log: (name, severity, message) => console.error(`[${elapsed()} ${name} ${severity}] ${message}`),
+};
+
+let context;
 let status = 0;
 try {
+  context = await chromium.launchPersistentContext(userDataDir, {
+    executablePath,
+    headless: true,
+    logger,
+    timeout: 180_000,
+    viewport: { width: 1400, height: 820 },
+    args: [
+      '--headless', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
+      '--disable-background-networking', '--disable-component-update', '--disable-sync',
+      '--no-first-run', '--disable-quic', '--disable-extensions', '--disable-default-apps',
+      '--no-default-browser-check', '--metrics-recording-only', '--disable-domain-reliability',
+    ],
+  });
+  phase('launched');
   const page = context.pages()[0] ?? (await context.newPage());
   const pageErrors = [];
   page.on('pageerror', (error) => pageErrors.push(String(error)));
@@ -55,7 +70,8 @@ try {
     if (host !== '127.0.0.1' && !request.url().startsWith('data:')) foreign.push(request.url());
   });
 
-  await page.goto(url, { waitUntil: 'load', timeout: 15_000 });
+  await page.goto(url, { waitUntil: 'load', timeout: 30_000 });
+  phase('loaded');
 
   // 1. Live: the field, robots of both teams and predictions with arrows.
   await page.waitForFunction(() => Number(document.body.dataset.predictions) >= 5 &&
@@ -203,7 +219,7 @@ try {
   console.log(`FAIL: ${error.message}`);
   status = 1;
 } finally {
-  await context.close().catch(() => {});
+  if (context) await context.close().catch(() => {});
   clearTimeout(overall);
 }
 process.exit(status);
