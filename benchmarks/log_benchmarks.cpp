@@ -74,8 +74,31 @@ const std::filesystem::path& log_path(bool gzip) {
   return gzip ? compressed : plain;
 }
 
-// The floor: read and parse every vision packet, nothing else.
+// The floor: read every vision packet as offline training reads it (LogReader::next_vision into
+// a VisionFrame: detection frames decoded straight from the bytes), nothing else.
 void BM_ReadAndParse(benchmark::State& state) {
+  const auto& path = log_path(state.range(0) != 0);
+  std::int64_t frames = 0;
+  sf::VisionFrame frame;
+  for (auto _ : state) {
+    auto reader = sf::LogReader::open(path).value();  // throws with the reason
+    while (reader.next_vision(frame)) {
+      benchmark::DoNotOptimize(frame.detection.frame_number);
+      ++frames;
+    }
+  }
+  state.SetItemsProcessed(frames);
+  state.SetLabel(state.range(0) ? ".log.gz" : ".log");
+}
+BENCHMARK(BM_ReadAndParse)
+    ->ArgName("gzip")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);  // CPU time: one core
+
+// The same with protobuf's full parse of every packet (next_vision into an SSL_WrapperPacket),
+// what offline training read through before the direct decoder.
+void BM_ReadAndParseProtobuf(benchmark::State& state) {
   const auto& path = log_path(state.range(0) != 0);
   std::int64_t frames = 0;
   SSL_WrapperPacket packet;
@@ -89,13 +112,13 @@ void BM_ReadAndParse(benchmark::State& state) {
   state.SetItemsProcessed(frames);
   state.SetLabel(state.range(0) ? ".log.gz" : ".log");
 }
-BENCHMARK(BM_ReadAndParse)
+BENCHMARK(BM_ReadAndParseProtobuf)
     ->ArgName("gzip")
     ->Arg(0)
     ->Arg(1)
     ->Unit(benchmark::kMillisecond);  // CPU time: one core
 
-// Offline training: the same loop feeding the Training the live trainer uses; range(1) chooses
+// Offline training: the same reading feeding the Training the live trainer uses; range(1) chooses
 // the sampling (0: a formation every 2 s, the paper's; 1: a formation at every frame, each
 // counting the transition from 0.5 s earlier; 2: the same plus the motion model's rows for 3
 // horizons, what `ssl-trainer --from-log` does by default).
@@ -104,7 +127,7 @@ void BM_OfflineTraining(benchmark::State& state) {
   const bool rolling = state.range(1) != 0;
   const bool motion = state.range(1) == 2;
   std::int64_t frames = 0;
-  SSL_WrapperPacket packet;
+  sf::VisionFrame frame;
   std::uint64_t transitions = 0;  // kept so the training cannot be optimised away
   for (auto _ : state) {
     sf::SamplerConfig config;
@@ -119,8 +142,8 @@ void BM_OfflineTraining(benchmark::State& state) {
     }
     sf::Training training(config, sf::TransitionTable(config.grid), 0, std::move(motion_table));
     auto reader = sf::LogReader::open(path).value();  // throws with the reason
-    while (reader.next_vision(packet)) {
-      training.add(packet);
+    while (reader.next_vision(frame)) {
+      training.add(frame);
       ++frames;
     }
     transitions = training.table().transitions();
@@ -128,7 +151,9 @@ void BM_OfflineTraining(benchmark::State& state) {
   state.SetItemsProcessed(frames);
   benchmark::DoNotOptimize(transitions);
   state.SetLabel(std::string(state.range(0) ? ".log.gz" : ".log") +
-                 (motion ? ", frame sampling + motion model" : rolling ? ", frame sampling" : ", step sampling"));
+                 (motion    ? ", frame sampling + motion model"
+                  : rolling ? ", frame sampling"
+                            : ", step sampling"));
 }
 BENCHMARK(BM_OfflineTraining)
     ->ArgNames({"gzip", "frame"})

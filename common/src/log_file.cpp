@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <span>
 #include <system_error>
 #include <utility>
 
@@ -302,22 +303,47 @@ bool LogReader::next(LogMessage& out) {
   return true;
 }
 
+bool LogReader::parse_vision(const Header& header, std::string_view payload,
+                             SSL_WrapperPacket& packet) {
+  const int size = static_cast<int>(payload.size());
+  if (header.type == static_cast<std::int32_t>(LogMessageType::vision)) {
+    if (packet.ParseFromArray(payload.data(), size)) return true;
+    ++counters_.parse_errors;
+  } else if (header.type == static_cast<std::int32_t>(LogMessageType::legacy_vision)) {
+    if (!packet.ParsePartialFromArray(payload.data(), size)) {
+      ++counters_.parse_errors;
+    } else if (adopt_legacy(packet)) {
+      return true;
+    } else {
+      ++counters_.legacy_unusable;
+    }
+  }
+  return false;
+}
+
 bool LogReader::next_vision(SSL_WrapperPacket& packet, std::int64_t* receive_time_ns) {
   Header header{};
   std::string_view payload;
   while (next_view(header, payload)) {
-    const int size = static_cast<int>(payload.size());
-    bool ok = false;
-    if (header.type == static_cast<std::int32_t>(LogMessageType::vision)) {
-      ok = packet.ParseFromArray(payload.data(), size);
-      if (!ok) ++counters_.parse_errors;
-    } else if (header.type == static_cast<std::int32_t>(LogMessageType::legacy_vision)) {
-      if (!packet.ParsePartialFromArray(payload.data(), size)) {
-        ++counters_.parse_errors;
-      } else {
-        ok = adopt_legacy(packet);
-        if (!ok) ++counters_.legacy_unusable;
-      }
+    if (parse_vision(header, payload, packet)) {
+      if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool LogReader::next_vision(VisionFrame& frame, std::int64_t* receive_time_ns) {
+  Header header{};
+  std::string_view payload;
+  while (next_view(header, payload)) {
+    // The fast path takes only what protobuf would accept and convert to the same frame; the
+    // 2010 schema (type 2) always goes through protobuf and adopt_legacy.
+    bool ok = header.type == static_cast<std::int32_t>(LogMessageType::vision) &&
+              decode_detection_datagram(std::as_bytes(std::span(payload)), frame);
+    if (!ok && parse_vision(header, payload, packet_scratch_)) {
+      to_vision_frame(packet_scratch_, frame);
+      ok = true;
     }
     if (ok) {
       if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;

@@ -4,10 +4,13 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <atomic>
+#include <bit>
 #include <fstream>
 #include <iterator>
 #include <set>
+#include <tuple>
 #include <type_traits>
 
 namespace ssl_formation {
@@ -261,6 +264,68 @@ TEST_P(LogFileRoundTrip, IndexedFileEndsWithTheOfficialIndexAndReadsCleanly) {
   EXPECT_EQ(reader->offset(), index_at) << "stops at the index message";
 }
 
+// Reads `file` with both next_vision overloads: the frames must be to_vision_frame() of the
+// packets, with the same receive times, the same counters, the same ending and error.
+bool same_robots(const std::vector<VisionRobot>& a, const std::vector<VisionRobot>& b) {
+  return std::equal(
+      a.begin(), a.end(), b.begin(), b.end(), [](const VisionRobot& x, const VisionRobot& y) {
+        return x.robot_id == y.robot_id && x.has_robot_id == y.has_robot_id &&
+               std::bit_cast<std::uint32_t>(x.x) == std::bit_cast<std::uint32_t>(y.x) &&
+               std::bit_cast<std::uint32_t>(x.y) == std::bit_cast<std::uint32_t>(y.y) &&
+               std::bit_cast<std::uint32_t>(x.confidence) ==
+                   std::bit_cast<std::uint32_t>(y.confidence);
+      });
+}
+
+std::size_t expect_frames_as_packets(const fs::path& file) {
+  Result<LogReader> by_packet = LogReader::open(file);
+  Result<LogReader> by_frame = LogReader::open(file);
+  if (!by_packet || !by_frame) {
+    ADD_FAILURE() << error_of(by_packet);
+    return 0;
+  }
+  SSL_WrapperPacket packet;
+  VisionFrame frame;
+  VisionFrame expected;
+  std::int64_t packet_ns = -1;
+  std::int64_t frame_ns = -1;
+  std::size_t n = 0;
+  for (;; ++n) {
+    const bool more = by_packet->next_vision(packet, &packet_ns);
+    EXPECT_EQ(by_frame->next_vision(frame, &frame_ns), more) << "packet " << n;
+    if (!more) break;
+    to_vision_frame(packet, expected);
+    const VisionDetection& a = frame.detection;
+    const VisionDetection& b = expected.detection;
+    EXPECT_EQ(frame_ns, packet_ns) << "packet " << n;
+    EXPECT_EQ(frame.has_detection, expected.has_detection) << "packet " << n;
+    EXPECT_EQ(frame.has_geometry, expected.has_geometry) << "packet " << n;
+    if (frame.has_geometry && expected.has_geometry) {
+      EXPECT_EQ(frame.field_length, expected.field_length) << "packet " << n;
+      EXPECT_EQ(frame.field_width, expected.field_width) << "packet " << n;
+    }
+    if (frame.has_detection && expected.has_detection) {
+      EXPECT_EQ(a.frame_number, b.frame_number) << "packet " << n;
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(a.t_capture),
+                std::bit_cast<std::uint64_t>(b.t_capture))
+          << "packet " << n;
+      EXPECT_EQ(a.camera_id, b.camera_id) << "packet " << n;
+      EXPECT_TRUE(same_robots(a.robots_yellow, b.robots_yellow)) << "packet " << n;
+      EXPECT_TRUE(same_robots(a.robots_blue, b.robots_blue)) << "packet " << n;
+    }
+    if (::testing::Test::HasFailure()) return n;
+  }
+  const LogReadCounters& a = by_frame->counters();
+  const LogReadCounters& b = by_packet->counters();
+  EXPECT_EQ(std::tie(a.messages, a.vision, a.legacy_vision, a.referee, a.tracker, a.index,
+                     a.unknown, a.parse_errors, a.bytes, a.blank, a.legacy_unusable),
+            std::tie(b.messages, b.vision, b.legacy_vision, b.referee, b.tracker, b.index,
+                     b.unknown, b.parse_errors, b.bytes, b.blank, b.legacy_unusable));
+  EXPECT_EQ(by_frame->error(), by_packet->error());
+  EXPECT_EQ(by_frame->ending(), by_packet->ending());
+  return n;
+}
+
 TEST_P(LogFileRoundTrip, NextVisionReturnsVisionAndCompatibleLegacyPacketsAndCountsTheRest) {
   const fs::path file = path(std::string("mixed") + GetParam());
   // A 2010-schema packet: today's detection fields plus the old geometry, whose field 1 was the
@@ -333,6 +398,8 @@ TEST_P(LogFileRoundTrip, NextVisionReturnsVisionAndCompatibleLegacyPacketsAndCou
   EXPECT_EQ(c.unknown, 1u);
   EXPECT_EQ(c.parse_errors, 2u);     // the garbage type 4 and the garbage type 2
   EXPECT_EQ(c.legacy_unusable, 2u);  // no detection; a ball without y
+
+  EXPECT_EQ(expect_frames_as_packets(file), 4u) << "the VisionFrame reader sees the same packets";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -367,6 +434,14 @@ TEST(LogFileGrSim, ReadsAllVisionPacketsOfTheRecording) {
   }
   EXPECT_EQ(reader->offset(), read_file(file).size());
   EXPECT_EQ(reader->compressed_offset(), fs::file_size(file));
+}
+
+// Offline training reads frames (detection packets decoded straight from the bytes, the
+// geometry-carrying ones through protobuf): the same frames, times and counters as the packets.
+TEST(LogFileGrSim, VisionFramesAreThePacketsOfTheRecording) {
+  EXPECT_EQ(expect_frames_as_packets(fs::path(SSLF_TEST_DATA_DIR) / "grsim-4cam-11v11-idle.log.gz"),
+            2353u);
+  EXPECT_GT(expect_frames_as_packets(fs::path(SSLF_TEST_DATA_DIR) / "step-golden.log.gz"), 0u);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -475,6 +550,7 @@ TEST_P(LogFileDamaged, TruncatedLastMessage) {
   EXPECT_EQ(log.packets.size(), 3u);
   EXPECT_EQ(log.ending, LogReader::Ending::cut_off);
   EXPECT_EQ(log.counters.vision, 3u);
+  EXPECT_EQ(expect_frames_as_packets(file()), 3u);
 }
 
 TEST_P(LogFileDamaged, TruncatedInsideAMessageHeader) {

@@ -17,12 +17,12 @@
 #include <utility>
 #include <vector>
 
+#include "circling_robots.hpp"
 #include "scratch_dir.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
-#include "circling_robots.hpp"
 #include "ssl_formation/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -45,7 +45,8 @@ std::uint32_t version_of(const fs::path& path) {
   const std::string bytes = read_bytes(path);
   if (bytes.size() < 12) return 0;
   std::uint32_t value = 0;
-  for (int i = 0; i < 4; ++i) value |= std::uint32_t{static_cast<std::uint8_t>(bytes[8 + i])} << (8 * i);
+  for (int i = 0; i < 4; ++i)
+    value |= std::uint32_t{static_cast<std::uint8_t>(bytes[8 + i])} << (8 * i);
   return value;
 }
 
@@ -92,8 +93,8 @@ TrainerOptions parse(std::vector<std::string> args) {
 int train_from_logs(const std::vector<std::string>& args) { return run_offline(parse(args)); }
 
 // What Training computes from the same streams with the options' model, one stream per file.
-std::unique_ptr<Training> library_training(const TrainerOptions& options,
-                                           const std::vector<std::vector<SSL_WrapperPacket>>& streams) {
+std::unique_ptr<Training> library_training(
+    const TrainerOptions& options, const std::vector<std::vector<SSL_WrapperPacket>>& streams) {
   const auto motion = motion_config(options);
   auto training = std::make_unique<Training>(
       options.model.sampler_config(), TransitionTable(options.model.parsed_grid()), 0,
@@ -176,8 +177,7 @@ TEST_F(MotionTraining, ResumesAVersionTwoTableAndGoesOn) {
   ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string()}),
             0);
   ASSERT_EQ(
-      train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("t.bin").string()}),
-      0);
+      train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("t.bin").string()}), 0);
   const StoredTable stored = load(at("t.bin"));
   ASSERT_TRUE(stored.motion.has_value());
   const auto expected = library_training(parse({}), {a_, b_});
@@ -214,8 +214,8 @@ TEST_F(MotionTraining, RefusesToResumeAVersionOneTableWithTheMotionModel) {
       std::runtime_error);
   EXPECT_EQ(version_of(at("t.bin")), table_file_version);
   // --reset replaces it at the first save.
-  auto training = open_training(at("t.bin"), parse({}).model.sampler_config(), true,
-                                motion_config(parse({})));
+  auto training =
+      open_training(at("t.bin"), parse({}).model.sampler_config(), true, motion_config(parse({})));
   EXPECT_TRUE(training->motion().has_value());
 }
 
@@ -233,8 +233,8 @@ TEST_F(MotionTraining, RefusesToResumeAnotherHorizon) {
 
 TEST_F(MotionTraining, SavesAndResumesInProcess) {
   const TrainerOptions options = parse({"--horizon", "2"});
-  auto training = open_training(at("t.bin"), options.model.sampler_config(), false,
-                                motion_config(options));
+  auto training =
+      open_training(at("t.bin"), options.model.sampler_config(), false, motion_config(options));
   ASSERT_TRUE(training->motion().has_value());
   for (const auto& packet : a_) training->add(packet);
   ASSERT_TRUE(training->changed_since_save());
@@ -242,12 +242,42 @@ TEST_F(MotionTraining, SavesAndResumesInProcess) {
   EXPECT_FALSE(training->changed_since_save());
   EXPECT_EQ(version_of(at("t.bin")), table_file_motion_version);
 
-  auto resumed = open_training(at("t.bin"), options.model.sampler_config(), false,
-                               motion_config(options));
+  auto resumed =
+      open_training(at("t.bin"), options.model.sampler_config(), false, motion_config(options));
   ASSERT_TRUE(resumed->motion().has_value());
   EXPECT_TRUE(*resumed->motion() == *training->motion());
   EXPECT_EQ(entries(resumed->table()), entries(training->table()));
   EXPECT_FALSE(resumed->changed_since_save());
+}
+
+// Training on a log's VisionFrames (LogReader::next_vision decoding detection packets straight
+// from the bytes) gives the tables of training on its parsed packets, the motion table bit for
+// bit: on the circling robots and on a grSim recording (geometry inside some of its packets).
+TEST_F(MotionTraining, FramesReadFromALogTrainWhatItsPacketsTrain) {
+  const TrainerOptions options = parse({});
+  const fs::path grsim = fs::path(SSLF_TEST_DATA_DIR) / "grsim-4cam-11v11-idle.log.gz";
+  std::vector<std::vector<SSL_WrapperPacket>> streams;
+  const auto motion = motion_config(options);
+  Training from_frames(options.model.sampler_config(), TransitionTable(options.model.parsed_grid()),
+                       0, MotionTable(*motion));
+  for (const fs::path& file : {at("a.log"), at("b.log.gz"), grsim}) {
+    auto packets = LogReader::open(file);
+    auto frames = LogReader::open(file);
+    ASSERT_TRUE(packets && frames) << file;
+    streams.emplace_back();
+    SSL_WrapperPacket packet;
+    while (packets->next_vision(packet)) streams.back().push_back(packet);
+    from_frames.start_new_stream();
+    VisionFrame frame;
+    while (frames->next_vision(frame)) from_frames.add(frame);
+  }
+  ASSERT_EQ(streams[0].size(), a_.size());
+  const auto from_packets = library_training(options, streams);
+  ASSERT_TRUE(from_frames.motion().has_value());
+  EXPECT_GT(from_frames.motion()->instances(), 0u);
+  EXPECT_TRUE(*from_frames.motion() == *from_packets->motion());
+  EXPECT_EQ(entries(from_frames.table()), entries(from_packets->table()));
+  EXPECT_EQ(from_frames.samples(), from_packets->samples());
 }
 
 // Two tables trained from two logs and merged equal the table trained on both logs at once,
@@ -258,8 +288,8 @@ TEST_F(MotionTraining, MergeOfVersionTwoTablesEqualsTrainingOnBothLogs) {
   ASSERT_EQ(
       train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("tb.bin").string()}),
       0);
-  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), at("b.log.gz").string(),
-                             "--table", at("tab.bin").string()}),
+  ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), at("b.log.gz").string(), "--table",
+                             at("tab.bin").string()}),
             0);
   merge_tables({at("ta.bin").string(), at("tb.bin").string()}, at("merged.bin"));
   EXPECT_EQ(version_of(at("merged.bin")), table_file_motion_version);
@@ -293,8 +323,9 @@ TEST_F(MotionTraining, MergeRefusesToMixTheModels) {
   ASSERT_EQ(train_from_logs({"--from-log", at("b.log.gz").string(), "--table",
                              at("v1.bin").string(), "--model", "paper"}),
             0);
-  for (const auto& inputs : {std::vector<std::string>{at("v2.bin").string(), at("v1.bin").string()},
-                             std::vector<std::string>{at("v1.bin").string(), at("v2.bin").string()}}) {
+  for (const auto& inputs :
+       {std::vector<std::string>{at("v2.bin").string(), at("v1.bin").string()},
+        std::vector<std::string>{at("v1.bin").string(), at("v2.bin").string()}}) {
     try {
       merge_tables(inputs, at("merged.bin"));
       ADD_FAILURE() << "merged a version-1 and a version-2 table";

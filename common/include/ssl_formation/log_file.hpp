@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ssl_formation/result.hpp"
+#include "ssl_formation/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 struct gzFile_s;  // zlib's file, kept out of this header
@@ -84,6 +85,11 @@ class LogReader {
   // is dropped since its field numbers mean other things now), skipping and counting the others.
   // Packets that fail to parse are counted as parse_errors and skipped.
   bool next_vision(SSL_WrapperPacket& packet, std::int64_t* receive_time_ns = nullptr);
+  // The same packets as what sampling reads (VisionFrame), skipped and counted alike: each frame
+  // is to_vision_frame() of the packet the overload above returns. A detection-only type-4
+  // payload is decoded straight from the bytes (decode_detection_datagram), anything else is
+  // parsed by protobuf as above; offline training's protobuf parse was most of its reading time.
+  bool next_vision(VisionFrame& frame, std::int64_t* receive_time_ns = nullptr);
 
   const std::string& error() const { return error_; }
   // How reading ended so far: the file ending inside its last message (what a recorder killed
@@ -106,6 +112,8 @@ class LogReader {
   };
 
   explicit LogReader(std::filesystem::path path, detail::GzFilePtr file);
+  // Parses a vision payload (type 4, or a usable type 2) into `packet`, counting what fails.
+  bool parse_vision(const Header& header, std::string_view payload, SSL_WrapperPacket& packet);
   // The next message's header and payload; the payload view stays valid until the next call.
   bool next_view(Header& header, std::string_view& payload);
   void count(std::int32_t type);
@@ -129,6 +137,7 @@ class LogReader {
   bool eof_ = false;   // the file has no more bytes
   bool done_ = false;  // clean end or error: next() returns false from now on
   std::string scratch_;
+  SSL_WrapperPacket packet_scratch_;  // next_vision(VisionFrame&)'s protobuf parses
   std::string error_;
   Ending ending_ = Ending::none;
   LogReadCounters counters_;
