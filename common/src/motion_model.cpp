@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <tuple>
 
@@ -58,44 +59,61 @@ std::size_t row_slot(MotionKey key, std::size_t mask) {
 }  // namespace
 
 MotionRow& MotionRowMap::operator[](MotionKey key) {
-  if (2 * (size_ + 1) > keys_.size()) grow();
-  const std::size_t mask = keys_.size() - 1;
-  for (std::size_t slot = row_slot(key, mask);; slot = (slot + 1) & mask) {
-    if (keys_[slot] == key) return rows_[slot];
-    if (keys_[slot] == empty_key) {
-      keys_[slot] = key;
-      ++size_;
-      return rows_[slot];
+  if (2 * (rows_.size() + 1) > slots_.size()) grow();
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = row_slot(key, mask);; i = (i + 1) & mask) {
+    Slot& slot = slots_[i];
+    if (slot.key == key) return rows_[slot.row];
+    if (slot.key == empty_key) {
+      slot.key = key;
+      slot.row = static_cast<std::uint32_t>(rows_.size());
+      row_keys_.push_back(key);
+      return rows_.emplace_back();
     }
   }
 }
 
 const MotionRow* MotionRowMap::find(MotionKey key) const {
-  if (keys_.empty()) return nullptr;
-  const std::size_t mask = keys_.size() - 1;
-  for (std::size_t slot = row_slot(key, mask);; slot = (slot + 1) & mask) {
-    if (keys_[slot] == key) return &rows_[slot];
-    if (keys_[slot] == empty_key) return nullptr;
+  if (slots_.empty()) return nullptr;
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = row_slot(key, mask);; i = (i + 1) & mask) {
+    const Slot& slot = slots_[i];
+    if (slot.key == key) return &rows_[slot.row];
+    if (slot.key == empty_key) return nullptr;
   }
+}
+
+void MotionRowMap::prefetch_slot(MotionKey key) const {
+  if (slots_.empty()) return;
+  __builtin_prefetch(&slots_[row_slot(key, slots_.size() - 1)]);
+}
+
+void MotionRowMap::prefetch_row(MotionKey key) const {
+  const MotionRow* row = find(key);
+  if (row == nullptr) return;
+  const char* bytes = reinterpret_cast<const char*>(row);
+  for (std::size_t at = 0; at < sizeof(MotionRow); at += 64) __builtin_prefetch(bytes + at);
+  __builtin_prefetch(bytes + sizeof(MotionRow) - 1);
+}
+
+std::size_t MotionRowMap::memory_bytes() const {
+  return slots_.capacity() * sizeof(Slot) + row_keys_.capacity() * sizeof(MotionKey) +
+         rows_.capacity() * sizeof(MotionRow);
 }
 
 void MotionRowMap::grow() {
-  std::vector<MotionKey> keys(std::max<std::size_t>(64, keys_.size() * 2), empty_key);
-  std::vector<MotionRow> rows(keys.size());
-  const std::size_t mask = keys.size() - 1;
-  for (std::size_t i = 0; i < keys_.size(); ++i) {
-    if (keys_[i] == empty_key) continue;
-    std::size_t slot = row_slot(keys_[i], mask);
-    while (keys[slot] != empty_key) slot = (slot + 1) & mask;
-    keys[slot] = keys_[i];
-    rows[slot] = rows_[i];
+  std::vector<Slot> slots(std::max<std::size_t>(64, slots_.size() * 2));
+  const std::size_t mask = slots.size() - 1;
+  for (std::size_t row = 0; row < row_keys_.size(); ++row) {
+    std::size_t i = row_slot(row_keys_[row], mask);
+    while (slots[i].key != empty_key) i = (i + 1) & mask;
+    slots[i] = Slot{row_keys_[row], static_cast<std::uint32_t>(row)};
   }
-  keys_ = std::move(keys);
-  rows_ = std::move(rows);
+  slots_ = std::move(slots);
 }
 
 bool operator==(const MotionRowMap& a, const MotionRowMap& b) {
-  if (a.size_ != b.size_) return false;
+  if (a.size() != b.size()) return false;
   bool equal = true;
   a.for_each([&](MotionKey key, const MotionRow& row) {
     const MotionRow* other = b.find(key);
@@ -270,6 +288,48 @@ void MotionTable::add(int horizon_index, double time_s, const MotionInstance& i)
     add_held_out(horizon_index, HeldOutInstance{instance_hash(horizon_index, time_s, i), i});
     return;
   }
+  count(horizon_index, encode_motion_key(motion_key_parts(horizon_index, i)), i);
+}
+
+void MotionTable::add(std::span<const Learned> learned) {
+  // A chunk at a time: every counted instance's key and index slot, then their rows, then the
+  // counts, so that the cache misses of a chunk's rows overlap rather than queue.
+  constexpr std::size_t chunk = 32;
+  std::array<MotionKey, chunk> keys{};
+  std::array<bool, chunk> held{};
+  for (std::size_t start = 0; start < learned.size(); start += chunk) {
+    const std::size_t n = std::min(chunk, learned.size() - start);
+    const Learned* batch = learned.data() + start;
+    // The instances of one horizon mostly share their start time, hence their block.
+    double block_time_s = std::numeric_limits<double>::quiet_NaN();
+    bool block_held = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (batch[i].time_s != block_time_s) {
+        block_time_s = batch[i].time_s;
+        block_held = is_held_out(block_time_s);
+      }
+      held[i] = block_held;
+      if (held[i]) continue;
+      keys[i] = encode_motion_key(motion_key_parts(batch[i].horizon_index, batch[i].instance));
+      rows_.prefetch_slot(keys[i]);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!held[i]) rows_.prefetch_row(keys[i]);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const Learned& l = batch[i];
+      if (held[i]) {
+        add_held_out(
+            l.horizon_index,
+            HeldOutInstance{instance_hash(l.horizon_index, l.time_s, l.instance), l.instance});
+      } else {
+        count(l.horizon_index, keys[i], l.instance);
+      }
+    }
+  }
+}
+
+void MotionTable::count(int horizon_index, MotionKey key, const MotionInstance& i) {
   const double horizon_s = (horizon_index + 1) * config_.step_s;
   const MotionRegressors regressors = motion_regressors_of(i.kinematics(), horizon_s);
   std::array<std::array<std::int64_t, 2>, motion_regressors> x{};
@@ -277,7 +337,7 @@ void MotionTable::add(int horizon_index, double time_s, const MotionInstance& i)
     x[r] = {whole_mm(regressors[r].x), whole_mm(regressors[r].y)};
   }
   ++instances_;
-  rows_[encode_motion_key(motion_key_parts(horizon_index, i))].add({i.d_x, i.d_y}, x);
+  rows_[key].add({i.d_x, i.d_y}, x);
 }
 
 void MotionTable::add_row(MotionKey key, const MotionRow& row) {
@@ -313,7 +373,7 @@ void MotionTable::merge(const MotionTable& other) {
 }
 
 std::size_t MotionTable::memory_bytes() const {
-  std::size_t bytes = rows_.capacity() * (sizeof(MotionKey) + sizeof(MotionRow));
+  std::size_t bytes = rows_.memory_bytes();
   for (const auto& heap : held_out_) bytes += heap.capacity() * sizeof(HeldOutInstance);
   return bytes;
 }
@@ -353,16 +413,23 @@ constexpr double forget_after_gap_s = 1.0;  // no robot data for this long: the 
 MotionHistory::MotionHistory(const MotionConfig& config)
     : config_(config),
       keep_s_(config.horizons * config.step_s +
-              std::max({config.velocity_window_s, config.settle_window_s,
-                        config.long_settle_window_s}) +
+              std::max(
+                  {config.velocity_window_s, config.settle_window_s, config.long_settle_window_s}) +
               2.0 * config.tolerance_s) {}
 
 void MotionHistory::Track::push(const Entry& entry) {
   if (end - begin == ring.size()) {
-    std::vector<Entry> grown(std::max<std::size_t>(64, ring.size() * 2));
-    for (std::uint64_t seq = begin; seq < end; ++seq) grown[seq & (grown.size() - 1)] = at(seq);
+    const std::size_t size = std::max<std::size_t>(64, ring.size() * 2);
+    std::vector<Entry> grown(size);
+    std::vector<double> grown_times(size);
+    for (std::uint64_t seq = begin; seq < end; ++seq) {
+      grown[seq & (size - 1)] = at(seq);
+      grown_times[seq & (size - 1)] = time_at(seq);
+    }
     ring = std::move(grown);
+    times = std::move(grown_times);
   }
+  times[end & (times.size() - 1)] = entry.time_s;
   at(end++) = entry;
 }
 
@@ -392,11 +459,11 @@ const MotionHistory::Entry* MotionHistory::nearest(const Track& track, std::uint
   // `after` is the first entry at or after time_s: it or the one before it is the nearest.
   const Entry* best = nullptr;
   double best_gap = config_.tolerance_s + 1e-9;
-  if (after < track.end && track.at(after).time_s - time_s <= best_gap) {
+  if (after < track.end && track.time_at(after) - time_s <= best_gap) {
     best = &track.at(after);
-    best_gap = track.at(after).time_s - time_s;
+    best_gap = track.time_at(after) - time_s;
   }
-  if (after > track.begin && time_s - track.at(after - 1).time_s <= best_gap) {
+  if (after > track.begin && time_s - track.time_at(after - 1) <= best_gap) {
     best = &track.at(after - 1);
   }
   return best;
@@ -414,11 +481,11 @@ void MotionHistory::add(const Formation& formation) {
   for (const FormationRobot& robot : formation.robots) {
     if (robot.robot_id >= tracks_.size()) tracks_.resize(robot.robot_id + 1);
     Track& track = tracks_[robot.robot_id];
-    while (track.begin < track.end && track.at(track.begin).time_s < t - keep_s_) ++track.begin;
+    while (track.begin < track.end && track.time_at(track.begin) < t - keep_s_) ++track.begin;
     // Cursors: the first entry at or after each window's start.
     const auto advance = [&](std::uint64_t& cursor, double from_s) {
       cursor = std::max(cursor, track.begin);
-      while (cursor < track.end && track.at(cursor).time_s < from_s) ++cursor;
+      while (cursor < track.end && track.time_at(cursor) < from_s) ++cursor;
     };
     advance(track.velocity_cursor, t - config_.velocity_window_s);
     advance(track.settle_cursor, t - config_.settle_window_s);
@@ -482,18 +549,24 @@ const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t rob
   const Track& track = tracks_[robot_id];
   if (track.end == track.begin) return nullptr;
   // The cursor was advanced before the latest entry was pushed, to its time minus the steps.
-  const double time_s = track.at(track.end - 1).time_s - steps * config_.step_s;
+  const double time_s = track.time_at(track.end - 1) - steps * config_.step_s;
   return nearest(track, track.horizon_cursor[static_cast<std::size_t>(steps - 1)], time_s);
 }
 
 void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now) {
   const MotionConfig& config = table.config();
   if (!history.take_learning_instant(now.time_s, config.learn_interval_s)) return;
+  // Gathered, then counted a batch at a time (MotionTable::add's prefetching), in this order.
+  std::array<MotionTable::Learned, 48> batch;
+  std::size_t pending = 0;
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= config.horizons; ++k) {
       const MotionHistory::Entry* then = history.steps_before_latest(robot.robot_id, k);
       if (!then || !then->has_velocity || then->time_s >= now.time_s) continue;
-      MotionInstance instance;
+      MotionTable::Learned& learned = batch[pending++];
+      learned.horizon_index = k - 1;
+      learned.time_s = then->time_s;
+      MotionInstance& instance = learned.instance;
       instance.robot_id = robot.robot_id;
       instance.x = whole_mm(then->position.x);
       instance.y = whole_mm(then->position.y);
@@ -509,9 +582,13 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
       instance.d_x = whole_mm(robot.position.x - then->position.x);
       instance.d_y = whole_mm(robot.position.y - then->position.y);
       instance.context = then->context;
-      table.add(k - 1, then->time_s, instance);
+      if (pending == batch.size()) {
+        table.add(std::span<const MotionTable::Learned>(batch.data(), pending));
+        pending = 0;
+      }
     }
   }
+  table.add(std::span<const MotionTable::Learned>(batch.data(), pending));
 }
 
 }  // namespace ssl_formation

@@ -1,6 +1,7 @@
 #include "ssl_formation/vision_frame.hpp"
 
 #include <bit>
+#include <cstring>
 #include <initializer_list>
 #include <type_traits>
 
@@ -39,6 +40,11 @@ class Reader {
   // A varint of at most 32 bits. Longer ones (which protobuf truncates for uint32 fields, or
   // negative enum values) are left to protobuf.
   bool varint32(std::uint32_t& out) {
+    // One byte: every key of the schema, ids and frame numbers below 128.
+    if (p_ != end_ && *p_ < 0x80U) {
+      out = *p_++;
+      return true;
+    }
     std::uint32_t value = 0;
     for (int shift = 0; shift <= 28; shift += 7) {
       if (p_ == end_) return false;
@@ -59,7 +65,11 @@ class Reader {
   bool fixed(Float& out) {
     if (end_ - p_ < static_cast<std::ptrdiff_t>(sizeof(Bits))) return false;
     Bits bits = 0;
-    for (int i = sizeof(Bits) - 1; i >= 0; --i) bits = bits << 8 | p_[i];
+    if constexpr (std::endian::native == std::endian::little) {
+      std::memcpy(&bits, p_, sizeof(Bits));
+    } else {
+      for (int i = sizeof(Bits) - 1; i >= 0; --i) bits = bits << 8 | p_[i];
+    }
     p_ += sizeof(Bits);
     out = std::bit_cast<Float>(bits);
     return true;

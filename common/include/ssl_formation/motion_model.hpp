@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -167,30 +168,39 @@ inline constexpr std::array<std::int32_t MotionInstance::*, 12> motion_instance_
     &MotionInstance::v_x, &MotionInstance::v_y, &MotionInstance::a_x, &MotionInstance::a_y,
     &MotionInstance::g_x, &MotionInstance::g_y, &MotionInstance::s_x, &MotionInstance::s_y};
 
-// Rows by key in one open-addressing table (linear probing, at most half full): training adds
-// to a row per robot, horizon and frame, and a node map's allocation and pointer chase per row
-// was most of the training time.
+// Rows by key: the rows one after the other in the order they first came, found through an
+// open-addressing index of (key, row number) slots (linear probing, at most half full). Training
+// adds to a row per robot, horizon and learning instant, all over a table larger than the caches:
+// the index is small and the rows are packed, and prefetch() lets a caller overlap the misses of
+// several rows (a node map's allocation and pointer chase per row was most of the training time).
 class MotionRowMap {
  public:
   MotionRow& operator[](MotionKey key);
   const MotionRow* find(MotionKey key) const;
-  std::size_t size() const { return size_; }
-  std::size_t capacity() const { return keys_.size(); }
+  // A hint that `key` will be looked up soon: fetches its index slot into the cache.
+  void prefetch_slot(MotionKey key) const;
+  // The same for its row, once its slot is there (a row not in the map yet: nothing).
+  void prefetch_row(MotionKey key) const;
+  std::size_t size() const { return rows_.size(); }
+  std::size_t capacity() const { return slots_.size(); }  // index slots
+  std::size_t memory_bytes() const;
   // Every row, in no particular order.
   template <typename Visit>
   void for_each(Visit&& visit) const {
-    for (std::size_t i = 0; i < keys_.size(); ++i) {
-      if (keys_[i] != empty_key) visit(keys_[i], rows_[i]);
-    }
+    for (std::size_t i = 0; i < rows_.size(); ++i) visit(row_keys_[i], rows_[i]);
   }
   friend bool operator==(const MotionRowMap& a, const MotionRowMap& b);
 
  private:
   static constexpr MotionKey empty_key = ~MotionKey{0};  // no key has every bit set
+  struct Slot {
+    MotionKey key = empty_key;
+    std::uint32_t row = 0;  // into rows_ and row_keys_
+  };
   void grow();
-  std::vector<MotionKey> keys_;
+  std::vector<Slot> slots_;
+  std::vector<MotionKey> row_keys_;
   std::vector<MotionRow> rows_;
-  std::size_t size_ = 0;
 };
 
 // A calibration instance and its rank (lower is kept).
@@ -212,6 +222,15 @@ class MotionTable {
   // as a row count or, for a held-out time, as a calibration candidate. `time_s` is when the
   // instance started (the data clock), which decides whether it is held out.
   void add(int horizon_index, double time_s, const MotionInstance& instance);
+  // What add() takes, for adding many at once.
+  struct Learned {
+    int horizon_index = 0;
+    double time_s = 0.0;
+    MotionInstance instance;
+  };
+  // add() for each, in order, with the same result; the rows are fetched for all of them before
+  // any is counted, so that their cache misses overlap.
+  void add(std::span<const Learned> learned);
   // Adds a row's sums (loading a file).
   void add_row(MotionKey key, const MotionRow& row);
   // Offers a calibration instance (loading a file, merging).
@@ -221,7 +240,7 @@ class MotionTable {
   // configurations differ.
   void merge(const MotionTable& other);
 
-  std::uint64_t instances() const { return instances_; }  // counted in rows
+  std::uint64_t instances() const { return instances_; }     // counted in rows
   std::uint64_t held_out() const { return held_out_seen_; }  // offered, kept or not
   // Loading a file: how many held-out instances the saved table had been offered.
   void restore_held_out_seen(std::uint64_t seen) { held_out_seen_ = seen; }
@@ -237,6 +256,9 @@ class MotionTable {
   friend bool operator==(const MotionTable& a, const MotionTable& b);
 
  private:
+  // Counts an instance that is not held out into the row of `key`.
+  void count(int horizon_index, MotionKey key, const MotionInstance& instance);
+
   MotionConfig config_;
   MotionRowMap rows_;
   // Per horizon a max-heap (by hash, then content) of the kept calibration instances.
@@ -281,12 +303,16 @@ class MotionHistory {
   // a binary search.
   struct Track {
     std::vector<Entry> ring;  // a power-of-two size
+    // The entries' times again, packed: the cursors' scans read only these, from a few cache
+    // lines instead of one 128-byte entry each.
+    std::vector<double> times;
     std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
     std::uint64_t velocity_cursor = 0, settle_cursor = 0, long_settle_cursor = 0;
     std::array<std::uint64_t, MotionConfig::max_horizons> horizon_cursor{};  // k steps ago
     std::optional<double> still_since_s;  // when the robot last came to a stand, if it stands
     const Entry& at(std::uint64_t seq) const { return ring[seq & (ring.size() - 1)]; }
     Entry& at(std::uint64_t seq) { return ring[seq & (ring.size() - 1)]; }
+    double time_at(std::uint64_t seq) const { return times[seq & (times.size() - 1)]; }
     void push(const Entry& entry);
     void clear();
   };
