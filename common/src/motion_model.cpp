@@ -32,6 +32,7 @@ std::uint64_t instance_hash(int horizon_index, double time_s, const MotionInstan
 // The heap order: higher hash first, ties broken by content so that the kept set never depends
 // on the order instances arrived in.
 bool ranks_before(const HeldOutInstance& a, const HeldOutInstance& b) {
+  if (a.hash != b.hash) return a.hash < b.hash;  // nearly always: no tuples to build
   const auto key = [](const HeldOutInstance& h) {
     const MotionInstance& i = h.instance;
     return std::tuple(h.hash, i.robot_id, i.x, i.y, i.d_x, i.d_y, i.v_x, i.v_y, i.a_x, i.a_y,
@@ -331,11 +332,19 @@ void MotionTable::add(std::span<const Learned> learned) {
 
 void MotionTable::count(int horizon_index, MotionKey key, const MotionInstance& i) {
   const double horizon_s = (horizon_index + 1) * config_.step_s;
-  const MotionRegressors regressors = motion_regressors_of(i.kinematics(), horizon_s);
-  std::array<std::array<std::int64_t, 2>, motion_regressors> x{};
-  for (int r = 0; r < motion_regressors; ++r) {
-    x[r] = {whole_mm(regressors[r].x), whole_mm(regressors[r].y)};
-  }
+  // motion_regressors_of(i.kinematics(), horizon_s) in whole millimetres. The settle-window
+  // regressors are whole millimetres already: whole_mm of a whole number is that number clamped
+  // to +-1e9, so only the two scaled by the horizon need rounding.
+  static_assert(motion_regressors == 4);
+  const auto whole = [](std::int32_t mm) -> std::int64_t {
+    return std::clamp(mm, std::int32_t{-1000000000}, std::int32_t{1000000000});
+  };
+  const std::array<std::array<std::int64_t, 2>, motion_regressors> x{{
+      {whole_mm(i.v_x * horizon_s), whole_mm(i.v_y * horizon_s)},
+      {whole_mm(i.a_x * horizon_s), whole_mm(i.a_y * horizon_s)},
+      {whole(i.g_x), whole(i.g_y)},
+      {whole(i.s_x), whole(i.s_y)},
+  }};
   ++instances_;
   rows_[key].add({i.d_x, i.d_y}, x);
 }
