@@ -36,6 +36,12 @@ class Reader {
   Reader(const unsigned char* begin, const unsigned char* end) : p_(begin), end_(end) {}
 
   bool done() const { return p_ == end_; }
+  // Consumes a one-byte key if it is next.
+  bool take(std::uint32_t key) {
+    if (p_ == end_ || *p_ != key) return false;
+    ++p_;
+    return true;
+  }
 
   // A varint of at most 32 bits. Longer ones (which protobuf truncates for uint32 fields, or
   // negative enum values) are left to protobuf.
@@ -115,9 +121,28 @@ class SeenFields {
   std::uint32_t seen_ = 0;
 };
 
+// A robot as protobuf writes it (SSL-Vision, grSim and the simulated producer alike): every field
+// once, in field-number order, the optional ones maybe missing. Read in one pass, without the
+// general loop's bookkeeping; false for any other layout.
+bool robot_in_order(Reader in, VisionRobot& out) {
+  float ignored = 0.0F;
+  if (!in.take(tag(1, fixed32_type)) || !in.fixed(out.confidence)) return false;
+  out.has_robot_id = in.take(tag(2, varint_type));
+  if (out.has_robot_id && !in.varint32(out.robot_id)) return false;
+  if (!in.take(tag(3, fixed32_type)) || !in.fixed(out.x)) return false;
+  if (!in.take(tag(4, fixed32_type)) || !in.fixed(out.y)) return false;
+  if (in.take(tag(5, fixed32_type)) && !in.fixed(ignored)) return false;
+  if (!in.take(tag(6, fixed32_type)) || !in.fixed(ignored)) return false;
+  if (!in.take(tag(7, fixed32_type)) || !in.fixed(ignored)) return false;
+  if (in.take(tag(8, fixed32_type)) && !in.fixed(ignored)) return false;
+  return in.done();
+}
+
 // SSL_DetectionRobot: confidence 1, robot_id 2, x 3, y 4, orientation 5, pixel_x 6, pixel_y 7,
 // height 8.
 bool robot(Reader in, VisionRobot& out) {
+  if (robot_in_order(in, out)) return true;
+  out = VisionRobot{};  // nothing of the attempt stays
   SeenFields seen;
   out.has_robot_id = false;
   while (!in.done()) {
