@@ -426,7 +426,7 @@ MotionHistory::MotionHistory(const MotionConfig& config)
                   {config.velocity_window_s, config.settle_window_s, config.long_settle_window_s}) +
               2.0 * config.tolerance_s) {}
 
-void MotionHistory::Track::push(const Entry& entry) {
+void MotionHistory::Track::make_room() {
   if (end - begin == ring.size()) {
     const std::size_t size = std::max<std::size_t>(64, ring.size() * 2);
     std::vector<Entry> grown(size);
@@ -438,8 +438,6 @@ void MotionHistory::Track::push(const Entry& entry) {
     ring = std::move(grown);
     times = std::move(grown_times);
   }
-  times[end & (times.size() - 1)] = entry.time_s;
-  at(end++) = entry;
 }
 
 void MotionHistory::Track::clear() {
@@ -503,8 +501,12 @@ void MotionHistory::add(const Formation& formation) {
       advance(track.horizon_cursor[static_cast<std::size_t>(k - 1)], t - k * config_.step_s);
     }
 
+    // The new entry is written in place, in the ring's next free slot (made first, so that no
+    // pointer into the ring moves after this) and counts once it is complete.
+    track.make_room();
     const Entry* last = track.end > track.begin ? &track.at(track.end - 1) : nullptr;
-    Entry entry;
+    Entry& entry = track.at(track.end);
+    entry = Entry{};
     entry.time_s = t;
     entry.position = robot.position;
     entry.sum_x = robot.position.x + (last ? last->sum_x : 0.0);
@@ -542,7 +544,8 @@ void MotionHistory::add(const Formation& formation) {
       }
       entry.context = standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0;
     }
-    track.push(entry);
+    track.times[track.end & (track.times.size() - 1)] = t;
+    ++track.end;
   }
 }
 

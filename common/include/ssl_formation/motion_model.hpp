@@ -313,7 +313,7 @@ class MotionHistory {
     const Entry& at(std::uint64_t seq) const { return ring[seq & (ring.size() - 1)]; }
     Entry& at(std::uint64_t seq) { return ring[seq & (ring.size() - 1)]; }
     double time_at(std::uint64_t seq) const { return times[seq & (times.size() - 1)]; }
-    void push(const Entry& entry);
+    void make_room();  // grows the ring if full: at(end) is then a free slot
     void clear();
   };
   const Entry* nearest(const Track& track, std::uint64_t after, double time_s) const;
