@@ -76,12 +76,17 @@ MotionRow& MotionRowMap::operator[](MotionKey key) {
 }
 
 const MotionRow* MotionRowMap::find(MotionKey key) const {
-  if (slots_.empty()) return nullptr;
+  const std::uint32_t number = row_number(key);
+  return number == no_row ? nullptr : &rows_[number];
+}
+
+std::uint32_t MotionRowMap::row_number(MotionKey key) const {
+  if (slots_.empty()) return no_row;
   const std::size_t mask = slots_.size() - 1;
   for (std::size_t i = row_slot(key, mask);; i = (i + 1) & mask) {
     const Slot& slot = slots_[i];
-    if (slot.key == key) return &rows_[slot.row];
-    if (slot.key == empty_key) return nullptr;
+    if (slot.key == key) return slot.row;
+    if (slot.key == empty_key) return no_row;
   }
 }
 
@@ -90,10 +95,8 @@ void MotionRowMap::prefetch_slot(MotionKey key) const {
   __builtin_prefetch(&slots_[row_slot(key, slots_.size() - 1)]);
 }
 
-void MotionRowMap::prefetch_row(MotionKey key) const {
-  const MotionRow* row = find(key);
-  if (row == nullptr) return;
-  const char* bytes = reinterpret_cast<const char*>(row);
+void MotionRowMap::prefetch_row(std::uint32_t number) const {
+  const char* bytes = reinterpret_cast<const char*>(&rows_[number]);
   for (std::size_t at = 0; at < sizeof(MotionRow); at += 64) __builtin_prefetch(bytes + at);
   __builtin_prefetch(bytes + sizeof(MotionRow) - 1);
 }
@@ -290,7 +293,7 @@ void MotionTable::add(int horizon_index, double time_s, const MotionInstance& i)
     add_held_out(horizon_index, HeldOutInstance{instance_hash(horizon_index, time_s, i), i});
     return;
   }
-  count(horizon_index, encode_motion_key(motion_key_parts(horizon_index, i)), i);
+  count(horizon_index, rows_[encode_motion_key(motion_key_parts(horizon_index, i))], i);
 }
 
 void MotionTable::add(std::span<const Learned> learned) {
@@ -298,6 +301,7 @@ void MotionTable::add(std::span<const Learned> learned) {
   // counts, so that the cache misses of a chunk's rows overlap rather than queue.
   constexpr std::size_t chunk = 32;
   std::array<MotionKey, chunk> keys{};
+  std::array<std::uint32_t, chunk> rows{};  // row numbers, no_row for a row still to make
   std::array<bool, chunk> held{};
   for (std::size_t start = 0; start < learned.size(); start += chunk) {
     const std::size_t n = std::min(chunk, learned.size() - start);
@@ -316,7 +320,9 @@ void MotionTable::add(std::span<const Learned> learned) {
       rows_.prefetch_slot(keys[i]);
     }
     for (std::size_t i = 0; i < n; ++i) {
-      if (!held[i]) rows_.prefetch_row(keys[i]);
+      if (held[i]) continue;
+      rows[i] = rows_.row_number(keys[i]);
+      if (rows[i] != MotionRowMap::no_row) rows_.prefetch_row(rows[i]);
     }
     for (std::size_t i = 0; i < n; ++i) {
       const Learned& l = batch[i];
@@ -324,14 +330,16 @@ void MotionTable::add(std::span<const Learned> learned) {
         add_held_out(
             l.horizon_index,
             HeldOutInstance{instance_hash(l.horizon_index, l.time_s, l.instance), l.instance});
+      } else if (rows[i] != MotionRowMap::no_row) {
+        count(l.horizon_index, rows_.row(rows[i]), l.instance);  // row numbers never change
       } else {
-        count(l.horizon_index, keys[i], l.instance);
+        count(l.horizon_index, rows_[keys[i]], l.instance);
       }
     }
   }
 }
 
-void MotionTable::count(int horizon_index, MotionKey key, const MotionInstance& i) {
+void MotionTable::count(int horizon_index, MotionRow& row, const MotionInstance& i) {
   const double horizon_s = (horizon_index + 1) * config_.step_s;
   // motion_regressors_of(i.kinematics(), horizon_s) in whole millimetres. The settle-window
   // regressors are whole millimetres already: whole_mm of a whole number is that number clamped
@@ -347,7 +355,7 @@ void MotionTable::count(int horizon_index, MotionKey key, const MotionInstance& 
       {whole(i.s_x), whole(i.s_y)},
   }};
   ++instances_;
-  rows_[key].add({i.d_x, i.d_y}, x);
+  row.add({i.d_x, i.d_y}, x);
 }
 
 void MotionTable::add_row(MotionKey key, const MotionRow& row) {

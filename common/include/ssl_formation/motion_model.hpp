@@ -177,10 +177,14 @@ class MotionRowMap {
  public:
   MotionRow& operator[](MotionKey key);
   const MotionRow* find(MotionKey key) const;
-  // A hint that `key` will be looked up soon: fetches its index slot into the cache.
+  // Rows are numbered in the order they came, and keep their number.
+  static constexpr std::uint32_t no_row = ~std::uint32_t{0};
+  std::uint32_t row_number(MotionKey key) const;  // no_row if not in the map
+  MotionRow& row(std::uint32_t number) { return rows_[number]; }
+  // Hints that a row will be used soon: fetches `key`'s index slot, or row `number`, into the
+  // cache.
   void prefetch_slot(MotionKey key) const;
-  // The same for its row, once its slot is there (a row not in the map yet: nothing).
-  void prefetch_row(MotionKey key) const;
+  void prefetch_row(std::uint32_t number) const;
   std::size_t size() const { return rows_.size(); }
   std::size_t capacity() const { return slots_.size(); }  // index slots
   std::size_t memory_bytes() const;
@@ -256,8 +260,8 @@ class MotionTable {
   friend bool operator==(const MotionTable& a, const MotionTable& b);
 
  private:
-  // Counts an instance that is not held out into the row of `key`.
-  void count(int horizon_index, MotionKey key, const MotionInstance& instance);
+  // Counts an instance that is not held out into its row.
+  void count(int horizon_index, MotionRow& row, const MotionInstance& instance);
 
   MotionConfig config_;
   MotionRowMap rows_;
