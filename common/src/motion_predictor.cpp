@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -51,11 +52,16 @@ double quantile(std::vector<double>& values, double p) {
   return values[low] + (rank - static_cast<double>(low)) * (values[high] - values[low]);
 }
 
+std::uint64_t next_model_id() {
+  static std::atomic<std::uint64_t> last{0};
+  return ++last;
+}
+
 }  // namespace
 
 MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
                          MotionModelSettings settings)
-    : config_(table.config()), settings_(settings) {
+    : config_(table.config()), settings_(settings), id_(next_model_id()) {
   const int horizons = config_.horizons;
   horizon_.resize(static_cast<std::size_t>(horizons));
 
@@ -169,9 +175,9 @@ MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& 
     rr -= 2.0 * c[i] * dx[i];
     for (int j = 0; j < r; ++j) rr += c[i] * c[j] * xx[i][j];
   }
-  const double about_fit =
-      std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
-                     n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) / n);
+  const double about_fit = std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
+                                          n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) /
+                                             n);
   e.mean_square = (n * about_fit + k * parent.mean_square) / (n + k);
   return e;
 }
@@ -236,35 +242,71 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
 
 MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot,
                                      const RobotKeys& keys) const {
+  return forecast(horizon_index, robot, resolve(horizon_index, keys));
+}
+
+MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& keys) const {
   const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
-  MotionForecast f;
-  double mean_x = horizon.root.mean_x, mean_y = horizon.root.mean_y;
-  double mean_square = horizon.root.mean_square;
-  std::array<double, motion_regressors> c = horizon.root.coefficients;
-  f.level = MotionLevel::all;
   const MotionKey horizon_bits = encode_motion_key({horizon_index, MotionLevel::robot, 0, 0, 0, 0});
   for (std::size_t level = 0; level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {
-      mean_x = found->mean_x;
-      mean_y = found->mean_y;
-      mean_square = found->mean_square;
-      for (int i = 0; i < motion_regressors; ++i) c[i] = found->coefficients[i];
-      f.level = static_cast<MotionLevel>(level);
-      break;
+      Resolved e;
+      e.mean_x = found->mean_x;
+      e.mean_y = found->mean_y;
+      e.mean_square = found->mean_square;
+      for (int i = 0; i < motion_regressors; ++i) e.coefficients[i] = found->coefficients[i];
+      e.level = static_cast<MotionLevel>(level);
+      return e;
     }
   }
+  return Resolved{horizon.root.mean_x, horizon.root.mean_y, horizon.root.mean_square,
+                  horizon.root.coefficients, MotionLevel::all};
+}
+
+void MotionModel::Cache::clear() {
+  model_id_ = 0;
+  estimates_.clear();
+}
+
+const MotionModel::Resolved* MotionModel::resolve_all(
+    const MotionRobot& robot, std::size_t horizons, Cache* cache,
+    std::array<Resolved, MotionConfig::max_horizons>& scratch) const {
+  const RobotKeys keys = motion_keys(robot);
+  Resolved* out = scratch.data();
+  if (cache) {
+    if (cache->model_id_ != id_ || cache->horizons_ != horizons) {
+      cache->model_id_ = id_;
+      cache->horizons_ = horizons;
+      cache->keys_.fill(empty_slot);
+      cache->estimates_.assign(cache->keys_.size() * horizons, Resolved{});
+    }
+    const auto slot = static_cast<std::size_t>(MotionFeatures::robot_slot(robot.robot_id));
+    out = cache->estimates_.data() + slot * horizons;
+    // The key holds the robot slot, so an entry is only ever this slot's.
+    if (cache->keys_[slot] == keys[0]) return out;
+    cache->keys_[slot] = keys[0];
+  }
+  for (std::size_t h = 0; h < horizons; ++h) out[h] = resolve(static_cast<int>(h), keys);
+  return out;
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot,
+                                     const Resolved& e) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  MotionForecast f;
+  f.level = e.level;
   f.from_counts = horizon.root.n > 0.0;
   const double horizon_s = (horizon_index + 1) * config_.step_s;
   // Without a velocity the robot counts as standing: no regressor moves it.
-  f.position = {robot.position.x + mean_x, robot.position.y + mean_y};
+  f.position = {robot.position.x + e.mean_x, robot.position.y + e.mean_y};
   if (robot.has_velocity) {
     const MotionRegressors x = motion_regressors_of(robot.kinematics, horizon_s);
     for (int i = 0; i < motion_regressors; ++i) {
-      f.position.x += c[i] * x[i].x;
-      f.position.y += c[i] * x[i].y;
+      f.position.x += e.coefficients[i] * x[i].x;
+      f.position.y += e.coefficients[i] * x[i].y;
     }
   }
-  f.mean_square_mm2 = mean_square;
+  f.mean_square_mm2 = e.mean_square;
   const double rms = std::sqrt(f.mean_square_mm2);
   f.radius50_mm = horizon.z50 * rms;
   f.radius90_mm = horizon.z90 * rms;
@@ -358,26 +400,41 @@ double MotionModel::cell_probability(int horizon_index, const MotionForecast& fo
 }
 
 void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
-                          const StateCodec& codec, const FieldSize& field,
-                          AttackDirection attacks, Prediction& out) const {
+                          const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
+                          Prediction& out) const {
+  predict(robots, horizon, codec, field, attacks, out, nullptr);
+}
+
+void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
+                          const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
+                          Prediction& out, Cache& cache) const {
+  predict(robots, horizon, codec, field, attacks, out, &cache);
+}
+
+void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
+                          const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
+                          Prediction& out, Cache* cache) const {
   const Grid& grid = codec.grid();
   const auto steps = static_cast<std::size_t>(horizon);
   out.steps.resize(steps);
   for (PredictedStep& step : out.steps) step.robots.resize(robots.size());
   const int learned = config_.horizons;
 
+  // The learned horizons this prediction reaches.
+  const auto resolved = static_cast<std::size_t>(std::min(horizon, learned));
   for (std::size_t r = 0; r < robots.size(); ++r) {
     const MotionRobot& robot = robots[r];
     // The two forecasts before the current step, for extrapolating beyond the learned ones.
     MotionForecast before_last{robot.position, 0.0, 0.0, 0.0, MotionLevel::all, true};
     MotionForecast last = before_last;
     Cell previous = grid.cell_of(robot.position, field);
-    const RobotKeys keys = motion_keys(robot);
+    std::array<Resolved, MotionConfig::max_horizons> scratch;
+    const Resolved* estimates = resolve_all(robot, resolved, cache, scratch);
     for (int k = 1; k <= horizon; ++k) {
       MotionForecast f;
       int calibration_index = k - 1;
       if (k <= learned) {
-        f = forecast(k - 1, robot, keys);
+        f = forecast(k - 1, robot, estimates[k - 1]);
       } else {
         calibration_index = learned - 1;
         f = last;
@@ -385,8 +442,8 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
                       2.0 * last.position.y - before_last.position.y};
         f.radius50_mm = 2.0 * last.radius50_mm - before_last.radius50_mm;
         f.radius90_mm = 2.0 * last.radius90_mm - before_last.radius90_mm;
-        const double rms = std::sqrt(last.mean_square_mm2) * 2.0 -
-                           std::sqrt(before_last.mean_square_mm2);
+        const double rms =
+            std::sqrt(last.mean_square_mm2) * 2.0 - std::sqrt(before_last.mean_square_mm2);
         f.mean_square_mm2 = rms * rms;
       }
       const Cell cell = grid.cell_of(f.position, field);

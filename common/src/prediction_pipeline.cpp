@@ -61,6 +61,7 @@ void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
                                                 table->metadata.field);
   }
   motion_model_ = std::move(model);
+  motion_cache_.clear();
   table_ = std::move(table);
 }
 
@@ -87,7 +88,7 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
                                 moving ? seen->context : 0});
     }
     motion_model->predict(motion_robots_, config_.horizon, sampler_.codec(), sampler_.field(),
-                          context.opponent_attacks, prediction_);
+                          context.opponent_attacks, prediction_, motion_cache_);
   } else {
     robot_states_.clear();
     for (const FormationRobot& robot : sample.formation.robots) {

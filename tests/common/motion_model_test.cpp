@@ -63,13 +63,13 @@ sf::MotionRobot moving_robot(std::uint32_t id, sf::Point position, sf::Point vel
 
 TEST(MotionFeatures, VelocityClassesSplitSpeedIntoBandsAndDirectionIntoEightSectors) {
   EXPECT_EQ(sf::MotionFeatures::velocity_class({0.0, 0.0}), 0);
-  EXPECT_EQ(sf::MotionFeatures::velocity_class({200.0, 100.0}), 0);  // under 250 mm/s: standing
-  EXPECT_EQ(sf::MotionFeatures::velocity_class({500.0, 0.0}), 1);   // band 1, +x
-  EXPECT_EQ(sf::MotionFeatures::velocity_class({0.0, 500.0}), 3);   // band 1, +y
-  EXPECT_EQ(sf::MotionFeatures::velocity_class({-500.0, 0.0}), 5);  // band 1, -x
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({200.0, 100.0}), 0);   // under 250 mm/s: standing
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({500.0, 0.0}), 1);     // band 1, +x
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({0.0, 500.0}), 3);     // band 1, +y
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({-500.0, 0.0}), 5);    // band 1, -x
   EXPECT_EQ(sf::MotionFeatures::velocity_class({400.0, -400.0}), 8);  // band 1, +x-y
-  EXPECT_EQ(sf::MotionFeatures::velocity_class({1000.0, 0.0}), 9);  // band 2
-  EXPECT_EQ(sf::MotionFeatures::velocity_class({2000.0, 0.0}), 17);  // band 3
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({1000.0, 0.0}), 9);    // band 2
+  EXPECT_EQ(sf::MotionFeatures::velocity_class({2000.0, 0.0}), 17);   // band 3
   EXPECT_LT(sf::MotionFeatures::velocity_class({-3000.0, -3000.0}),
             sf::MotionFeatures::velocity_classes);
 }
@@ -189,6 +189,80 @@ TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
   // Elsewhere on the field only the velocity class is known.
   const sf::MotionForecast far = model.forecast(0, moving_robot(9, {4000.0, -3000.0}, velocity));
   EXPECT_EQ(far.level, sf::MotionLevel::velocity);
+}
+
+// Every value of two predictions, compared exactly.
+void expect_same_prediction(const sf::Prediction& a, const sf::Prediction& b) {
+  ASSERT_EQ(a.steps.size(), b.steps.size());
+  for (std::size_t k = 0; k < a.steps.size(); ++k) {
+    const sf::PredictedStep& x = a.steps[k];
+    const sf::PredictedStep& y = b.steps[k];
+    EXPECT_EQ(x.centroid, y.centroid);
+    EXPECT_EQ(x.centroid_probability, y.centroid_probability);
+    EXPECT_EQ(x.formation_probability, y.formation_probability);
+    EXPECT_EQ(x.confidence, y.confidence);
+    ASSERT_EQ(x.robots.size(), y.robots.size());
+    for (std::size_t r = 0; r < x.robots.size(); ++r) {
+      const sf::RobotPrediction& p = x.robots[r];
+      const sf::RobotPrediction& q = y.robots[r];
+      EXPECT_EQ(p.robot_id, q.robot_id);
+      EXPECT_EQ(p.state, q.state);
+      EXPECT_EQ(p.position, q.position);
+      EXPECT_EQ(p.probability, q.probability);
+      EXPECT_EQ(p.unseen, q.unseen);
+      EXPECT_EQ(p.feed_position.x, q.feed_position.x);
+      EXPECT_EQ(p.feed_position.y, q.feed_position.y);
+      EXPECT_EQ(p.radius50_mm, q.radius50_mm);
+      EXPECT_EQ(p.radius90_mm, q.radius90_mm);
+      EXPECT_EQ(p.mean_square_mm2, q.mean_square_mm2);
+    }
+  }
+}
+
+TEST(MotionModel, PredictingThroughACacheGivesTheSameValuesFrameAfterFrame) {
+  // Two models of two horizons: robot 7's own row in one, only the cell's in the other.
+  const sf::Point position{-2000.0, 1000.0}, velocity{1000.0, 0.0};
+  sf::MotionTable table(one_second(2));
+  sf::MotionTable other(one_second(2));
+  for (int h = 0; h < 2; ++h) {
+    const sf::MotionKey horizon_bits =
+        sf::encode_motion_key({h, sf::MotionLevel::robot, 0, 0, 0, 0});
+    const double horizon_s = h + 1.0;
+    table.add_row(key_of(2, position, velocity) | horizon_bits,
+                  row_of(5000, velocity, {0.0, 0.0}, horizon_s));
+    table.add_row(key_of(7, position, velocity) | horizon_bits,
+                  row_of(20000, velocity, {0.0, 800.0 * horizon_s}, horizon_s));
+    other.add_row(key_of(2, position, velocity) | horizon_bits,
+                  row_of(5000, velocity, {300.0, 0.0}, horizon_s));
+  }
+  const sf::MotionModel model(table, grid, field);
+  const sf::MotionModel other_model(other, grid, field);
+  const sf::StateCodec codec(grid);
+
+  // Frames in which robots keep their keys, change cell or velocity class, stand, and share a
+  // robot slot (ids 16 and 20); horizons within and beyond the learned two; then the other model
+  // through the same cache.
+  sf::MotionModel::Cache cache;
+  sf::Prediction cached, direct;
+  for (int frame = 0; frame < 40; ++frame) {
+    const double shift = frame < 10 ? 10.0 * frame : 600.0 * (frame % 3);
+    std::vector<sf::MotionRobot> robots{
+        moving_robot(7, {position.x + shift, position.y}, velocity),
+        moving_robot(2, position, frame % 5 == 0 ? sf::Point{0.0, -900.0} : velocity),
+        moving_robot(16, {position.x, position.y - shift}, velocity),
+        moving_robot(20, position, velocity)};
+    sf::MotionRobot standing;
+    standing.robot_id = 3;
+    standing.position = {500.0 + shift, -800.0};
+    standing.context = static_cast<std::uint32_t>(frame % 4);
+    robots.push_back(standing);
+    const sf::MotionModel& used = frame < 30 ? model : other_model;
+    const int horizon = frame % 7 == 0 ? 4 : 2;
+    used.predict(robots, horizon, codec, field, sf::AttackDirection::negative_x, cached, cache);
+    used.predict(robots, horizon, codec, field, sf::AttackDirection::negative_x, direct);
+    SCOPED_TRACE(frame);
+    expect_same_prediction(cached, direct);
+  }
 }
 
 TEST(MotionModel, HeldOutInstancesCalibrateTheRadii) {
@@ -312,8 +386,8 @@ TEST(MotionPipeline, AVersionOneTableServesOnlyThePapersModelAndSaysSo) {
   config.sampler.sampling = sf::Sampling::frame;
   config.model = sf::ModelKind::motion;
   sf::PredictionPipeline pipeline(config, nullptr);
-  const auto paper_only =
-      std::make_shared<const sf::StoredTable>(sf::StoredTable{sf::TransitionTable(config.sampler.grid), {}, {}});
+  const auto paper_only = std::make_shared<const sf::StoredTable>(
+      sf::StoredTable{sf::TransitionTable(config.sampler.grid), {}, {}});
   try {
     pipeline.set_table(paper_only);
     FAIL() << "a table without the motion model's counts was accepted";

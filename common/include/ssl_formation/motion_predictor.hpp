@@ -4,6 +4,7 @@
 // then, for each robot and step, a position in mm, the radii holding it with 50% and 90%
 // probability and the calibrated probability that its predicted cell is right.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -45,11 +46,39 @@ struct MotionForecast {
   double radius50_mm = 0.0;
   double radius90_mm = 0.0;
   MotionLevel level = MotionLevel::all;  // the finest level with counts
-  bool from_counts = false;             // false: the empty table's prior
+  bool from_counts = false;              // false: the empty table's prior
 };
 
 class MotionModel {
+  // One robot's estimate at one horizon, found by its keys: 64 bytes, one cache line.
+  // No initialisers: predict() keeps a scratch array of them per robot.
+  struct alignas(64) Resolved {
+    double mean_x, mean_y;  // residual against damped constant velocity, mm
+    double mean_square;
+    std::array<double, motion_regressors> coefficients;
+    MotionLevel level;
+  };
+
  public:
+  // The estimates predict() found for each robot slot at its last frame, by the robot's finest
+  // key. A real robot keeps its keys (cell, velocity class, standing context) for many frames in
+  // a row, so a frame mostly reads these few contiguous lines instead of probing the index: the
+  // daemon sleeps 16 ms between frames, and after that every line it touches is a cache miss and
+  // every page a TLB miss. (The simulated opponent of the end-to-end benchmark jumps to a new
+  // formation every frame: there it misses every time.) The caller owns it, so predict() stays
+  // const; it holds copies of the model's estimates, so predictions are the same without it.
+  class Cache {
+   public:
+    void clear();
+
+   private:
+    friend class MotionModel;
+    std::uint64_t model_id_ = 0;  // the model the entries are from; 0: none
+    std::size_t horizons_ = 0;    // resolved per robot: those predict() reaches
+    std::array<MotionKey, MotionFeatures::robot_slots> keys_{};  // per slot, at horizon 0
+    std::vector<Resolved> estimates_;                            // slot-major, `horizons_` each
+  };
+
   // `grid` and `field` are those the cell probabilities are calibrated for.
   MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
               MotionModelSettings settings = {});
@@ -75,9 +104,13 @@ class MotionModel {
   // Steps beyond the table's horizons extrapolate the last two learned steps.
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out) const;
+  // The same, looking the robots' estimates up through `cache` (see Cache).
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out,
+               Cache& cache) const;
 
  private:
-  // A slot is the key and the estimate rounded to floats, 32 bytes: one cache line per probe.
+  // A slot is the key and the estimate rounded to floats, 40 bytes.
   struct Slot {
     MotionKey key;
     float mean_x, mean_y, mean_square;
@@ -101,6 +134,16 @@ class MotionModel {
   };
   Estimate shrink(const MotionRow& row, const Estimate& parent) const;
   const Slot* find(MotionKey key) const;
+  // The finest estimate with counts among the robot's keys, else the horizon's root.
+  Resolved resolve(int horizon_index, const RobotKeys& keys) const;
+  // The robot's estimates for the first `horizons` learned horizons, through `cache` if there
+  // is one (else in `scratch`).
+  const Resolved* resolve_all(const MotionRobot& robot, std::size_t horizons, Cache* cache,
+                              std::array<Resolved, MotionConfig::max_horizons>& scratch) const;
+  MotionForecast forecast(int horizon_index, const MotionRobot& robot, const Resolved& e) const;
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out,
+               Cache* cache) const;
   void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
   void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
                  const FieldSize& field);
@@ -113,6 +156,7 @@ class MotionModel {
   // a lookup is one or two cache lines, where a node map costs a pointer chase per probe.
   std::vector<Slot> index_;
   std::size_t index_mask_ = 0;
+  std::uint64_t id_;  // unique per model built: what a Cache's entries are checked against
 };
 
 }  // namespace ssl_formation

@@ -71,6 +71,7 @@ class PredictionPipeline {
   Handler on_prediction_;
   std::shared_ptr<const StoredTable> table_;
   std::shared_ptr<const MotionModel> motion_model_;  // built from table_ for the motion model
+  MotionModel::Cache motion_cache_;
   MotionHistory motion_history_;
   FormationSampler sampler_;
   // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
