@@ -16,6 +16,23 @@
 
 namespace ssl_formation {
 
+// Memory for large arrays probed at random: whole 2 MiB pages, with transparent huge pages
+// asked for (Linux, where /sys/kernel/mm/transparent_hugepage/enabled allows it), so that one TLB
+// entry covers the array where 4 KiB pages would cost a page walk per probe in a process that
+// has slept since its last frame. Small arrays are allocated as usual.
+void* allocate_probed(std::size_t bytes);
+void free_probed(void* memory, std::size_t bytes);
+template <typename T>
+struct ProbedAllocator {
+  using value_type = T;
+  ProbedAllocator() = default;
+  template <typename U>
+  ProbedAllocator(const ProbedAllocator<U>&) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(allocate_probed(n * sizeof(T))); }
+  void deallocate(T* p, std::size_t n) { free_probed(p, n * sizeof(T)); }
+  friend bool operator==(const ProbedAllocator&, const ProbedAllocator&) { return true; }
+};
+
 struct MotionModelSettings {
   // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
   // are far from independent, so this is a few seconds of one robot's frames.
@@ -154,7 +171,7 @@ class MotionModel {
   std::vector<Horizon> horizon_;
   // Every level's estimates in one open-addressing table (linear probing, power-of-two size):
   // a lookup is one or two cache lines, where a node map costs a pointer chase per probe.
-  std::vector<Slot> index_;
+  std::vector<Slot, ProbedAllocator<Slot>> index_;
   std::size_t index_mask_ = 0;
   std::uint64_t id_;  // unique per model built: what a Cache's entries are checked against
 };
