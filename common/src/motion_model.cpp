@@ -578,7 +578,9 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   const MotionConfig& config = table.config();
   if (!history.take_learning_instant(now.time_s, config.learn_interval_s)) return;
   // Gathered, then counted a batch at a time (MotionTable::add's prefetching), in this order.
-  std::array<MotionTable::Learned, 48> batch;
+  // The buffer outlives the call (per thread: learn_motion never reenters itself), so that 3 KiB
+  // are not zeroed at every learning instant; each entry used is written in full first.
+  static thread_local std::array<MotionTable::Learned, 48> batch;
   std::size_t pending = 0;
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= config.horizons; ++k) {
