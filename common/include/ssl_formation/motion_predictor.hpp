@@ -19,7 +19,7 @@ namespace ssl_formation {
 // Memory for large arrays probed at random: whole 2 MiB pages, with transparent huge pages
 // asked for (Linux, where /sys/kernel/mm/transparent_hugepage/enabled allows it), so that one TLB
 // entry covers the array where 4 KiB pages would cost a page walk per probe in a process that
-// has slept since its last frame. Small arrays are allocated as usual.
+// has slept since its last frame. Small arrays are allocated as usual, aligned to 64 bytes.
 void* allocate_probed(std::size_t bytes);
 void free_probed(void* memory, std::size_t bytes);
 template <typename T>
