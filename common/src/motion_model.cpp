@@ -244,14 +244,15 @@ MotionKey coarser_motion_key(MotionKey key) {
 MotionRegressors motion_regressors_of(const MotionKinematics& k, double horizon_s) {
   return {Point{k.velocity.x * horizon_s, k.velocity.y * horizon_s},
           Point{k.velocity_change.x * horizon_s, k.velocity_change.y * horizon_s},
-          k.to_recent_mean, k.to_settled_mean};
+          k.to_recent_mean, k.to_settled_mean,
+          Point{k.team_velocity.x * horizon_s, k.team_velocity.y * horizon_s}};
 }
 
 MotionKinematics MotionInstance::kinematics() const {
   const auto p = [](std::int32_t px, std::int32_t py) {
     return Point{static_cast<double>(px), static_cast<double>(py)};
   };
-  return {p(v_x, v_y), p(a_x, a_y), p(g_x, g_y), p(s_x, s_y)};
+  return {p(v_x, v_y), p(a_x, a_y), p(g_x, g_y), p(s_x, s_y), p(t_x, t_y)};
 }
 
 void MotionRow::add(const std::array<std::int64_t, 2>& d,
@@ -344,7 +345,7 @@ void MotionTable::count(int horizon_index, MotionRow& row, const MotionInstance&
   // motion_regressors_of(i.kinematics(), horizon_s) in whole millimetres. The settle-window
   // regressors are whole millimetres already: whole_mm of a whole number is that number clamped
   // to +-1e9, so only the two scaled by the horizon need rounding.
-  static_assert(motion_regressors == 4);
+  static_assert(motion_regressors == 5);
   const auto whole = [](std::int32_t mm) -> std::int64_t {
     return std::clamp(mm, std::int32_t{-1000000000}, std::int32_t{1000000000});
   };
@@ -353,6 +354,7 @@ void MotionTable::count(int horizon_index, MotionRow& row, const MotionInstance&
       {whole_mm(i.a_x * horizon_s), whole_mm(i.a_y * horizon_s)},
       {whole(i.g_x), whole(i.g_y)},
       {whole(i.s_x), whole(i.s_y)},
+      {whole_mm(i.t_x * horizon_s), whole_mm(i.t_y * horizon_s)},
   }};
   ++instances_;
   row.add({i.d_x, i.d_y}, x);
@@ -556,6 +558,23 @@ void MotionHistory::add(const Formation& formation) {
     track.times[track.end & (track.times.size() - 1)] = t;
     ++track.end;
   }
+  // The team's mean velocity goes into every new entry, now that each robot has its own.
+  Point team{};
+  int with_velocity = 0;
+  for (const FormationRobot& robot : formation.robots) {
+    const Track& track = tracks_[robot.robot_id];
+    const Entry& entry = track.at(track.end - 1);
+    if (!entry.has_velocity) continue;
+    team.x += entry.kinematics.velocity.x;
+    team.y += entry.kinematics.velocity.y;
+    ++with_velocity;
+  }
+  if (with_velocity == 0) return;
+  team = {team.x / with_velocity, team.y / with_velocity};
+  for (const FormationRobot& robot : formation.robots) {
+    Track& track = tracks_[robot.robot_id];
+    track.at(track.end - 1).kinematics.team_velocity = team;
+  }
 }
 
 const MotionHistory::Entry* MotionHistory::latest(std::uint32_t robot_id) const {
@@ -602,6 +621,8 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
       instance.g_y = whole_mm(kinematics.to_recent_mean.y);
       instance.s_x = whole_mm(kinematics.to_settled_mean.x);
       instance.s_y = whole_mm(kinematics.to_settled_mean.y);
+      instance.t_x = whole_mm(kinematics.team_velocity.x);
+      instance.t_y = whole_mm(kinematics.team_velocity.y);
       instance.d_x = whole_mm(robot.position.x - then->position.x);
       instance.d_y = whole_mm(robot.position.y - then->position.y);
       instance.context = then->context;

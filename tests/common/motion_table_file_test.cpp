@@ -102,6 +102,8 @@ MotionTable synthetic_motion_table(const MotionConfig& config) {
     instance.g_y = (i % 4 - 2) * 60;
     instance.s_x = -(i % 6) * 150;
     instance.s_y = (i % 8) * 120;
+    instance.t_x = (i % 7 - 3) * 110;
+    instance.t_y = -(i % 5) * 95;
     instance.context = static_cast<std::uint32_t>(i % 3);
     const double time_s = 0.37 * i;
     table.add(i % config.horizons, time_s, instance);
@@ -172,8 +174,8 @@ TEST(MotionTableFileLayout, CoversEveryFieldOfTheMotionStructs) {
             7 * sizeof(double) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t))
       << "MotionConfig changed: update the motion section of table_file.cpp/.hpp";
   // The sizes table_file.hpp documents.
-  EXPECT_EQ(row_size, 216u) << "update the layout in table_file.hpp";
-  EXPECT_EQ(held_out_size, 64u) << "update the layout in table_file.hpp";
+  EXPECT_EQ(row_size, 280u) << "update the layout in table_file.hpp";
+  EXPECT_EQ(held_out_size, 72u) << "update the layout in table_file.hpp";
 }
 
 TEST_F(MotionTableFile, TrainedTableRoundTrips) {

@@ -38,14 +38,14 @@
 //                  u64 held-out instances seen (>= the calibration instances stored)
 //                  u64 row count, then the rows in increasing key order, each
 //                    u64 MotionKey (a finest, robot-level key of a horizon < horizons),
-//                    then MotionRow::size (26) i64 sums in MotionRow::sums order: n (>= 1),
+//                    then MotionRow::size (34) i64 sums in MotionRow::sums order: n (>= 1),
 //                    d_x, d_y, each regressor's x and y (2 x motion_regressors), dd (>= 0),
-//                    each d.x_i, then x_i.x_j for i <= j (x_i.x_i >= 0)         (216 bytes)
+//                    each d.x_i, then x_i.x_j for i <= j (x_i.x_i >= 0)         (280 bytes)
 //                  per horizon 0..horizons-1: u32 count (<= calibration_capacity), then
 //                    `count` HeldOutInstances in MotionTable::calibration's order (by hash,
-//                    then content): u64 hash, u32 robot_id, the 12 i32 of
+//                    then content): u64 hash, u32 robot_id, the 14 i32 of
 //                    motion_instance_values (x, y, d_x, d_y, v_x, v_y, a_x, a_y, g_x, g_y,
-//                    s_x, s_y), u32 context                                    (64 bytes)
+//                    s_x, s_y, t_x, t_y), u32 context                          (72 bytes)
 //      end-4   4  u32 CRC-32 of every byte before it (the file checksum)
 //
 // The header has its own checksum so that the size fields can be trusted before the file
