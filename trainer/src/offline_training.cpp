@@ -24,7 +24,7 @@ int run_offline(const TrainerOptions& options) {
   std::unique_ptr<Training> training =
       open_training(table_path, config, options.reset, motion_config(options));
   bool every_file_whole = true;
-  SSL_WrapperPacket packet;
+  VisionFrame frame;  // detection packets decoded straight from the log's bytes
   for (const std::string& file : options.from_logs) {
     Result<LogReader> reader = LogReader::open(file);
     if (!reader) {
@@ -39,8 +39,8 @@ int run_offline(const TrainerOptions& options) {
     if (reader->compressed_size() > progress_bar_bytes)
       bar.emplace("training from " + file, reader->compressed_size());
     std::uint64_t frames = 0;
-    while (reader->next_vision(packet)) {
-      training->add(packet);
+    while (reader->next_vision(frame)) {
+      training->add(frame);
       if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);
     }
     if (bar) bar->finish(frames);
