@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 
@@ -165,6 +166,46 @@ BENCHMARK(BM_OfflineTraining)
     ->Args({1, 2})
     ->Unit(benchmark::kMillisecond);  // CPU time: one core
 
+// Offline training as `ssl-trainer --from-log` runs it by default (frame sampling, the motion
+// model's 3 horizons of 0.5 s) on a recorded match given by SSLF_BENCH_RECORDING (an
+// uncompressed .log; scripts/bench.sh passes the shared grSim recording A). A real feed spreads
+// a team over several cameras, so a frame holds fewer robots than the synthetic log's one camera.
+void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::path& path) {
+  std::int64_t frames = 0;
+  sf::VisionFrame frame;
+  std::uint64_t instances = 0;  // kept so the training cannot be optimised away
+  for (auto _ : state) {
+    sf::SamplerConfig config;
+    config.step_s = 0.5;
+    config.sampling = sf::Sampling::frame;
+    sf::MotionConfig motion_config;
+    motion_config.step_s = config.step_s;
+    motion_config.horizons = 3;
+    sf::Training training(config, sf::TransitionTable(config.grid), 0,
+                          sf::MotionTable(motion_config));
+    auto reader = sf::LogReader::open(path).value();  // throws with the reason
+    while (reader.next_vision(frame)) {
+      training.add(frame);
+      ++frames;
+    }
+    instances = training.motion()->instances();
+  }
+  state.SetItemsProcessed(frames);
+  benchmark::DoNotOptimize(instances);
+  state.SetLabel(path.filename().string() + ", frame sampling + motion model");
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  if (const char* recording = std::getenv("SSLF_BENCH_RECORDING")) {
+    benchmark::RegisterBenchmark("BM_OfflineTrainingRecorded", BM_OfflineTrainingRecorded,
+                                 std::filesystem::path(recording))
+        ->Unit(benchmark::kMillisecond);
+  }
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
