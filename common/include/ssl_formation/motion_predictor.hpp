@@ -67,9 +67,10 @@ struct MotionForecast {
 };
 
 class MotionModel {
-  // One robot's estimate at one horizon, found by its keys: 64 bytes, one cache line.
-  // No initialisers: predict() keeps a scratch array of them per robot.
-  struct alignas(64) Resolved {
+  // One robot's estimate at one horizon, found by its keys (72 bytes with five regressors: not
+  // aligned to a line, so a robot's horizons lie back to back). No initialisers: predict() keeps
+  // a scratch array of them per robot.
+  struct Resolved {
     double mean_x, mean_y;  // residual against damped constant velocity, mm
     double mean_square;
     std::array<double, motion_regressors> coefficients;
@@ -127,8 +128,8 @@ class MotionModel {
                Cache& cache) const;
 
  private:
-  // A slot is the key and the estimate rounded to floats (36 bytes), padded to a cache line so
-  // that a probe reads one line: at 40 bytes half the slots straddled two.
+  // A slot is the key and the estimate rounded to floats, padded to a cache line so that a
+  // probe reads one line: unpadded (40 bytes), half the slots straddled two.
   struct alignas(64) Slot {
     MotionKey key;
     float mean_x, mean_y, mean_square;
