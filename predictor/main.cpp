@@ -31,6 +31,9 @@ int main(int argc, char** argv) {
         "receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
         "socket receive buffer (SO_RCVBUF) to request, bytes")("quiet", po::bool_switch(&o.quiet),
                                                                "no prediction lines on stdout")(
+        "warm-up-lead", po::value(&o.warm_up_lead_ms)->default_value(o.warm_up_lead_ms),
+        "milliseconds before the next frame is due at which the last prediction is rehearsed "
+        "(nothing sent) to bring the model back into the CPU caches; 0 = off")(
         "http-port", po::value(&o.http_port)->default_value(o.http_port),
         "TCP port of the live field view (http://ADDRESS:PORT/); 0 = off")(
         "http-address", po::value(&o.http_address)->default_value(o.http_address),

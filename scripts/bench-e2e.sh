@@ -14,8 +14,9 @@
 #
 # Environment: SSLF_BUILD_DIR (default build/), SSLF_BENCH_SLOW_SECONDS (60 packets/s run,
 # default 60), SSLF_BENCH_FAST_SECONDS (1,000 packets/s run, default 10), SSLF_BENCH_LOAD_RATE
-# (default 20000), SSLF_BENCH_LOAD_SECONDS (default 5). The whole script takes about 2.5 minutes
-# after the build. Exit status 1 if a target is missed.
+# (default 20000), SSLF_BENCH_LOAD_SECONDS (default 5), SSLF_BENCH_PREDICTOR_OPTIONS (more
+# ssl-predictor options for the latency runs, e.g. "--warm-up-lead 0"). The whole script takes
+# about 2.5 minutes after the build. Exit status 1 if a target is missed.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -104,8 +105,9 @@ frame_s=0.0166667
 latency_run() {
   local rate="$1" seconds="$2"
   local plog="$work/predictor-$rate.log" elog="$work/echo-$rate.log"
+  # shellcheck disable=SC2086
   start "$plog" "$predictor" --quiet --table "$work/table.bin" --vision-address "$vision" \
-    --prediction-address "$predictions" --interface 127.0.0.1 --ttl 1
+    --prediction-address "$predictions" --interface 127.0.0.1 --ttl 1 ${SSLF_BENCH_PREDICTOR_OPTIONS:-}
   local ppid=$started
   start "$elog" "$bench" echo --echo-in "$echo_in" --echo-out "$echo_out" --interface 127.0.0.1 \
     --seconds $((seconds + 60))

@@ -67,14 +67,28 @@ void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
 
 void PredictionPipeline::on_sample(const FormationSample& sample) {
   if (config_.model == ModelKind::motion) motion_history_.add(sample.formation);
-  if (!table_) {
+  last_sample_ = &sample;
+  if (!predict_sample(sample)) {
     ++samples_without_table_;
     return;
   }
+  ++predictions_;
+  if (on_prediction_) on_prediction_(PredictedFormation{sample, prediction_, context_});
+}
+
+bool PredictionPipeline::rehearse(const Handler& on_rehearsal) {
+  if (!last_sample_ || !predict_sample(*last_sample_)) return false;
+  if (on_rehearsal) on_rehearsal(PredictedFormation{*last_sample_, prediction_, context_});
+  return true;
+}
+
+bool PredictionPipeline::predict_sample(const FormationSample& sample) {
+  if (!table_) return false;
   // Holds the table for this call even if the handler sets another one.
   const std::shared_ptr<const StoredTable> stored = table_;
   const std::shared_ptr<const MotionModel> motion_model = motion_model_;
-  PredictionContext context = prediction_context(stored->table, config_.sampler, sampler_.field());
+  PredictionContext& context = context_;
+  context = prediction_context(stored->table, config_.sampler, sampler_.field());
   // The direction may be inferred (--opponent-attacks auto): the one this sample was taken with.
   context.opponent_attacks = sampler_.attacks().value_or(config_.sampler.opponent_attacks);
   context.model = config_.model;
@@ -103,8 +117,7 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
       }
     }
   }
-  ++predictions_;
-  if (on_prediction_) on_prediction_(PredictedFormation{sample, prediction_, context});
+  return true;
 }
 
 }  // namespace ssl_formation

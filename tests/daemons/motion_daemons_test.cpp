@@ -76,14 +76,18 @@ class MotionDaemons : public ::testing::Test {
     ASSERT_EQ(trained.exit_code, 0) << trained.err;
   }
 
-  // `ssl-predictor --from-log test.log --table TABLE --horizon 3` with the default model: the
-  // CSV's rows, after its header (checked).
+  // `ssl-predictor --from-log LOG --table TABLE --horizon 3` with the default model (LOG: the
+  // test log unless given): the CSV's rows, after its header (checked).
   std::vector<std::string> predict_csv(const std::filesystem::path& table_path,
                                        const std::string& name) {
+    return predict_csv(table_path, name, test_log);
+  }
+  std::vector<std::string> predict_csv(const std::filesystem::path& table_path,
+                                       const std::string& name, const std::filesystem::path& log) {
     const auto csv_path = dir / (name + ".csv");
     const auto offline =
         testing::run_to_end(predictor_program,
-                            {"--from-log", test_log.string(), "--table", table_path.string(),
+                            {"--from-log", log.string(), "--table", table_path.string(),
                              "--horizon", "3", "--output", csv_path.string()},
                             dir.path(), name, 60s);
     EXPECT_EQ(offline.exit_code, 0) << offline.err;
@@ -298,6 +302,52 @@ TEST_F(MotionDaemons, PredictorRefusesAVersionOneTableKeepsRunningAndTakesAVersi
   EXPECT_EQ(daemon.wait(5s), 0) << daemon.stderr_text();
   EXPECT_EQ(testing::last_status(daemon.stderr_text()).at("predictions"),
             static_cast<std::uint64_t>(test_frames));
+}
+
+// Fed at the real pace (a frame every 16.7 ms), the daemon rehearses its last prediction shortly
+// before each next frame is due, to warm its caches: it sends nothing more, and what it sends is
+// still exactly what --from-log predicts.
+TEST_F(MotionDaemons, WarmUpsBetweenFramesAtTheRealPaceSendNothingAndChangeNoPrediction) {
+  const auto short_log = dir / "short.log";
+  constexpr int frames = 180;  // 3 s at 60 Hz
+  ASSERT_EQ(testing::write_vision_log(
+                short_log,
+                testing::moving_robots_packets({.seed = 4, .seconds = 3.0, .start_time_s = 2000.0})),
+            "");
+  const std::string vision = new_group();
+  const std::string predictions = new_group();
+  ChildProcess daemon(predictor_program,
+                      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+                       table.string(), "--horizon", "3", "--quiet", "--warm-up-lead", "2",
+                       "--status-interval", "0.1"},
+                      dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(daemon.wait_until_ready(10s)) << daemon.stderr_text();
+  testing::PredictionListener listener(predictions);
+  const auto replayed = testing::run_to_end(
+      producer_program, {"--replay", short_log.string(), "--vision-address", vision}, dir.path(),
+      "replay", 30s);
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.err;
+  listener.wait_for(frames, 20s);
+  const auto messages = listener.drain(2s);
+  ASSERT_TRUE(messages.has_value());
+  ASSERT_EQ(messages->size(), static_cast<std::size_t>(frames)) << daemon.stderr_text();
+  std::vector<std::string> multicast;
+  for (const auto& message : *messages) {
+    const std::vector<std::string> rows = rows_of(message);
+    multicast.insert(multicast.end(), rows.begin(), rows.end());
+  }
+  const std::vector<std::string> lines = predict_csv(table, "from-log-short", short_log);
+  ASSERT_EQ(multicast.size(), lines.size());
+  for (std::size_t i = 0; i < lines.size(); ++i) ASSERT_EQ(multicast[i], lines[i]) << "row " << i;
+
+  daemon.signal(SIGTERM);
+  EXPECT_EQ(daemon.wait(5s), 0) << daemon.stderr_text();
+  const auto status = testing::last_status(daemon.stderr_text());
+  EXPECT_EQ(status.at("predictions"), static_cast<std::uint64_t>(frames));
+  EXPECT_EQ(status.at("sent"), static_cast<std::uint64_t>(frames));
+  // Nearly every gap between two frames had its warm-up (a busy machine may let a frame come
+  // first now and then).
+  EXPECT_GT(status.at("warm_ups"), static_cast<std::uint64_t>(frames / 2)) << daemon.stderr_text();
 }
 
 }  // namespace

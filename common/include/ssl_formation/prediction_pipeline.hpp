@@ -57,7 +57,15 @@ class PredictionPipeline {
   void start_new_stream() {
     sampler_.start_new_stream();
     motion_history_.clear();
+    last_sample_ = nullptr;
   }
+
+  // Predicts the last sampled formation again, as it was, counting nothing, and hands it to
+  // `on_rehearsal` (not to the pipeline's handler). A daemon that waits ~16 ms between frames
+  // finds its model's memory and code cold; rehearsing just before the next frame is due brings
+  // them back, so the real prediction is quick. Returns false if there is nothing to rehearse
+  // (no table, or no formation since the table was set).
+  bool rehearse(const Handler& on_rehearsal);
 
   const PredictionConfig& config() const { return config_; }
   const FormationSampler& sampler() const { return sampler_; }
@@ -66,6 +74,8 @@ class PredictionPipeline {
 
  private:
   void on_sample(const FormationSample& sample);
+  // Fills prediction_ and context_ for `sample` from the current table; false without one.
+  bool predict_sample(const FormationSample& sample);
 
   PredictionConfig config_;
   Handler on_prediction_;
@@ -78,6 +88,9 @@ class PredictionPipeline {
   std::vector<RobotStateById> robot_states_;
   std::vector<MotionRobot> motion_robots_;
   Prediction prediction_;
+  PredictionContext context_;
+  // The sampler's last sample (its own buffer, unchanged until the next frame completes one).
+  const FormationSample* last_sample_ = nullptr;
   std::uint64_t predictions_ = 0;
   std::uint64_t samples_without_table_ = 0;
 };

@@ -25,6 +25,9 @@ struct PredictorOptions {
   double status_interval_s = 5.0;
   int receive_buffer_bytes = net::kDefaultReceiveBufferBytes;
   bool quiet = false;
+  // Milliseconds before the next frame is due (from the last frames' pace) at which the
+  // predictor rehearses its last prediction to warm its caches; 0 = never.
+  double warm_up_lead_ms = 1.5;
   bool list_states = false;
   bool verbose = false;
   // The live field view: off unless a port is given.
