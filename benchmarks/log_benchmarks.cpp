@@ -75,49 +75,30 @@ const std::filesystem::path& log_path(bool gzip) {
   return gzip ? compressed : plain;
 }
 
-// The floor: read every vision packet as offline training reads it (LogReader::next_vision into
-// a VisionFrame: detection frames decoded straight from the bytes), nothing else.
-void BM_ReadAndParse(benchmark::State& state) {
+std::uint32_t frame_number_of(const sf::VisionFrame& frame) { return frame.detection.frame_number; }
+std::uint32_t frame_number_of(const SSL_WrapperPacket& packet) {
+  return packet.detection().frame_number();
+}
+
+// The floor: read every vision packet, nothing else. Into a VisionFrame (BM_ReadAndParse) as
+// offline training reads it (detection frames decoded straight from the bytes), or into an
+// SSL_WrapperPacket (BM_ReadAndParseProtobuf): protobuf's full parse, what offline training read
+// through before the direct decoder.
+template <typename Frame>
+void BM_Read(benchmark::State& state) {
   const auto& path = log_path(state.range(0) != 0);
   std::int64_t frames = 0;
-  sf::VisionFrame frame;
+  Frame frame;
   for (auto _ : state) {
     auto reader = sf::LogReader::open(path).value();  // throws with the reason
     while (reader.next_vision(frame)) {
-      benchmark::DoNotOptimize(frame.detection.frame_number);
+      benchmark::DoNotOptimize(frame_number_of(frame));
       ++frames;
     }
   }
   state.SetItemsProcessed(frames);
   state.SetLabel(state.range(0) ? ".log.gz" : ".log");
 }
-BENCHMARK(BM_ReadAndParse)
-    ->ArgName("gzip")
-    ->Arg(0)
-    ->Arg(1)
-    ->Unit(benchmark::kMillisecond);  // CPU time: one core
-
-// The same with protobuf's full parse of every packet (next_vision into an SSL_WrapperPacket),
-// what offline training read through before the direct decoder.
-void BM_ReadAndParseProtobuf(benchmark::State& state) {
-  const auto& path = log_path(state.range(0) != 0);
-  std::int64_t frames = 0;
-  SSL_WrapperPacket packet;
-  for (auto _ : state) {
-    auto reader = sf::LogReader::open(path).value();  // throws with the reason
-    while (reader.next_vision(packet)) {
-      benchmark::DoNotOptimize(packet.detection().frame_number());
-      ++frames;
-    }
-  }
-  state.SetItemsProcessed(frames);
-  state.SetLabel(state.range(0) ? ".log.gz" : ".log");
-}
-BENCHMARK(BM_ReadAndParseProtobuf)
-    ->ArgName("gzip")
-    ->Arg(0)
-    ->Arg(1)
-    ->Unit(benchmark::kMillisecond);  // CPU time: one core
 
 // Offline training: the same reading feeding the Training the live trainer uses; range(1) chooses
 // the sampling (0: a formation every 2 s, the paper's; 1: a formation at every frame, each
@@ -198,6 +179,15 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (const auto& [name, read] :
+       {std::pair{"BM_ReadAndParse", &BM_Read<sf::VisionFrame>},
+        std::pair{"BM_ReadAndParseProtobuf", &BM_Read<SSL_WrapperPacket>}}) {
+    benchmark::RegisterBenchmark(name, read)
+        ->ArgName("gzip")
+        ->Arg(0)
+        ->Arg(1)
+        ->Unit(benchmark::kMillisecond);  // CPU time: one core
+  }
   if (const char* recording = std::getenv("SSLF_BENCH_RECORDING")) {
     benchmark::RegisterBenchmark("BM_OfflineTrainingRecorded", BM_OfflineTrainingRecorded,
                                  std::filesystem::path(recording))

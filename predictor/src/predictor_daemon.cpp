@@ -55,7 +55,8 @@ class PredictorDaemon {
       : options_(options),
         config_(config.sampler),
         watcher_(options.table, config.sampler.grid),
-        pipeline_(config, [this](const PredictedFormation& predicted) { on_prediction(predicted); }),
+        pipeline_(config,
+                  [this](const PredictedFormation& predicted) { on_prediction(predicted); }),
         receiver_(io, app::parse_group_option("vision-address", options.network.vision_address),
                   app::parse_interface_option(options.network.interface, true),
                   options.receive_buffer_bytes),
@@ -224,11 +225,11 @@ class PredictorDaemon {
         "status: {} formations={} predictions={} sent={} warm_ups={} table_reloads={} attacks={} "
         "| {}",
         app::describe_reception(receiver_), c.samples, pipeline_.predictions(), sender_.sent(),
-        warm_ups_, watcher_.reloads(), app::describe_attacks(pipeline_.sampler().attacks(), config_.infer_attacks),
+        warm_ups_, watcher_.reloads(),
+        app::describe_attacks(pipeline_.sampler().attacks(), config_.infer_attacks),
         describe_rejections(c));
     // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
-    for (const std::string& line : new_rejections(reported_, c))
-      spdlog::warn("input: {}", line);
+    for (const std::string& line : new_rejections(reported_, c)) spdlog::warn("input: {}", line);
     reported_ = c;
     if (web_) {
       const web::FieldViewCounters w = web_->counters();
@@ -311,7 +312,7 @@ class PredictorDaemon {
   net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction
   std::string datagram_;
   proto::FormationPrediction message_;  // for the field view only
-  SamplerCounters reported_;  // counters at the last status line
+  SamplerCounters reported_;            // counters at the last status line
   // The field view (--http-port), and what only it needs.
   web::TeamRobots ours_;
   app::FieldSizeLog field_log_;
@@ -386,6 +387,5 @@ int run_daemon(const PredictorOptions& options) {
   daemon.log_status();
   return 0;
 }
-
 
 }  // namespace ssl_formation::predictor

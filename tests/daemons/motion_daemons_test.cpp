@@ -310,17 +310,17 @@ TEST_F(MotionDaemons, PredictorRefusesAVersionOneTableKeepsRunningAndTakesAVersi
 TEST_F(MotionDaemons, WarmUpsBetweenFramesAtTheRealPaceSendNothingAndChangeNoPrediction) {
   const auto short_log = dir / "short.log";
   constexpr int frames = 180;  // 3 s at 60 Hz
-  ASSERT_EQ(testing::write_vision_log(
-                short_log,
-                testing::moving_robots_packets({.seed = 4, .seconds = 3.0, .start_time_s = 2000.0})),
+  ASSERT_EQ(testing::write_vision_log(short_log,
+                                      testing::moving_robots_packets(
+                                          {.seed = 4, .seconds = 3.0, .start_time_s = 2000.0})),
             "");
   const std::string vision = new_group();
   const std::string predictions = new_group();
-  ChildProcess daemon(predictor_program,
-                      {"--vision-address", vision, "--prediction-address", predictions, "--table",
-                       table.string(), "--horizon", "3", "--quiet", "--warm-up-lead", "2",
-                       "--status-interval", "0.1"},
-                      dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess daemon(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table", table.string(),
+       "--horizon", "3", "--quiet", "--warm-up-lead", "2", "--status-interval", "0.1"},
+      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(daemon.wait_until_ready(10s)) << daemon.stderr_text();
   testing::PredictionListener listener(predictions);
   const auto replayed = testing::run_to_end(
