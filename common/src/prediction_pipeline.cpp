@@ -68,6 +68,9 @@ void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
 void PredictionPipeline::on_sample(const FormationSample& sample) {
   if (config_.model == ModelKind::motion) motion_history_.add(sample.formation);
   last_sample_ = &sample;
+  // Holds the table for the handler's call even if the handler sets another one: the context
+  // points into it.
+  const std::shared_ptr<const StoredTable> stored = table_;
   if (!predict_sample(sample)) {
     ++samples_without_table_;
     return;
@@ -77,6 +80,7 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
 }
 
 bool PredictionPipeline::rehearse(const Handler& on_rehearsal) {
+  const std::shared_ptr<const StoredTable> stored = table_;  // as in on_sample
   if (!last_sample_ || !predict_sample(*last_sample_)) return false;
   if (on_rehearsal) on_rehearsal(PredictedFormation{*last_sample_, prediction_, context_});
   return true;
@@ -84,7 +88,6 @@ bool PredictionPipeline::rehearse(const Handler& on_rehearsal) {
 
 bool PredictionPipeline::predict_sample(const FormationSample& sample) {
   if (!table_) return false;
-  // Holds the table for this call even if the handler sets another one.
   const std::shared_ptr<const StoredTable> stored = table_;
   const std::shared_ptr<const MotionModel> motion_model = motion_model_;
   PredictionContext& context = context_;
