@@ -87,11 +87,12 @@ bool PredictionPipeline::rehearse(const Handler& on_rehearsal) {
 }
 
 bool PredictionPipeline::predict_sample(const FormationSample& sample) {
+  // The callers hold the table for the whole call (nothing here can replace it).
   if (!table_) return false;
-  const std::shared_ptr<const StoredTable> stored = table_;
-  const std::shared_ptr<const MotionModel> motion_model = motion_model_;
+  const StoredTable& stored = *table_;
+  const MotionModel* motion_model = motion_model_.get();
   PredictionContext& context = context_;
-  context = prediction_context(stored->table, config_.sampler, sampler_.field());
+  context = prediction_context(stored.table, config_.sampler, sampler_.field());
   // The direction may be inferred (--opponent-attacks auto): the one this sample was taken with.
   context.opponent_attacks = sampler_.attacks().value_or(config_.sampler.opponent_attacks);
   context.model = config_.model;
@@ -111,7 +112,7 @@ bool PredictionPipeline::predict_sample(const FormationSample& sample) {
     for (const FormationRobot& robot : sample.formation.robots) {
       robot_states_.push_back({robot.robot_id, robot.state});
     }
-    predict(stored->table, robot_states_, config_.horizon, prediction_);
+    predict(stored.table, robot_states_, config_.horizon, prediction_);
     const Grid& grid = config_.sampler.grid;
     for (PredictedStep& step : prediction_.steps) {
       for (RobotPrediction& robot : step.robots) {
