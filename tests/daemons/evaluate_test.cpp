@@ -94,6 +94,18 @@ std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
   return rows;
 }
 
+// The accuracy table has a line for every method at `horizon` (as printed) and `steps`.
+void expect_every_method(const std::string& out, const std::string& horizon,
+                         const std::string& steps) {
+  for (const std::string method :
+       {"model", "persistence", "constant velocity", "damped constant velocity"}) {
+    EXPECT_TRUE(std::regex_search(
+        out, std::regex(horizon + R"(\s+)" + steps + R"(\s+)" + method + R"(\s+[\d.]+%)")))
+        << horizon << " " << steps << " " << method << "\n"
+        << out;
+  }
+}
+
 TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
   TempDir dir;
   const auto run = evaluate(dir,
@@ -105,24 +117,17 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
   const std::vector<std::pair<std::string, std::string>> rows{
       {"1.00 s", "1"}, {"2.00 s", "1"}, {"2.00 s", "1"}, {"4.00 s", "2"}, {"6.00 s", "3"}};
   for (const auto& [horizon, steps] : rows) {
-    for (const std::string method :
-         {"model", "persistence", "constant velocity", "damped constant velocity"}) {
-      EXPECT_TRUE(std::regex_search(
-          run.out, std::regex(horizon + R"(\s+)" + steps + R"(\s+)" + method + R"(\s+[\d.]+%)")))
-          << horizon << " " << steps << " " << method << "\n"
-          << run.out;
-    }
+    expect_every_method(run.out, horizon, steps);
   }
   EXPECT_NE(run.out.find("Brier"), std::string::npos);
   EXPECT_NE(run.out.find("ECE"), std::string::npos);
 
   const auto accuracy = csv_rows(read(dir / "holdout" / "holdout-accuracy.csv"));
   ASSERT_EQ(accuracy.size(), 1u + 5u * 4u);
-  EXPECT_EQ(accuracy[0],
-            (std::vector<std::string>{"grid", "horizon_steps", "horizon_s", "method",
-                                      "state_accuracy", "cell_accuracy", "mean_cell_distance",
-                                      "mean_error_mm", "median_error_mm", "p90_error_mm",
-                                      "robots"}));
+  EXPECT_EQ(accuracy[0], (std::vector<std::string>{"grid", "horizon_steps", "horizon_s", "method",
+                                                   "state_accuracy", "cell_accuracy",
+                                                   "mean_cell_distance", "mean_error_mm",
+                                                   "median_error_mm", "p90_error_mm", "robots"}));
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
     ASSERT_EQ(accuracy[i].size(), 11u);
     EXPECT_EQ(accuracy[i][0], "3x2");
@@ -136,10 +141,9 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
 
   const auto calibration = csv_rows(read(dir / "holdout" / "holdout-calibration.csv"));
   ASSERT_EQ(calibration.size(), 1u + 5u * 2u);
-  EXPECT_EQ(calibration[0],
-            (std::vector<std::string>{"grid", "horizon_steps", "horizon_s", "method", "quantity",
-                                      "brier", "ece", "predictions", "within_radius_50",
-                                      "within_radius_90"}));
+  EXPECT_EQ(calibration[0], (std::vector<std::string>{
+                                "grid", "horizon_steps", "horizon_s", "method", "quantity", "brier",
+                                "ece", "predictions", "within_radius_50", "within_radius_90"}));
   EXPECT_EQ(calibration[3][4], "robot");
   EXPECT_EQ(calibration[4][4], "formation");
   // The paper's model states no radii: nothing is within them, and the report has no radii
@@ -158,27 +162,27 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
 TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   TempDir dir;
   const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
-  for (const auto& [name, seed] : {std::pair{"a.log", "1"}, std::pair{"b.log.gz", "2"},
-                                   std::pair{"c.log", "3"}}) {
+  for (const auto& [name, seed] :
+       {std::pair{"a.log", "1"}, std::pair{"b.log.gz", "2"}, std::pair{"c.log", "3"}}) {
     const auto written = testing::run_to_end(
         producer_program,
         {"--write-log", (dir / name).string(), "--count", "300", "--seed", seed, "--cameras", "2"},
         dir.path(), std::string("write-") + name, 30s);
     ASSERT_EQ(written.exit_code, 0) << written.err;
   }
-  const auto split = evaluate(dir,
-                              {"holdout", "--train-log", (dir / "a.log").string(),
-                               (dir / "b.log.gz").string(), "--split", "0.6", "--horizons", "2",
-                               "--model", "paper"},
-                              "split");
+  const auto split =
+      evaluate(dir,
+               {"holdout", "--train-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
+                "--split", "0.6", "--horizons", "2", "--model", "paper"},
+               "split");
   ASSERT_EQ(split.exit_code, 0) << split.err;
   // Two streams of 300 formations, the last 40% of each tested: 2 x 120 formations.
   EXPECT_NE(split.out.find(": 240 test formations"), std::string::npos) << split.out;
-  const auto separate = evaluate(dir,
-                                 {"holdout", "--train-log", (dir / "a.log").string(),
-                                  (dir / "b.log.gz").string(), "--test-log",
-                                  (dir / "c.log").string(), "--horizons", "2", "--model", "paper"},
-                                 "separate");
+  const auto separate =
+      evaluate(dir,
+               {"holdout", "--train-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
+                "--test-log", (dir / "c.log").string(), "--horizons", "2", "--model", "paper"},
+               "separate");
   ASSERT_EQ(separate.exit_code, 0) << separate.err;
   EXPECT_NE(separate.out.find("transitions from 600 formations"), std::string::npos)
       << separate.out;
@@ -192,15 +196,16 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   TempDir dir;
   const auto train_log = dir / "train.log.gz";
   const auto test_log = dir / "test.log";
-  ASSERT_EQ(testing::write_vision_log(
-                train_log, testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
+  ASSERT_EQ(testing::write_vision_log(train_log,
+                                      testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
             "");
-  ASSERT_EQ(testing::write_vision_log(
-                test_log, testing::moving_robots_packets(
-                              {.seed = 2, .seconds = 20.0, .start_time_s = 1000.0})),
+  ASSERT_EQ(testing::write_vision_log(test_log,
+                                      testing::moving_robots_packets(
+                                          {.seed = 2, .seconds = 20.0, .start_time_s = 1000.0})),
             "");
-  const std::vector<std::string> args{"holdout",  "--train-log", train_log.string(), "--test-log",
-                                      test_log.string(), "--horizons", "0.5,1"};
+  const std::vector<std::string> args{"holdout",    "--train-log",     train_log.string(),
+                                      "--test-log", test_log.string(), "--horizons",
+                                      "0.5,1"};
   const auto run = evaluate(dir, args, "motion");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("frame sampling: 1200 test formations"), std::string::npos) << run.out;
@@ -208,13 +213,7 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   const std::vector<std::pair<std::string, std::string>> rows{
       {"0.50 s", "1"}, {"1.00 s", "1"}, {"0.50 s", "1"}, {"1.00 s", "2"}, {"1.50 s", "3"}};
   for (const auto& [horizon, steps] : rows) {
-    for (const std::string method :
-         {"model", "persistence", "constant velocity", "damped constant velocity"}) {
-      EXPECT_TRUE(std::regex_search(
-          run.out, std::regex(horizon + R"(\s+)" + steps + R"(\s+)" + method + R"(\s+[\d.]+%)")))
-          << horizon << " " << steps << " " << method << "\n"
-          << run.out;
-    }
+    expect_every_method(run.out, horizon, steps);
     // The radii section: how often the robot ended up within r50 and r90.
     EXPECT_TRUE(std::regex_search(
         run.out, std::regex(horizon + R"(\s+)" + steps + R"(\s+[\d.]+%\s+[\d.]+%\s+[1-9]\d*\n)")))
@@ -254,8 +253,8 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
 
   const auto again = evaluate(dir, args, "again");
   ASSERT_EQ(again.exit_code, 0) << again.err;
-  for (const std::string csv : {"holdout-accuracy.csv", "holdout-calibration.csv",
-                                "holdout-reliability.csv"}) {
+  for (const std::string csv :
+       {"holdout-accuracy.csv", "holdout-calibration.csv", "holdout-reliability.csv"}) {
     EXPECT_EQ(read(dir / "motion" / csv), read(dir / "again" / csv)) << csv;
   }
 }
