@@ -29,14 +29,14 @@ std::uint64_t instance_hash(int horizon_index, double time_s, const MotionInstan
   return h;
 }
 
-// The heap order: higher hash first, ties broken by content so that the kept set never depends
-// on the order instances arrived in.
+// The calibration sample's order: the lowest hashes are kept, ties broken by every value of the
+// instance so that the kept set never depends on the order instances arrived in.
 bool ranks_before(const HeldOutInstance& a, const HeldOutInstance& b) {
   if (a.hash != b.hash) return a.hash < b.hash;  // nearly always: no tuples to build
   const auto key = [](const HeldOutInstance& h) {
     const MotionInstance& i = h.instance;
     return std::tuple(h.hash, i.robot_id, i.x, i.y, i.d_x, i.d_y, i.v_x, i.v_y, i.a_x, i.a_y,
-                      i.g_x, i.g_y, i.s_x, i.s_y, i.context);
+                      i.g_x, i.g_y, i.s_x, i.s_y, i.t_x, i.t_y, i.context);
   };
   return key(a) < key(b);
 }
@@ -367,16 +367,18 @@ void MotionTable::add_row(MotionKey key, const MotionRow& row) {
 
 void MotionTable::add_held_out(int horizon_index, const HeldOutInstance& held_out) {
   ++held_out_seen_;
-  auto& heap = held_out_[static_cast<std::size_t>(horizon_index)];
-  if (heap.size() < config_.calibration_capacity) {
-    heap.push_back(held_out);
-    std::push_heap(heap.begin(), heap.end(), ranks_before);
-    return;
-  }
-  if (!ranks_before(held_out, heap.front())) return;
-  std::pop_heap(heap.begin(), heap.end(), ranks_before);
-  heap.back() = held_out;
-  std::push_heap(heap.begin(), heap.end(), ranks_before);
+  HeldOutSample& sample = held_out_[static_cast<std::size_t>(horizon_index)];
+  // Ranking no lower than the bar, it cannot be among the lowest `capacity`: the bar and
+  // `capacity` - 1 instances ranked below it are. (An equal one may be left out: it is the
+  // bar's twin, and the multiset kept is the same.)
+  if (sample.bar && !ranks_before(held_out, *sample.bar)) return;
+  sample.candidates.push_back(held_out);
+  const std::size_t capacity = config_.calibration_capacity;
+  if (sample.candidates.size() < 2 * capacity) return;
+  const auto cut = sample.candidates.begin() + static_cast<std::ptrdiff_t>(capacity - 1);
+  std::nth_element(sample.candidates.begin(), cut, sample.candidates.end(), ranks_before);
+  sample.bar = *cut;
+  sample.candidates.resize(capacity);
 }
 
 void MotionTable::merge(const MotionTable& other) {
@@ -387,14 +389,18 @@ void MotionTable::merge(const MotionTable& other) {
   instances_ += other.instances_;
   const std::uint64_t seen = held_out_seen_ + other.held_out_seen_;
   for (std::size_t h = 0; h < held_out_.size(); ++h) {
-    for (const HeldOutInstance& i : other.held_out_[h]) add_held_out(static_cast<int>(h), i);
+    for (const HeldOutInstance& i : other.held_out_[h].candidates) {
+      add_held_out(static_cast<int>(h), i);
+    }
   }
   held_out_seen_ = seen;
 }
 
 std::size_t MotionTable::memory_bytes() const {
   std::size_t bytes = rows_.memory_bytes();
-  for (const auto& heap : held_out_) bytes += heap.capacity() * sizeof(HeldOutInstance);
+  for (const HeldOutSample& sample : held_out_) {
+    bytes += sample.candidates.capacity() * sizeof(HeldOutInstance);
+  }
   return bytes;
 }
 
@@ -408,7 +414,13 @@ std::vector<std::pair<MotionKey, MotionRow>> MotionTable::sorted_rows() const {
 }
 
 std::vector<HeldOutInstance> MotionTable::calibration(int horizon_index) const {
-  std::vector<HeldOutInstance> sample = held_out_[static_cast<std::size_t>(horizon_index)];
+  std::vector<HeldOutInstance> sample = held_out_[static_cast<std::size_t>(horizon_index)].candidates;
+  const std::size_t capacity = config_.calibration_capacity;
+  if (sample.size() > capacity) {
+    std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(capacity),
+                     sample.end(), ranks_before);
+    sample.resize(capacity);
+  }
   std::sort(sample.begin(), sample.end(), ranks_before);
   return sample;
 }

@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <random>
 
 #include "ssl_formation/motion_predictor.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
@@ -318,6 +320,42 @@ TEST(MotionTable, CountsAreSumsSoMergingEqualsAddingEverythingToOne) {
   sf::MotionConfig other = config;
   other.step_s = 0.5;
   EXPECT_THROW(merged.merge(sf::MotionTable(other)), std::invalid_argument);
+}
+
+TEST(MotionTable, TheCalibrationSampleIsTheLowestRankedWhateverTheOrderInstancesCameIn) {
+  // Every instance's time falls in a held-out block (one in two), and each comes twice: the
+  // sample is a multiset, and the twins of the last kept one must not crowd out others.
+  sf::MotionConfig config = one_second(1);
+  config.calibration_one_in = 2;
+  std::vector<std::pair<double, sf::MotionInstance>> offered;
+  const sf::MotionTable probe(config);
+  for (int i = 0; offered.size() < 2000; ++i) {
+    const double t = i * 1.0;
+    if (!probe.is_held_out(t)) continue;
+    sf::MotionInstance instance;
+    instance.robot_id = static_cast<std::uint32_t>(i % 6);
+    instance.x = (i * 37) % 9000 - 4500;
+    instance.d_x = (i * 7) % 900 - 450;
+    offered.emplace_back(t, instance);
+    offered.emplace_back(t, instance);
+  }
+  sf::MotionConfig unbounded = config;
+  unbounded.calibration_capacity = static_cast<std::uint32_t>(offered.size());
+  sf::MotionTable everything(unbounded);
+  for (const auto& [t, instance] : offered) everything.add(0, t, instance);
+  std::vector<sf::HeldOutInstance> lowest = everything.calibration(0);
+  ASSERT_EQ(lowest.size(), offered.size());
+
+  config.calibration_capacity = 50;  // cut back many times over 4000 offers
+  lowest.resize(config.calibration_capacity);
+  std::mt19937 random(3);
+  for (int order = 0; order < 3; ++order) {
+    sf::MotionTable table(config);
+    for (const auto& [t, instance] : offered) table.add(0, t, instance);
+    EXPECT_EQ(table.calibration(0), lowest) << "order " << order;
+    EXPECT_EQ(table.held_out(), offered.size());
+    std::shuffle(offered.begin(), offered.end(), random);
+  }
 }
 
 namespace {
