@@ -205,12 +205,38 @@ bool ball(Reader in) {
   return seen.has_all({1, 3, 4, 6, 7});
 }
 
+// A detection frame as protobuf writes it: every field in field-number order, the repeated ones
+// in runs, t_capture_camera maybe missing. Read in one pass of expected keys, whose branches the
+// CPU predicts, instead of the general loop's switch on every key (an indirect jump it mispredicts
+// where one run of robots ends and the next begins); false for any other layout.
+bool detection_in_order(Reader in, VisionDetection& out) {
+  if (!in.take(tag(1, varint_type)) || !in.varint32(out.frame_number)) return false;
+  if (!in.take(tag(2, fixed64_type)) || !in.fixed(out.t_capture)) return false;
+  if (!in.take(tag(3, fixed64_type)) || !in.skip(8)) return false;
+  if (!in.take(tag(4, varint_type)) || !in.varint32(out.camera_id)) return false;
+  Reader nested(nullptr, nullptr);
+  while (in.take(tag(5, bytes_type))) {
+    if (!in.nested(nested) || !ball(nested)) return false;
+  }
+  while (in.take(tag(6, bytes_type))) {
+    if (!in.nested(nested) || !robot(nested, out.robots_yellow.emplace_back())) return false;
+  }
+  while (in.take(tag(7, bytes_type))) {
+    if (!in.nested(nested) || !robot(nested, out.robots_blue.emplace_back())) return false;
+  }
+  if (in.take(tag(8, fixed64_type)) && !in.skip(8)) return false;
+  return in.done();
+}
+
 // SSL_DetectionFrame: frame_number 1, t_capture 2, t_sent 3, camera_id 4, balls 5,
 // robots_yellow 6, robots_blue 7, t_capture_camera 8.
 bool detection(Reader in, VisionDetection& out) {
-  SeenFields seen;
   out.robots_yellow.clear();
   out.robots_blue.clear();
+  if (detection_in_order(in, out)) return true;
+  out.robots_yellow.clear();  // nothing of the attempt stays
+  out.robots_blue.clear();
+  SeenFields seen;
   while (!in.done()) {
     std::uint32_t key = 0;
     if (!in.varint32(key)) return false;
