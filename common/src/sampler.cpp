@@ -76,10 +76,7 @@ void FormationSampler::add_geometry(std::int32_t field_length, std::int32_t fiel
 void FormationSampler::break_chain() {
   if (previous_ || !history_.empty()) ++counters_.chain_breaks;
   previous_.reset();
-  while (!history_.empty()) {
-    spare_.push_back(std::move(history_.front()));
-    history_.pop_front();
-  }
+  history_.clear();
 }
 
 void FormationSampler::add_detection(const VisionDetection& frame) {
@@ -200,9 +197,15 @@ Formation FormationSampler::formation_at(const StateCodec& codec, const FieldSiz
   return build_formation(codec, field, std::move(robots), previous);
 }
 
-void FormationSampler::build_formation(const StateCodec& codec, const FieldSize& field,
-                                       std::vector<FormationRobot>& robots,
-                                       const Formation* previous, Formation& formation) {
+namespace {
+
+// build_formation(), calling continued(robot, then) for every robot also in `previous` (`then`
+// its entry there) once its state is known. `find_in_previous(id)` is that robot's entry in
+// `previous`, or none; it is asked for ids in increasing order.
+template <class FindInPrevious, class Continued>
+void encode_formation(const StateCodec& codec, const FieldSize& field,
+                      std::vector<FormationRobot>& robots, const Formation* previous,
+                      Formation& formation, FindInPrevious find_in_previous, Continued continued) {
   formation.time_s = 0.0;
   formation.frame_number = 0;
   formation.centroid = Point{};
@@ -228,12 +231,24 @@ void FormationSampler::build_formation(const StateCodec& codec, const FieldSize&
   formation.continues_previous = previous != nullptr;
   for (FormationRobot& robot : robots) {
     robot.cell = grid.cell_of(robot.position, field);
-    const FormationRobot* before = previous ? previous->find(robot.robot_id) : nullptr;
+    const FormationRobot* before = previous ? find_in_previous(robot.robot_id) : nullptr;
     robot.previous_cell = before ? before->cell : robot.cell;
     robot.state =
         codec.encode(RobotState{formation.centroid_cell, robot.cell, robot.previous_cell});
+    if (before) continued(robot, *before);
   }
   formation.robots.swap(robots);
+}
+
+}  // namespace
+
+void FormationSampler::build_formation(const StateCodec& codec, const FieldSize& field,
+                                       std::vector<FormationRobot>& robots,
+                                       const Formation* previous, Formation& formation) {
+  encode_formation(
+      codec, field, robots, previous, formation,
+      [previous](std::uint32_t id) { return previous->find(id); },
+      [](const FormationRobot&, const FormationRobot&) {});
 }
 
 // The clock hands an instant on: its sample is built from the freshest observations.
@@ -246,11 +261,10 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   for (const std::uint32_t id : observed_ids_) {
     const Observation& obs = observations_[id];
     if (obs.time_s <= sample_s - fresh_s + time_epsilon_s) continue;
-    FormationRobot robot;
+    FormationRobot& robot = robots.emplace_back();  // built in place, not copied in
     robot.robot_id = id;
     robot.feed_position = Point{obs.sum_x / obs.weight, obs.sum_y / obs.weight};
     robot.position = normalise(robot.feed_position, config_.opponent_attacks);
-    robots.push_back(robot);
   }
   if (robots.empty()) {
     ++counters_.samples_empty;
@@ -309,18 +323,25 @@ FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
                                                 std::vector<FormationRobot>& robots,
                                                 const Formation* before) {
   FormationSample& sample = sample_scratch_;
-  build_formation(codec_, field_, robots, before, sample.formation);
+  sample.transitions.clear();
+  // `before` is a formation of this sampler's, sorted by id with each id once, and the robots
+  // are asked for in id order: one walk through it finds each, as Formation::find would, and
+  // the transitions are counted in the same pass.
+  const FormationRobot* next_before = before ? before->robots.data() : nullptr;
+  const FormationRobot* const before_end =
+      before ? before->robots.data() + before->robots.size() : nullptr;
+  encode_formation(
+      codec_, field_, robots, before, sample.formation,
+      [&](std::uint32_t id) -> const FormationRobot* {
+        while (next_before != before_end && next_before->robot_id < id) ++next_before;
+        return next_before != before_end && next_before->robot_id == id ? next_before : nullptr;
+      },
+      [&](const FormationRobot& robot, const FormationRobot& then) {
+        sample.transitions.push_back({robot.robot_id, then.state, robot.state});
+      });
   sample.formation.time_s = instant.time_s;
   sample.formation.frame_number = last_frame_number_;
   sample.formation.opponent_attacks = attacks_.value_or(config_.opponent_attacks);
-  sample.transitions.clear();
-  if (before) {
-    for (const FormationRobot& robot : sample.formation.robots) {
-      if (const FormationRobot* then = before->find(robot.robot_id)) {
-        sample.transitions.push_back({robot.robot_id, then->state, robot.state});
-      }
-    }
-  }
   ++counters_.samples;
   if (instant.forced) ++counters_.samples_forced;
   counters_.transitions += sample.transitions.size();
@@ -339,14 +360,14 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
   // Samples older than step_s (and the tolerance) can no longer be anyone's previous.
   const double oldest_s = sample_s - config_.step_s - config_.history_tolerance_s;
   while (!history_.empty() && history_.front().time_s < oldest_s - time_epsilon_s) {
-    spare_.push_back(std::move(history_.front()));
     history_.pop_front();
   }
   // The sample nearest step_s earlier, within the tolerance; the earlier of two equally near.
   const double wanted_s = sample_s - config_.step_s;
   const Formation* before = nullptr;
   double best_gap = config_.history_tolerance_s + time_epsilon_s;
-  for (const Formation& f : history_) {
+  for (std::size_t i = 0; i < history_.size(); ++i) {
+    const Formation& f = history_[i];
     const double gap = std::abs(f.time_s - wanted_s);
     if (gap < best_gap) {
       best_gap = gap;
@@ -360,29 +381,28 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
   }
   FormationSample& sample = build_sample(instant, robots, before);
   // The sample joins the history after the handler has run (the predictor sends its prediction
-  // from there); a handler that starts a new stream forgets it too.
+  // from there), by swapping buffers rather than copying (build_sample() overwrites all of
+  // sample_scratch_ next time); a handler that starts a new stream forgets it too.
   struct JoinsHistory {
     FormationSampler& sampler;
     std::uint64_t restarts;
     ~JoinsHistory() {
       if (sampler.restarts_ != restarts) return;
-      Formation entry;
-      if (!sampler.spare_.empty()) {
-        entry = std::move(sampler.spare_.back());
-        sampler.spare_.pop_back();
-      }
-      const Formation& sample = sampler.sample_scratch_.formation;
-      entry.time_s = sample.time_s;
-      entry.frame_number = sample.frame_number;
-      entry.centroid = sample.centroid;
-      entry.centroid_cell = sample.centroid_cell;
-      entry.continues_previous = sample.continues_previous;
-      entry.opponent_attacks = sample.opponent_attacks;
-      entry.robots.assign(sample.robots.begin(), sample.robots.end());  // keeps its capacity
-      sampler.history_.push_back(std::move(entry));
+      sampler.history_.push_back_swap(sampler.sample_scratch_.formation);
     }
   } joins_history{*this, restarts_};
   if (on_sample_) on_sample_(sample);
+}
+
+void FormationHistory::push_back_swap(Formation& formation) {
+  if (size_ == slots_.size()) {
+    // Full: the slots in order from the oldest, then new ones after them.
+    std::rotate(slots_.begin(), slots_.begin() + static_cast<std::ptrdiff_t>(head_), slots_.end());
+    head_ = 0;
+    slots_.resize(std::max<std::size_t>(16, 2 * slots_.size()));
+  }
+  std::swap(slots_[slot(size_)], formation);
+  ++size_;
 }
 
 void FormationSampler::start_new_stream() {

@@ -13,7 +13,6 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
-#include <deque>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -109,9 +108,9 @@ struct SamplerCounters {
   std::uint64_t clock_conflicts = 0;      // episodes of two clocks interleaving
   std::uint64_t samples_in_conflict = 0;  // samples that counted no transition because of one
   std::uint64_t samples = 0;
-  std::uint64_t samples_empty = 0;   // no opponent robot in the sample: not handed on
-  std::uint64_t samples_forced = 0;  // handed on without every live camera (a dropped frame)
-  std::uint64_t chain_breaks = 0;    // gaps, field changes and clock resets
+  std::uint64_t samples_empty = 0;       // no opponent robot in the sample: not handed on
+  std::uint64_t samples_forced = 0;      // handed on without every live camera (a dropped frame)
+  std::uint64_t chain_breaks = 0;        // gaps, field changes and clock resets
   std::uint64_t samples_undirected = 0;  // not handed on: the attack direction is not known yet
   std::uint64_t attack_switches = 0;     // the inferred attack direction changed (ends changed)
   std::uint64_t transitions = 0;
@@ -123,6 +122,37 @@ std::string describe_rejections(const SamplerCounters& counters);
 // over the limit (5 in all)"), for a daemon to log as warnings when new kinds of bad input arrive.
 std::vector<std::string> new_rejections(const SamplerCounters& before,
                                         const SamplerCounters& after);
+
+// Frame sampling's history: formations oldest first, in a ring of slots that keep their storage.
+// A formation joins by swapping with a free slot, so a steady stream neither allocates (a deque
+// allocates and frees a block every few formations) nor copies robots.
+class FormationHistory {
+ public:
+  bool empty() const { return size_ == 0; }
+  std::size_t size() const { return size_; }
+  const Formation& operator[](std::size_t i) const { return slots_[slot(i)]; }
+  const Formation& front() const { return slots_[head_]; }
+  const Formation& back() const { return slots_[slot(size_ - 1)]; }
+  void pop_front() {
+    head_ = slot(1);
+    --size_;
+  }
+  void clear() {
+    head_ = 0;
+    size_ = 0;
+  }
+  // `formation` becomes the newest and gets the storage of the slot it takes.
+  void push_back_swap(Formation& formation);
+
+ private:
+  std::size_t slot(std::size_t i) const {
+    const std::size_t at = head_ + i;
+    return at < slots_.size() ? at : at - slots_.size();
+  }
+  std::vector<Formation> slots_;
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+};
 
 class FormationSampler : private DataClockListener {
  public:
@@ -204,10 +234,8 @@ class FormationSampler : private DataClockListener {
   // Step sampling: the last sample and its instant number.
   std::optional<Formation> previous_;
   std::int64_t previous_k_ = 0;
-  // Frame sampling: the samples of the last step (and the tolerance), oldest first, and the
-  // storage of those that fell out, reused.
-  std::deque<Formation> history_;
-  std::vector<Formation> spare_;
+  // Frame sampling: the samples of the last step (and the tolerance), oldest first.
+  FormationHistory history_;
   std::uint64_t restarts_ = 0;  // calls of forget_stream(), so a sample sees one by its handler
   // Reused from sample to sample, so that a steady stream allocates nothing.
   std::vector<FormationRobot> robots_scratch_;
