@@ -43,6 +43,16 @@ struct TransitionTable::Storage {
     const std::uint64_t to_centroid = to / (cells * cells);
     return candidates(from, to_centroid, previous) + position;
   }
+  // offset(), from the centroids the caller has already divided out (`from_centroid` = from /
+  // cells^2 and so on): add() runs for every transition, and 64-bit divisions were most of it.
+  std::uint64_t offset(StateIndex from_centroid, StateIndex from_in_block, StateIndex to_centroid,
+                       StateIndex to_in_block) const {
+    const auto cells32 = static_cast<StateIndex>(cells);
+    const StateIndex position = to_in_block / cells32;
+    const StateIndex previous = to_in_block - position * cells32;
+    const std::uint64_t block = std::uint64_t{from_centroid} * cells + to_centroid;
+    return ((block * cells * cells + from_in_block) * cells + previous) * cells + position;
+  }
   Count& at(StateIndex from, StateIndex to) { return counts[offset(from, to)]; }
   Count at(StateIndex from, StateIndex to) const { return counts[offset(from, to)]; }
   std::vector<std::uint64_t> row_totals;
@@ -87,10 +97,14 @@ TransitionTable::Count TransitionTable::add(StateIndex from, StateIndex to, Coun
   if (from >= storage_->states || to >= storage_->states) {
     throw std::out_of_range("state index out of range for grid " + grid().to_string());
   }
+  const StateIndex block_rows = codec_.cell_count() * codec_.cell_count();
+  const StateIndex from_centroid = from / block_rows;
+  const StateIndex to_centroid = to / block_rows;
   Count* cell = nullptr;
   std::uint64_t* row_total = nullptr;
   if (storage_->dense) {
-    cell = &storage_->at(from, to);
+    cell = &storage_->counts[storage_->offset(from_centroid, from - from_centroid * block_rows,
+                                              to_centroid, to - to_centroid * block_rows)];
     row_total = &storage_->row_totals[from];
   } else {
     if (n == 0) return 0;
@@ -107,8 +121,7 @@ TransitionTable::Count TransitionTable::add(StateIndex from, StateIndex to, Coun
   const Count added = std::min<Count>(n, max_count - *cell);
   *cell += added;
   *row_total += added;
-  const StateIndex from_centroid = codec_.centroid_id(from);
-  centroid_counts_[from_centroid * codec_.cell_count() + codec_.centroid_id(to)] += added;
+  centroid_counts_[from_centroid * codec_.cell_count() + to_centroid] += added;
   centroid_totals_[from_centroid] += added;
   transitions_ += added;
   return added;
