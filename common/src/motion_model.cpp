@@ -528,24 +528,25 @@ void MotionHistory::add(const Formation& formation) {
     // pointer into the ring moves after this) and counts once it is complete.
     track.make_room();
     const Entry* last = track.end > track.begin ? &track.at(track.end - 1) : nullptr;
+    // Every field is written below (no `entry = Entry{}`: zeroing the whole slot first was a
+    // fifth of this function's time).
     Entry& entry = track.at(track.end);
-    entry = Entry{};
     entry.time_s = t;
     entry.position = robot.position;
     entry.sum_x = robot.position.x + (last ? last->sum_x : 0.0);
     entry.sum_y = robot.position.y + (last ? last->sum_y : 0.0);
     entry.count = 1 + (last ? last->count : 0);
+    MotionKinematics& k = entry.kinematics;
+    k.team_velocity = {};  // set after the loop if any robot of the formation has a velocity
     const Entry* then = nearest(track, track.velocity_cursor, t - config_.velocity_window_s);
     if (then && t - then->time_s > config_.velocity_window_s / 2.0) {
       const double dt = t - then->time_s;
-      MotionKinematics& k = entry.kinematics;
       k.velocity = {(robot.position.x - then->position.x) / dt,
                     (robot.position.y - then->position.y) / dt};
       entry.has_velocity = true;
-      if (then->has_velocity) {
-        k.velocity_change = {k.velocity.x - then->kinematics.velocity.x,
-                             k.velocity.y - then->kinematics.velocity.y};
-      }
+      k.velocity_change = then->has_velocity ? Point{k.velocity.x - then->kinematics.velocity.x,
+                                                     k.velocity.y - then->kinematics.velocity.y}
+                                             : Point{};
       // From the robot to its mean position since the window's first entry (the new one
       // included), from the running sums.
       const auto to_mean_since = [&](std::uint64_t first_seq) {
@@ -566,6 +567,10 @@ void MotionHistory::add(const Formation& formation) {
         track.still_since_s = t;
       }
       entry.context = standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0;
+    } else {
+      entry.has_velocity = false;
+      entry.context = 0;
+      k.velocity = k.velocity_change = k.to_recent_mean = k.to_settled_mean = {};
     }
     track.times[track.end & (track.times.size() - 1)] = t;
     ++track.end;
