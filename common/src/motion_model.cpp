@@ -520,9 +520,6 @@ void MotionHistory::add(const Formation& formation) {
     advance(track.velocity_cursor, t - config_.velocity_window_s);
     advance(track.settle_cursor, t - config_.settle_window_s);
     advance(track.long_settle_cursor, t - config_.long_settle_window_s);
-    for (int k = 1; k <= config_.horizons; ++k) {
-      advance(track.horizon_cursor[static_cast<std::size_t>(k - 1)], t - k * config_.step_s);
-    }
 
     // The new entry is written in place, in the ring's next free slot (made first, so that no
     // pointer into the ring moves after this) and counts once it is complete.
@@ -535,7 +532,6 @@ void MotionHistory::add(const Formation& formation) {
     entry.position = robot.position;
     entry.sum_x = robot.position.x + (last ? last->sum_x : 0.0);
     entry.sum_y = robot.position.y + (last ? last->sum_y : 0.0);
-    entry.count = 1 + (last ? last->count : 0);
     MotionKinematics& k = entry.kinematics;
     k.team_velocity = {};  // set after the loop if any robot of the formation has a velocity
     const Entry* then = nearest(track, track.velocity_cursor, t - config_.velocity_window_s);
@@ -548,11 +544,12 @@ void MotionHistory::add(const Formation& formation) {
                                                      k.velocity.y - then->kinematics.velocity.y}
                                              : Point{};
       // From the robot to its mean position since the window's first entry (the new one
-      // included), from the running sums.
+      // included), from the running sums. They run unbroken over every kept entry (they restart
+      // only when none is kept), so the number of positions summed is that of sequence numbers.
       const auto to_mean_since = [&](std::uint64_t first_seq) {
         if (first_seq >= track.end) return Point{};
         const Entry& first = track.at(first_seq);
-        const double n = static_cast<double>(entry.count - first.count + 1);
+        const double n = static_cast<double>(track.end - first_seq + 1);
         return Point{(entry.sum_x - first.sum_x + first.position.x) / n - robot.position.x,
                      (entry.sum_y - first.sum_y + first.position.y) / n - robot.position.y};
       };
@@ -600,14 +597,18 @@ const MotionHistory::Entry* MotionHistory::latest(std::uint32_t robot_id) const 
   return track.end > track.begin ? &track.at(track.end - 1) : nullptr;
 }
 
-const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t robot_id,
-                                                               int steps) const {
+const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t robot_id, int steps) {
   if (robot_id >= tracks_.size() || steps < 1 || steps > config_.horizons) return nullptr;
-  const Track& track = tracks_[robot_id];
+  Track& track = tracks_[robot_id];
   if (track.end == track.begin) return nullptr;
-  // The cursor was advanced before the latest entry was pushed, to its time minus the steps.
+  // The cursor moves only when asked (learning is 15 times a second, frames come 60): to the
+  // first entry before the latest one at or after the latest's time minus the steps, else the
+  // latest. The target only grows between two clears, so its earlier place is a lower bound.
   const double time_s = track.time_at(track.end - 1) - steps * config_.step_s;
-  return nearest(track, track.horizon_cursor[static_cast<std::size_t>(steps - 1)], time_s);
+  std::uint64_t& cursor = track.horizon_cursor[static_cast<std::size_t>(steps - 1)];
+  cursor = std::max(cursor, track.begin);
+  while (cursor < track.end - 1 && track.time_at(cursor) < time_s) ++cursor;
+  return nearest(track, cursor, time_s);
 }
 
 void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now) {

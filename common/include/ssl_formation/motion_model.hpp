@@ -301,7 +301,6 @@ class MotionHistory {
     MotionKinematics kinematics;  // valid if has_velocity
     bool has_velocity = false;
     double sum_x = 0.0, sum_y = 0.0;  // of the positions up to this one since the history began
-    std::uint64_t count = 0;
     std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
   };
   // Records a formation; its robots' kinematics are then latest(id)->kinematics.
@@ -310,8 +309,8 @@ class MotionHistory {
 
   const Entry* latest(std::uint32_t robot_id) const;
   // The entry nearest (within the tolerance) to the latest entry's time minus `steps` steps,
-  // 1 to the configuration's horizons.
-  const Entry* steps_before_latest(std::uint32_t robot_id, int steps) const;
+  // 1 to the configuration's horizons. Not const: it moves the robot's cursor for `steps`.
+  const Entry* steps_before_latest(std::uint32_t robot_id, int steps);
 
   // Whether an instant at `time_s` is one to learn from (once per `interval_s`); if so it is
   // remembered as the last one.
@@ -329,7 +328,8 @@ class MotionHistory {
     std::vector<double> times;
     std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
     std::uint64_t velocity_cursor = 0, settle_cursor = 0, long_settle_cursor = 0;
-    std::array<std::uint64_t, MotionConfig::max_horizons> horizon_cursor{};  // k steps ago
+    // k steps before the latest entry; moved by steps_before_latest, not by add.
+    std::array<std::uint64_t, MotionConfig::max_horizons> horizon_cursor{};
     std::optional<double> still_since_s;  // when the robot last came to a stand, if it stands
     const Entry& at(std::uint64_t seq) const { return ring[seq & (ring.size() - 1)]; }
     Entry& at(std::uint64_t seq) { return ring[seq & (ring.size() - 1)]; }
