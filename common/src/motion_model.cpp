@@ -454,12 +454,15 @@ void MotionHistory::Track::make_room() {
     const std::size_t size = std::max<std::size_t>(64, ring.size() * 2);
     std::vector<Entry> grown(size);
     std::vector<double> grown_times(size);
+    std::vector<Running> grown_running(size);
     for (std::uint64_t seq = begin; seq < end; ++seq) {
       grown[seq & (size - 1)] = at(seq);
       grown_times[seq & (size - 1)] = time_at(seq);
+      grown_running[seq & (size - 1)] = running_at(seq);
     }
     ring = std::move(grown);
     times = std::move(grown_times);
+    running = std::move(grown_running);
   }
 }
 
@@ -524,14 +527,16 @@ void MotionHistory::add(const Formation& formation) {
     // The new entry is written in place, in the ring's next free slot (made first, so that no
     // pointer into the ring moves after this) and counts once it is complete.
     track.make_room();
-    const Entry* last = track.end > track.begin ? &track.at(track.end - 1) : nullptr;
+    const Track::Running* last = track.end > track.begin ? &track.running_at(track.end - 1) : nullptr;
+    Track::Running& running = track.running[track.end & (track.running.size() - 1)];
+    running.position = robot.position;
+    running.sum = {robot.position.x + (last ? last->sum.x : 0.0),
+                   robot.position.y + (last ? last->sum.y : 0.0)};
     // Every field is written below (no `entry = Entry{}`: zeroing the whole slot first was a
     // fifth of this function's time).
     Entry& entry = track.at(track.end);
     entry.time_s = t;
     entry.position = robot.position;
-    entry.sum_x = robot.position.x + (last ? last->sum_x : 0.0);
-    entry.sum_y = robot.position.y + (last ? last->sum_y : 0.0);
     MotionKinematics& k = entry.kinematics;
     k.team_velocity = {};  // set after the loop if any robot of the formation has a velocity
     const Entry* then = nearest(track, track.velocity_cursor, t - config_.velocity_window_s);
@@ -548,10 +553,10 @@ void MotionHistory::add(const Formation& formation) {
       // only when none is kept), so the number of positions summed is that of sequence numbers.
       const auto to_mean_since = [&](std::uint64_t first_seq) {
         if (first_seq >= track.end) return Point{};
-        const Entry& first = track.at(first_seq);
+        const Track::Running& first = track.running_at(first_seq);
         const double n = static_cast<double>(track.end - first_seq + 1);
-        return Point{(entry.sum_x - first.sum_x + first.position.x) / n - robot.position.x,
-                     (entry.sum_y - first.sum_y + first.position.y) / n - robot.position.y};
+        return Point{(running.sum.x - first.sum.x + first.position.x) / n - robot.position.x,
+                     (running.sum.y - first.sum.y + first.position.y) / n - robot.position.y};
       };
       k.to_recent_mean = to_mean_since(track.settle_cursor);
       k.to_settled_mean = to_mean_since(track.long_settle_cursor);

@@ -300,7 +300,6 @@ class MotionHistory {
     Point position;
     MotionKinematics kinematics;  // valid if has_velocity
     bool has_velocity = false;
-    double sum_x = 0.0, sum_y = 0.0;  // of the positions up to this one since the history began
     std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
   };
   // Records a formation; its robots' kinematics are then latest(id)->kinematics.
@@ -326,6 +325,13 @@ class MotionHistory {
     // The entries' times again, packed: the cursors' scans read only these, from a few cache
     // lines instead of one 128-byte entry each.
     std::vector<double> times;
+    // The running sums for the settle windows' means, packed with the positions for the same
+    // reason: the windows' first entries are 30 and 120 frames back, out of the nearest cache.
+    struct Running {
+      Point position;
+      Point sum;  // of the positions up to this one since the history began
+    };
+    std::vector<Running> running;
     std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
     std::uint64_t velocity_cursor = 0, settle_cursor = 0, long_settle_cursor = 0;
     // k steps before the latest entry; moved by steps_before_latest, not by add.
@@ -334,6 +340,9 @@ class MotionHistory {
     const Entry& at(std::uint64_t seq) const { return ring[seq & (ring.size() - 1)]; }
     Entry& at(std::uint64_t seq) { return ring[seq & (ring.size() - 1)]; }
     double time_at(std::uint64_t seq) const { return times[seq & (times.size() - 1)]; }
+    const Running& running_at(std::uint64_t seq) const {
+      return running[seq & (running.size() - 1)];
+    }
     void make_room();  // grows the ring if full: at(end) is then a free slot
     void clear();
   };
