@@ -487,8 +487,9 @@ bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
   return true;
 }
 
-const MotionHistory::Entry* MotionHistory::nearest(const Track& track, std::uint64_t after,
-                                                   double time_s) const {
+// Inline: add calls it for every robot and frame, steps_before_latest for every horizon.
+inline const MotionHistory::Entry* MotionHistory::nearest(const Track& track, std::uint64_t after,
+                                                          double time_s) const {
   // `after` is the first entry at or after time_s: it or the one before it is the nearest.
   const Entry* best = nullptr;
   double best_gap = config_.tolerance_s + 1e-9;
@@ -511,14 +512,20 @@ void MotionHistory::add(const Formation& formation) {
   last_time_s_ = t;
   attacks_ = formation.opponent_attacks;
   const double limit = MotionFeatures::speed_limits_mm_s[0];
+  // The team's mean velocity, summed as each robot gets its own (in the formation's order).
+  Point team{};
+  int with_velocity = 0;
   for (const FormationRobot& robot : formation.robots) {
     if (robot.robot_id >= tracks_.size()) tracks_.resize(robot.robot_id + 1);
     Track& track = tracks_[robot.robot_id];
     while (track.begin < track.end && track.time_at(track.begin) < t - keep_s_) ++track.begin;
     // Cursors: the first entry at or after each window's start.
     const auto advance = [&](std::uint64_t& cursor, double from_s) {
-      cursor = std::max(cursor, track.begin);
-      while (cursor < track.end && track.time_at(cursor) < from_s) ++cursor;
+      // Moved in a local: a cursor stored through its reference at each step cost a store per
+      // entry passed.
+      std::uint64_t at = std::max(cursor, track.begin);
+      while (at < track.end && track.time_at(at) < from_s) ++at;
+      cursor = at;
     };
     advance(track.velocity_cursor, t - config_.velocity_window_s);
     advance(track.settle_cursor, t - config_.settle_window_s);
@@ -527,7 +534,8 @@ void MotionHistory::add(const Formation& formation) {
     // The new entry is written in place, in the ring's next free slot (made first, so that no
     // pointer into the ring moves after this) and counts once it is complete.
     track.make_room();
-    const Track::Running* last = track.end > track.begin ? &track.running_at(track.end - 1) : nullptr;
+    const Track::Running* last =
+        track.end > track.begin ? &track.running_at(track.end - 1) : nullptr;
     Track::Running& running = track.running[track.end & (track.running.size() - 1)];
     running.position = robot.position;
     running.sum = {robot.position.x + (last ? last->sum.x : 0.0),
@@ -569,6 +577,9 @@ void MotionHistory::add(const Formation& formation) {
         track.still_since_s = t;
       }
       entry.context = standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0;
+      team.x += k.velocity.x;
+      team.y += k.velocity.y;
+      ++with_velocity;
     } else {
       entry.has_velocity = false;
       entry.context = 0;
@@ -578,16 +589,6 @@ void MotionHistory::add(const Formation& formation) {
     ++track.end;
   }
   // The team's mean velocity goes into every new entry, now that each robot has its own.
-  Point team{};
-  int with_velocity = 0;
-  for (const FormationRobot& robot : formation.robots) {
-    const Track& track = tracks_[robot.robot_id];
-    const Entry& entry = track.at(track.end - 1);
-    if (!entry.has_velocity) continue;
-    team.x += entry.kinematics.velocity.x;
-    team.y += entry.kinematics.velocity.y;
-    ++with_velocity;
-  }
   if (with_velocity == 0) return;
   team = {team.x / with_velocity, team.y / with_velocity};
   for (const FormationRobot& robot : formation.robots) {
