@@ -35,8 +35,8 @@ bool ranks_before(const HeldOutInstance& a, const HeldOutInstance& b) {
   if (a.hash != b.hash) return a.hash < b.hash;  // nearly always: no tuples to build
   const auto key = [](const HeldOutInstance& h) {
     const MotionInstance& i = h.instance;
-    return std::tuple(h.hash, i.robot_id, i.x, i.y, i.d_x, i.d_y, i.v_x, i.v_y, i.a_x, i.a_y,
-                      i.g_x, i.g_y, i.s_x, i.s_y, i.t_x, i.t_y, i.context);
+    return std::tuple(h.hash, i.robot_id, i.x, i.y, i.d_x, i.d_y, i.v_x, i.v_y, i.a_x, i.a_y, i.g_x,
+                      i.g_y, i.s_x, i.s_y, i.t_x, i.t_y, i.context);
   };
   return key(a) < key(b);
 }
@@ -61,23 +61,26 @@ std::size_t row_slot(MotionKey key, std::size_t mask) {
 }  // namespace
 
 MotionRow& MotionRowMap::operator[](MotionKey key) {
-  if (2 * (rows_.size() + 1) > slots_.size()) grow();
+  if (2 * (row_keys_.size() + 1) > slots_.size()) grow();
   const std::size_t mask = slots_.size() - 1;
   for (std::size_t i = row_slot(key, mask);; i = (i + 1) & mask) {
     Slot& slot = slots_[i];
-    if (slot.key == key) return rows_[slot.row];
+    if (slot.key == key) return row(slot.row);
     if (slot.key == empty_key) {
       slot.key = key;
-      slot.row = static_cast<std::uint32_t>(rows_.size());
+      slot.row = static_cast<std::uint32_t>(row_keys_.size());
       row_keys_.push_back(key);
-      return rows_.emplace_back();
+      if (blocks_.empty() || blocks_.back().size() == rows_per_block) blocks_.emplace_back();
+      // Also a copied map's last block, which the copy made only as large as its rows.
+      blocks_.back().reserve(rows_per_block);
+      return blocks_.back().emplace_back();
     }
   }
 }
 
 const MotionRow* MotionRowMap::find(MotionKey key) const {
   const std::uint32_t number = row_number(key);
-  return number == no_row ? nullptr : &rows_[number];
+  return number == no_row ? nullptr : &row(number);
 }
 
 std::uint32_t MotionRowMap::row_number(MotionKey key) const {
@@ -96,14 +99,15 @@ void MotionRowMap::prefetch_slot(MotionKey key) const {
 }
 
 void MotionRowMap::prefetch_row(std::uint32_t number) const {
-  const char* bytes = reinterpret_cast<const char*>(&rows_[number]);
+  const char* bytes = reinterpret_cast<const char*>(&row(number));
   for (std::size_t at = 0; at < sizeof(MotionRow); at += 64) __builtin_prefetch(bytes + at);
   __builtin_prefetch(bytes + sizeof(MotionRow) - 1);
 }
 
 std::size_t MotionRowMap::memory_bytes() const {
-  return slots_.capacity() * sizeof(Slot) + row_keys_.capacity() * sizeof(MotionKey) +
-         rows_.capacity() * sizeof(MotionRow);
+  std::size_t bytes = slots_.capacity() * sizeof(Slot) + row_keys_.capacity() * sizeof(MotionKey);
+  for (const std::vector<MotionRow>& block : blocks_) bytes += block.capacity() * sizeof(MotionRow);
+  return bytes;
 }
 
 void MotionRowMap::grow() {
@@ -138,12 +142,12 @@ std::string_view to_string(ModelKind model) {
 }
 
 bool MotionConfig::valid() const {
-  return std::isfinite(step_s) && step_s > 0.0 && horizons >= 1 && horizons <= max_horizons && std::isfinite(velocity_window_s) &&
-         velocity_window_s > 0.0 && std::isfinite(settle_window_s) && settle_window_s > 0.0 &&
+  return std::isfinite(step_s) && step_s > 0.0 && horizons >= 1 && horizons <= max_horizons &&
+         std::isfinite(velocity_window_s) && velocity_window_s > 0.0 &&
+         std::isfinite(settle_window_s) && settle_window_s > 0.0 &&
          std::isfinite(long_settle_window_s) && long_settle_window_s > 0.0 &&
-         std::isfinite(tolerance_s) && tolerance_s >= 0.0 &&
-         std::isfinite(calibration_block_s) && calibration_block_s > 0.0 &&
-         calibration_one_in >= 2 && calibration_capacity >= 1;
+         std::isfinite(tolerance_s) && tolerance_s >= 0.0 && std::isfinite(calibration_block_s) &&
+         calibration_block_s > 0.0 && calibration_one_in >= 2 && calibration_capacity >= 1;
 }
 
 int MotionFeatures::cell(Point p) {
@@ -211,10 +215,18 @@ MotionKeyParts motion_key_parts(int horizon_index, const MotionInstance& i) {
 
 MotionKey encode_motion_key(MotionKeyParts p) {
   switch (p.level) {
-    case MotionLevel::all: p.velocity_class = 0; [[fallthrough]];
-    case MotionLevel::velocity: p.cell = 0; p.context = 0; [[fallthrough]];
-    case MotionLevel::cell: p.robot_slot = 0; [[fallthrough]];
-    case MotionLevel::robot: break;
+    case MotionLevel::all:
+      p.velocity_class = 0;
+      [[fallthrough]];
+    case MotionLevel::velocity:
+      p.cell = 0;
+      p.context = 0;
+      [[fallthrough]];
+    case MotionLevel::cell:
+      p.robot_slot = 0;
+      [[fallthrough]];
+    case MotionLevel::robot:
+      break;
   }
   return static_cast<MotionKey>(p.horizon_index) << horizon_shift |
          static_cast<MotionKey>(p.level) << level_shift |
@@ -237,15 +249,15 @@ MotionKeyParts decode_motion_key(MotionKey key) {
 
 MotionKey coarser_motion_key(MotionKey key) {
   MotionKeyParts p = decode_motion_key(key);
-  if (p.level != MotionLevel::all) p.level = static_cast<MotionLevel>(static_cast<int>(p.level) + 1);
+  if (p.level != MotionLevel::all)
+    p.level = static_cast<MotionLevel>(static_cast<int>(p.level) + 1);
   return encode_motion_key(p);
 }
 
 MotionRegressors motion_regressors_of(const MotionKinematics& k, double horizon_s) {
   return {Point{k.velocity.x * horizon_s, k.velocity.y * horizon_s},
-          Point{k.velocity_change.x * horizon_s, k.velocity_change.y * horizon_s},
-          k.to_recent_mean, k.to_settled_mean,
-          Point{k.team_velocity.x * horizon_s, k.team_velocity.y * horizon_s}};
+          Point{k.velocity_change.x * horizon_s, k.velocity_change.y * horizon_s}, k.to_recent_mean,
+          k.to_settled_mean, Point{k.team_velocity.x * horizon_s, k.team_velocity.y * horizon_s}};
 }
 
 MotionKinematics MotionInstance::kinematics() const {
@@ -414,7 +426,8 @@ std::vector<std::pair<MotionKey, MotionRow>> MotionTable::sorted_rows() const {
 }
 
 std::vector<HeldOutInstance> MotionTable::calibration(int horizon_index) const {
-  std::vector<HeldOutInstance> sample = held_out_[static_cast<std::size_t>(horizon_index)].candidates;
+  std::vector<HeldOutInstance> sample =
+      held_out_[static_cast<std::size_t>(horizon_index)].candidates;
   const std::size_t capacity = config_.calibration_capacity;
   if (sample.size() > capacity) {
     std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(capacity),
@@ -480,7 +493,8 @@ void MotionHistory::clear() {
 }
 
 bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
-  if (last_learned_s_ && time_s >= *last_learned_s_ && time_s - *last_learned_s_ < interval_s - 1e-6) {
+  if (last_learned_s_ && time_s >= *last_learned_s_ &&
+      time_s - *last_learned_s_ < interval_s - 1e-6) {
     return false;
   }
   last_learned_s_ = time_s;
@@ -570,7 +584,8 @@ void MotionHistory::add(const Formation& formation) {
       k.to_settled_mean = to_mean_since(track.long_settle_cursor);
       // How long a standing robot has stood: one that has held its place for a while is about
       // to leave it (set plays hold each position for a second or two).
-      const bool standing = k.velocity.x * k.velocity.x + k.velocity.y * k.velocity.y < limit * limit;
+      const bool standing =
+          k.velocity.x * k.velocity.x + k.velocity.y * k.velocity.y < limit * limit;
       if (!standing) {
         track.still_since_s.reset();
       } else if (!track.still_since_s) {

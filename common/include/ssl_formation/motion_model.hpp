@@ -37,17 +37,17 @@ std::string_view to_string(ModelKind model);
 
 // What a motion table's rows mean; saved with them, and equal for tables that merge.
 struct MotionConfig {
-  double step_s = 2.0;              // the table's step
-  int horizons = 3;                 // steps learned: k x step_s ahead for k = 1..horizons
-  double velocity_window_s = 0.1;   // a robot's velocity is its displacement over this window
+  double step_s = 2.0;             // the table's step
+  int horizons = 3;                // steps learned: k x step_s ahead for k = 1..horizons
+  double velocity_window_s = 0.1;  // a robot's velocity is its displacement over this window
   // Instances are learned at most this often per robot: frames 16 ms apart say almost the same
   // thing. On the inner splits of both recordings, 10 a second forecast as well as 15 (2 s:
   // 10.7 / 11.9% below damped constant velocity against 10.6 / 11.7%; 0.2 s 0.5 mm worse) and 60
   // (every frame), for a third of 15's row updates, most of offline training's time.
   double learn_interval_s = 0.1;
-  double settle_window_s = 0.5;     // MotionKinematics::to_recent_mean's window
+  double settle_window_s = 0.5;       // MotionKinematics::to_recent_mean's window
   double long_settle_window_s = 2.0;  // MotionKinematics::to_settled_mean's
-  double tolerance_s = 0.05;        // how far from an instant a position may be taken for it
+  double tolerance_s = 0.05;          // how far from an instant a position may be taken for it
   double calibration_block_s = 1.0;
   // One block in this many is held out: at one in ten, ten minutes of play held out about 40
   // blocks, and the 90% radius's coverage wandered by a few points between recordings.
@@ -69,7 +69,8 @@ struct MotionFeatures {
   static constexpr int robot_slots = 17;
   static constexpr int directions = 8;
   static constexpr std::array<double, 3> speed_limits_mm_s{250.0, 750.0, 1500.0};
-  static constexpr int velocity_classes = 1 + directions * static_cast<int>(speed_limits_mm_s.size());
+  static constexpr int velocity_classes =
+      1 + directions * static_cast<int>(speed_limits_mm_s.size());
 
   static int cell(Point normalised);
   static int velocity_class(Point velocity_mm_s);
@@ -77,7 +78,9 @@ struct MotionFeatures {
   // 1 + standing_limits_s.size(); 0 is a moving robot's.
   static constexpr std::array<double, 3> standing_limits_s{0.5, 1.0, 2.0};
   static std::uint32_t standing_context(double standing_s);
-  static int robot_slot(std::uint32_t robot_id) { return robot_id < 16 ? static_cast<int>(robot_id) : 16; }
+  static int robot_slot(std::uint32_t robot_id) {
+    return robot_id < 16 ? static_cast<int>(robot_id) : 16;
+  }
 };
 
 // The back-off levels, finest first.
@@ -106,11 +109,11 @@ MotionKey coarser_motion_key(MotionKey key);
 
 // What the model knows of a robot's recent motion, normalised (mm, mm/s).
 struct MotionKinematics {
-  Point velocity;          // over the velocity window
-  Point velocity_change;   // the velocity now minus one velocity window earlier
-  Point to_recent_mean;    // from the robot to its mean position over the settle window
-  Point to_settled_mean;   // the same over the long settle window
-  Point team_velocity;     // the mean velocity of the formation's robots that have one
+  Point velocity;         // over the velocity window
+  Point velocity_change;  // the velocity now minus one velocity window earlier
+  Point to_recent_mean;   // from the robot to its mean position over the settle window
+  Point to_settled_mean;  // the same over the long settle window
+  Point team_velocity;    // the mean velocity of the formation's robots that have one
 };
 
 // The regressors the model fits a displacement with, for one horizon:
@@ -141,7 +144,8 @@ struct MotionRow {
   std::int64_t xx(int i, int j) const { return sums[4 + 3 * r + pair_index(i, j)]; }
 
   // Adds one instance: displacement d and regressors x, in whole millimetres.
-  void add(const std::array<std::int64_t, 2>& d, const std::array<std::array<std::int64_t, 2>, r>& x);
+  void add(const std::array<std::int64_t, 2>& d,
+           const std::array<std::array<std::int64_t, 2>, r>& x);
   void add(const MotionRow& other);
   friend bool operator==(const MotionRow&, const MotionRow&) = default;
 
@@ -189,18 +193,25 @@ class MotionRowMap {
   // Rows are numbered in the order they came, and keep their number.
   static constexpr std::uint32_t no_row = ~std::uint32_t{0};
   std::uint32_t row_number(MotionKey key) const;  // no_row if not in the map
-  MotionRow& row(std::uint32_t number) { return rows_[number]; }
+  MotionRow& row(std::uint32_t number) {
+    return blocks_[number / rows_per_block][number % rows_per_block];
+  }
+  const MotionRow& row(std::uint32_t number) const {
+    return blocks_[number / rows_per_block][number % rows_per_block];
+  }
   // Hints that a row will be used soon: fetches `key`'s index slot, or row `number`, into the
   // cache.
   void prefetch_slot(MotionKey key) const;
   void prefetch_row(std::uint32_t number) const;
-  std::size_t size() const { return rows_.size(); }
+  std::size_t size() const { return row_keys_.size(); }
   std::size_t capacity() const { return slots_.size(); }  // index slots
   std::size_t memory_bytes() const;
   // Every row, in no particular order.
   template <typename Visit>
   void for_each(Visit&& visit) const {
-    for (std::size_t i = 0; i < rows_.size(); ++i) visit(row_keys_[i], rows_[i]);
+    for (std::size_t i = 0; i < row_keys_.size(); ++i) {
+      visit(row_keys_[i], row(static_cast<std::uint32_t>(i)));
+    }
   }
   friend bool operator==(const MotionRowMap& a, const MotionRowMap& b);
 
@@ -208,12 +219,16 @@ class MotionRowMap {
   static constexpr MotionKey empty_key = ~MotionKey{0};  // no key has every bit set
   struct Slot {
     MotionKey key = empty_key;
-    std::uint32_t row = 0;  // into rows_ and row_keys_
+    std::uint32_t row = 0;  // into the blocks and row_keys_
   };
   void grow();
   std::vector<Slot> slots_;
   std::vector<MotionKey> row_keys_;
-  std::vector<MotionRow> rows_;
+  // The rows in blocks of a fixed size that never move: a growing table adds a block instead of
+  // copying every row into a buffer twice the size (and faulting in its fresh pages) each time
+  // it doubles, which was a tenth of training on a single log.
+  static constexpr std::size_t rows_per_block = 4096;  // 1.1 MiB
+  std::vector<std::vector<MotionRow>> blocks_;
 };
 
 // A calibration instance and its rank (lower is kept).
