@@ -24,10 +24,13 @@ constexpr unsigned kGzBufferSize = 128 * 1024;
 constexpr unsigned kPlainBufferSize = 16 * 1024;
 static_assert(kReadBufferSize >= 8 * kPlainBufferSize);
 
-// Whether the file starts as a gzip stream does; false if it cannot be read (gzopen says why).
+// Whether a regular file starts as a gzip stream does. Anything else (a pipe, a file that cannot
+// be read: gzopen says why) counts as gzip: a pipe's bytes, once read here, would be gone.
 bool starts_as_gzip(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return true;
   std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return false;
+  if (file == nullptr) return true;
   unsigned char magic[2] = {0, 0};
   const std::size_t got = std::fread(magic, 1, sizeof magic, file);
   std::fclose(file);

@@ -52,6 +52,14 @@ std::int32_t whole_mm(double value) {
 }
 
 namespace {
+// Fetches every cache line `object` spans into the cache (a hint: nothing waits for it).
+template <typename T>
+void prefetch_object(const T& object) {
+  const char* bytes = reinterpret_cast<const char*>(&object);
+  for (std::size_t at = 0; at < sizeof(T); at += 64) __builtin_prefetch(bytes + at);
+  __builtin_prefetch(bytes + sizeof(T) - 1);  // an object not aligned to a line spans one more
+}
+
 std::size_t row_slot(MotionKey key, std::size_t mask) {
   key ^= key >> 31;
   key *= 0x7fb5d329728ea185ULL;
@@ -98,11 +106,7 @@ void MotionRowMap::prefetch_slot(MotionKey key) const {
   __builtin_prefetch(&slots_[row_slot(key, slots_.size() - 1)]);
 }
 
-void MotionRowMap::prefetch_row(std::uint32_t number) const {
-  const char* bytes = reinterpret_cast<const char*>(&row(number));
-  for (std::size_t at = 0; at < sizeof(MotionRow); at += 64) __builtin_prefetch(bytes + at);
-  __builtin_prefetch(bytes + sizeof(MotionRow) - 1);
-}
+void MotionRowMap::prefetch_row(std::uint32_t number) const { prefetch_object(row(number)); }
 
 std::size_t MotionRowMap::memory_bytes() const {
   std::size_t bytes = slots_.capacity() * sizeof(Slot) + row_keys_.capacity() * sizeof(MotionKey);
@@ -501,7 +505,6 @@ bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
   return true;
 }
 
-// Inline: add calls it for every robot and frame, steps_before_latest for every horizon.
 inline const MotionHistory::Entry* MotionHistory::nearest(const Track& track, std::uint64_t after,
                                                           double time_s) const {
   // `after` is the first entry at or after time_s: it or the one before it is the nearest.
@@ -622,7 +625,7 @@ const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t rob
   if (robot_id >= tracks_.size() || steps < 1 || steps > config_.horizons) return nullptr;
   Track& track = tracks_[robot_id];
   if (track.end == track.begin) return nullptr;
-  // The cursor moves only when asked (learning is 15 times a second, frames come 60): to the
+  // The cursor moves only when asked (learning is 10 times a second, frames come 60): to the
   // first entry before the latest one at or after the latest's time minus the steps, else the
   // latest. The target only grows between two clears, so its earlier place is a lower bound.
   const double time_s = track.time_at(track.end - 1) - steps * config_.step_s;
@@ -646,11 +649,7 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= config.horizons; ++k) {
       const MotionHistory::Entry* then = history.steps_before_latest(robot.robot_id, k);
-      if (then) {
-        const char* bytes = reinterpret_cast<const char*>(then);
-        __builtin_prefetch(bytes);
-        __builtin_prefetch(bytes + sizeof(MotionHistory::Entry) - 1);
-      }
+      if (then) prefetch_object(*then);
       thens.push_back(then);
     }
   }

@@ -28,30 +28,32 @@ struct TransitionTable::Storage {
   // prediction costs when the predictor wakes with cold caches and TLB every 16 ms.
   std::vector<Count> counts;
   std::uint64_t cells = 0;
+  // The one formula of the layout: the offset of the candidates (to_centroid, every position,
+  // previous) of the row whose centroid and (position, previous) within it are given.
+  std::uint64_t candidates(std::uint64_t from_centroid, std::uint64_t from_in_block,
+                           std::uint64_t to_centroid, std::uint64_t previous) const {
+    const std::uint64_t block = from_centroid * cells + to_centroid;
+    return ((block * cells * cells + from_in_block) * cells + previous) * cells;
+  }
   // Offset of the candidates (to_centroid, every position, previous) of row `from`.
   std::uint64_t candidates(StateIndex from, std::uint64_t to_centroid,
                            std::uint64_t previous) const {
     const std::uint64_t block_rows = cells * cells;  // (position, previous) of one centroid
-    const std::uint64_t from_centroid = from / block_rows;
-    const std::uint64_t from_in_block = from % block_rows;
-    const std::uint64_t block = from_centroid * cells + to_centroid;
-    return ((block * block_rows + from_in_block) * cells + previous) * cells;
+    return candidates(from / block_rows, from % block_rows, to_centroid, previous);
   }
-  std::uint64_t offset(StateIndex from, StateIndex to) const {
-    const std::uint64_t previous = to % cells;
-    const std::uint64_t position = (to / cells) % cells;
-    const std::uint64_t to_centroid = to / (cells * cells);
-    return candidates(from, to_centroid, previous) + position;
-  }
-  // offset(), from the centroids the caller has already divided out (`from_centroid` = from /
-  // cells^2 and so on): add() runs for every transition, and 64-bit divisions were most of it.
+  // offset(from, to), from the centroids the caller has already divided out (`from_centroid` =
+  // from / cells^2 and so on): add() runs for every transition, and 64-bit divisions were most
+  // of it.
   std::uint64_t offset(StateIndex from_centroid, StateIndex from_in_block, StateIndex to_centroid,
                        StateIndex to_in_block) const {
     const auto cells32 = static_cast<StateIndex>(cells);
     const StateIndex position = to_in_block / cells32;
     const StateIndex previous = to_in_block - position * cells32;
-    const std::uint64_t block = std::uint64_t{from_centroid} * cells + to_centroid;
-    return ((block * cells * cells + from_in_block) * cells + previous) * cells + position;
+    return candidates(from_centroid, from_in_block, to_centroid, previous) + position;
+  }
+  std::uint64_t offset(StateIndex from, StateIndex to) const {
+    const auto block_rows = static_cast<StateIndex>(cells * cells);
+    return offset(from / block_rows, from % block_rows, to / block_rows, to % block_rows);
   }
   Count& at(StateIndex from, StateIndex to) { return counts[offset(from, to)]; }
   Count at(StateIndex from, StateIndex to) const { return counts[offset(from, to)]; }

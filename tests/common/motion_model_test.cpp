@@ -294,6 +294,53 @@ TEST(MotionModel, HeldOutInstancesCalibrateTheRadii) {
   EXPECT_NEAR(f.radius90_mm, 300.0, 15.0);
 }
 
+// Rows live in blocks of a few thousand: past a block's end, and in a copy that grows on its
+// own, every row keeps its number, its key and its sums.
+TEST(MotionRowMap, RowsKeepNumberKeyAndSumsAcrossBlocksAndInACopyThatGrows) {
+  const auto key_of = [](int i) {
+    return sf::encode_motion_key({.horizon_index = i % 3,
+                                  .level = sf::MotionLevel::robot,
+                                  .robot_slot = i % 17,
+                                  .cell = (i / 17) % sf::MotionFeatures::cell_count,
+                                  .velocity_class = 0,
+                                  .context = static_cast<std::uint32_t>(i)});
+  };
+  const auto count_into = [](sf::MotionRow& row, int i) {
+    row.add({i, -i}, {{{i, 1}, {2, i}, {0, 0}, {i, i}, {-1, 3}}});
+  };
+  sf::MotionRowMap map;
+  constexpr int first = 9000;  // more than two blocks
+  for (int i = 0; i < first; ++i) count_into(map[key_of(i)], i);
+  ASSERT_EQ(map.size(), static_cast<std::size_t>(first));
+  sf::MotionRowMap copy = map;
+  constexpr int more = 5000;
+  for (int i = first; i < first + more; ++i) count_into(copy[key_of(i)], i);
+  for (int i = 0; i < first; i += 7) count_into(copy[key_of(i)], i);  // old rows again
+
+  EXPECT_EQ(map.size(), static_cast<std::size_t>(first)) << "the copy grew alone";
+  ASSERT_EQ(copy.size(), static_cast<std::size_t>(first + more));
+  for (int i = 0; i < first + more; ++i) {
+    const sf::MotionRow* row = copy.find(key_of(i));
+    ASSERT_NE(row, nullptr) << i;
+    EXPECT_EQ(copy.row_number(key_of(i)), static_cast<std::uint32_t>(i)) << "numbered as they came";
+    sf::MotionRow expected;
+    count_into(expected, i);
+    if (i < first && i % 7 == 0) count_into(expected, i);
+    EXPECT_EQ(*row, expected) << i;
+    if (i < first) {
+      sf::MotionRow once;
+      count_into(once, i);
+      EXPECT_EQ(*map.find(key_of(i)), once) << i;
+    }
+  }
+  std::size_t visited = 0;
+  copy.for_each([&](sf::MotionKey key, const sf::MotionRow& row) {
+    ++visited;
+    EXPECT_EQ(copy.find(key), &row);
+  });
+  EXPECT_EQ(visited, copy.size());
+}
+
 TEST(MotionTable, CountsAreSumsSoMergingEqualsAddingEverythingToOne) {
   sf::MotionConfig config = one_second(2);
   config.calibration_capacity = 16;  // small, so that the merge must choose what to keep

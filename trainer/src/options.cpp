@@ -15,7 +15,8 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
       ("table", po::value(&o.table)->default_value(o.table),
        "table file to resume and save (written atomically)")
       ("reset", po::bool_switch(&o.reset),
-       "start an empty table even if --table holds one of another grid, step or model")
+       "start an empty table even if --table holds one of another grid, step, model or motion-model "
+       "settings (an older version's)")
       ("horizon", po::value(&o.horizon)->default_value(o.horizon),
        "--model motion: steps ahead to learn (1 to 16), as many as ssl-predictor --horizon "
        "predicts")

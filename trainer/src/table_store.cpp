@@ -35,11 +35,13 @@ void remove_stale_temporaries(const std::filesystem::path& table_path) {
 }
 
 std::string describe_motion(const MotionConfig& config) {
-  return fmt::format("horizons={} step={} velocity_window={} tolerance={} calibration_block={} "
-                     "calibration_one_in={} calibration_capacity={}",
-                     config.horizons, config.step_s, config.velocity_window_s, config.tolerance_s,
-                     config.calibration_block_s, config.calibration_one_in,
-                     config.calibration_capacity);
+  return fmt::format(
+      "horizons={} step={} velocity_window={} learn_interval={} settle_window={} "
+      "long_settle_window={} tolerance={} calibration_block={} calibration_one_in={} "
+      "calibration_capacity={}",
+      config.horizons, config.step_s, config.velocity_window_s, config.learn_interval_s,
+      config.settle_window_s, config.long_settle_window_s, config.tolerance_s,
+      config.calibration_block_s, config.calibration_one_in, config.calibration_capacity);
 }
 }  // namespace
 

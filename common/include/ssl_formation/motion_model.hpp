@@ -43,7 +43,8 @@ struct MotionConfig {
   // Instances are learned at most this often per robot: frames 16 ms apart say almost the same
   // thing. On the inner splits of both recordings, 10 a second forecast as well as 15 (2 s:
   // 10.7 / 11.9% below damped constant velocity against 10.6 / 11.7%; 0.2 s 0.5 mm worse) and 60
-  // (every frame), for a third of 15's row updates, most of offline training's time.
+  // (every frame). Row updates are most of offline training's time, and 10 make a third fewer
+  // than 15.
   double learn_interval_s = 0.1;
   double settle_window_s = 0.5;       // MotionKinematics::to_recent_mean's window
   double long_settle_window_s = 2.0;  // MotionKinematics::to_settled_mean's
@@ -224,9 +225,11 @@ class MotionRowMap {
   void grow();
   std::vector<Slot> slots_;
   std::vector<MotionKey> row_keys_;
-  // The rows in blocks of a fixed size that never move: a growing table adds a block instead of
-  // copying every row into a buffer twice the size (and faulting in its fresh pages) each time
-  // it doubles, which was a tenth of training on a single log.
+  // The rows in blocks of a fixed size: a growing table adds a block instead of copying every
+  // row into a buffer twice the size (and faulting in its fresh pages) each time it doubles,
+  // which was a tenth of training on a single log. Rows keep their numbers; their addresses
+  // hold too, except that a copied map's last block moves once, at its first new row (nothing
+  // keeps a row's address across an insert).
   static constexpr std::size_t rows_per_block = 4096;  // 1.1 MiB
   std::vector<std::vector<MotionRow>> blocks_;
 };
@@ -338,13 +341,13 @@ class MotionHistory {
   struct Track {
     std::vector<Entry> ring;  // a power-of-two size
     // The entries' times again, packed: the cursors' scans read only these, from a few cache
-    // lines instead of one 128-byte entry each.
+    // lines instead of one 112-byte entry each.
     std::vector<double> times;
     // The running sums for the settle windows' means, packed with the positions for the same
     // reason: the windows' first entries are 30 and 120 frames back, out of the nearest cache.
     struct Running {
       Point position;
-      Point sum;  // of the positions up to this one since the history began
+      Point sum;  // of the positions up to this one since the track last had no entry kept
     };
     std::vector<Running> running;
     std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
@@ -361,7 +364,9 @@ class MotionHistory {
     void make_room();  // grows the ring if full: at(end) is then a free slot
     void clear();
   };
-  const Entry* nearest(const Track& track, std::uint64_t after, double time_s) const;
+  // Inline (defined in motion_model.cpp, its only user): add calls it for every robot and
+  // frame, steps_before_latest for every horizon.
+  inline const Entry* nearest(const Track& track, std::uint64_t after, double time_s) const;
 
   MotionConfig config_;
   double keep_s_;
