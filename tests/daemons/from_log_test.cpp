@@ -114,11 +114,7 @@ TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
   const auto messages = listener.wait_for(instants.size(), 20s);
   ASSERT_EQ(messages.size(), instants.size()) << daemon.stderr_text();
 
-  std::vector<std::string> multicast;
-  for (const auto& message : messages) {
-    const std::vector<std::string> rows = rows_of(message);
-    multicast.insert(multicast.end(), rows.begin(), rows.end());
-  }
+  const std::vector<std::string> multicast = rows_of(messages);
   ASSERT_EQ(multicast.size(), lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) ASSERT_EQ(multicast[i], lines[i]) << "row " << i;
 

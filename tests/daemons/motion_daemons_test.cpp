@@ -199,7 +199,6 @@ TEST_F(MotionDaemons, TrainerWritesAVersionTwoTableAndTheDaemonMulticastsTheCsvs
   const auto messages = listener.drain(5s);
   ASSERT_TRUE(messages.has_value());
   ASSERT_EQ(messages->size(), instants.size()) << daemon.stderr_text();
-  std::vector<std::string> multicast;
   for (const auto& message : *messages) {
     ASSERT_EQ(message.model(), "motion");
     ASSERT_EQ(message.steps_size(), 3);
@@ -210,9 +209,8 @@ TEST_F(MotionDaemons, TrainerWritesAVersionTwoTableAndTheDaemonMulticastsTheCsvs
             << message.DebugString();
       }
     }
-    const std::vector<std::string> rows = rows_of(message);
-    multicast.insert(multicast.end(), rows.begin(), rows.end());
   }
+  const std::vector<std::string> multicast = rows_of(*messages);
   ASSERT_EQ(multicast.size(), lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) ASSERT_EQ(multicast[i], lines[i]) << "row " << i;
 
@@ -288,12 +286,8 @@ TEST_F(MotionDaemons, PredictorRefusesAVersionOneTableKeepsRunningAndTakesAVersi
   const auto messages = listener.drain(5s);
   ASSERT_TRUE(messages.has_value());
   ASSERT_EQ(messages->size(), static_cast<std::size_t>(test_frames)) << daemon.stderr_text();
-  std::vector<std::string> multicast;
-  for (const auto& message : *messages) {
-    ASSERT_EQ(message.model(), "motion");
-    const std::vector<std::string> rows = rows_of(message);
-    multicast.insert(multicast.end(), rows.begin(), rows.end());
-  }
+  for (const auto& message : *messages) ASSERT_EQ(message.model(), "motion");
+  const std::vector<std::string> multicast = rows_of(*messages);
   const std::vector<std::string> lines = predict_csv(table, "from-log");
   ASSERT_EQ(multicast.size(), lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) ASSERT_EQ(multicast[i], lines[i]) << "row " << i;
@@ -331,11 +325,7 @@ TEST_F(MotionDaemons, WarmUpsBetweenFramesAtTheRealPaceSendNothingAndChangeNoPre
   const auto messages = listener.drain(2s);
   ASSERT_TRUE(messages.has_value());
   ASSERT_EQ(messages->size(), static_cast<std::size_t>(frames)) << daemon.stderr_text();
-  std::vector<std::string> multicast;
-  for (const auto& message : *messages) {
-    const std::vector<std::string> rows = rows_of(message);
-    multicast.insert(multicast.end(), rows.begin(), rows.end());
-  }
+  const std::vector<std::string> multicast = rows_of(*messages);
   const std::vector<std::string> lines = predict_csv(table, "from-log-short", short_log);
   ASSERT_EQ(multicast.size(), lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) ASSERT_EQ(multicast[i], lines[i]) << "row " << i;

@@ -82,4 +82,15 @@ inline std::vector<std::string> rows_of(const proto::FormationPrediction& messag
   return rows;
 }
 
+// The CSV rows of every message, one after the other: what `--from-log` writes for the same
+// frames.
+inline std::vector<std::string> rows_of(const std::vector<proto::FormationPrediction>& messages) {
+  std::vector<std::string> rows;
+  for (const proto::FormationPrediction& message : messages) {
+    const std::vector<std::string> more = rows_of(message);
+    rows.insert(rows.end(), more.begin(), more.end());
+  }
+  return rows;
+}
+
 }  // namespace ssl_formation::testing
