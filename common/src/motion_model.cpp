@@ -494,6 +494,7 @@ void MotionHistory::clear() {
   for (Track& track : tracks_) track.clear();
   last_time_s_.reset();
   last_learned_s_.reset();
+  previous_learned_s_.reset();
 }
 
 bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
@@ -501,6 +502,8 @@ bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
       time_s - *last_learned_s_ < interval_s - 1e-6) {
     return false;
   }
+  previous_learned_s_ =
+      last_learned_s_ && *last_learned_s_ < time_s ? last_learned_s_ : std::nullopt;
   last_learned_s_ = time_s;
   return true;
 }
@@ -535,6 +538,16 @@ void MotionHistory::add(const Formation& formation) {
   for (const FormationRobot& robot : formation.robots) {
     if (robot.robot_id >= tracks_.size()) tracks_.resize(robot.robot_id + 1);
     Track& track = tracks_[robot.robot_id];
+    if (!robot.observed) {
+      // No entry: the robot's latest is still its last observation, and counts for the team.
+      if (track.end > track.begin && track.at(track.end - 1).has_velocity) {
+        const Point velocity = track.at(track.end - 1).kinematics.velocity;
+        team.x += velocity.x;
+        team.y += velocity.y;
+        ++with_velocity;
+      }
+      continue;
+    }
     while (track.begin < track.end && track.time_at(track.begin) < t - keep_s_) ++track.begin;
     // Cursors: the first entry at or after each window's start.
     const auto advance = [&](std::uint64_t& cursor, double from_s) {
@@ -610,6 +623,7 @@ void MotionHistory::add(const Formation& formation) {
   if (with_velocity == 0) return;
   team = {team.x / with_velocity, team.y / with_velocity};
   for (const FormationRobot& robot : formation.robots) {
+    if (!robot.observed) continue;
     Track& track = tracks_[robot.robot_id];
     track.at(track.end - 1).kinematics.team_velocity = team;
   }
@@ -646,9 +660,16 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   // are found and fetched first, so that their misses overlap.
   static thread_local std::vector<const MotionHistory::Entry*> thens;
   thens.clear();
+  // A robot not seen since the last learning instant (its camera's packets missed it) was
+  // learned from there already.
+  const std::optional<double> previous_s = history.previous_learning_instant_s();
   for (const FormationRobot& robot : now.robots) {
+    const MotionHistory::Entry* latest = history.latest(robot.robot_id);
+    const bool learned_already =
+        !robot.observed && previous_s && latest && latest->time_s <= *previous_s;
     for (int k = 1; k <= config.horizons; ++k) {
-      const MotionHistory::Entry* then = history.steps_before_latest(robot.robot_id, k);
+      const MotionHistory::Entry* then =
+          learned_already ? nullptr : history.steps_before_latest(robot.robot_id, k);
       if (then) prefetch_object(*then);
       thens.push_back(then);
     }

@@ -259,10 +259,12 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   std::vector<FormationRobot>& robots = robots_scratch_;
   robots.clear();
   for (const std::uint32_t id : observed_ids_) {
-    const Observation& obs = observations_[id];
+    Observation& obs = observations_[id];
     if (obs.time_s <= sample_s - fresh_s + time_epsilon_s) continue;
     FormationRobot& robot = robots.emplace_back();  // built in place, not copied in
     robot.robot_id = id;
+    robot.observed = !obs.in_instant;
+    obs.in_instant = true;
     robot.feed_position = Point{obs.sum_x / obs.weight, obs.sum_y / obs.weight};
     robot.position = normalise(robot.feed_position, config_.opponent_attacks);
   }
@@ -337,7 +339,13 @@ FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
         return next_before != before_end && next_before->robot_id == id ? next_before : nullptr;
       },
       [&](const FormationRobot& robot, const FormationRobot& then) {
-        sample.transitions.push_back({robot.robot_id, then.state, robot.state});
+        // Frame sampling counts a robot at the instants a frame saw it: one carried over from
+        // an earlier frame would count that frame's transition again, and robots would weigh
+        // by how the cameras split the field. (A step sample's robots are all counted, as the
+        // paper does.)
+        if (robot.observed || config_.sampling == Sampling::step) {
+          sample.transitions.push_back({robot.robot_id, then.state, robot.state});
+        }
       });
   sample.formation.time_s = instant.time_s;
   sample.formation.frame_number = last_frame_number_;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -57,6 +58,84 @@ TEST(MotionWholeMm, RoundsEveryValueAsTablesWereTrained) {
   for (const double value : values) {
     EXPECT_EQ(sf::whole_mm(value), whole_mm_as_trained(value)) << value;
   }
+}
+
+// Real logs' camera packets each cover part of the field: a robot carried over from an earlier
+// packet (FormationRobot::observed false) is no new observation.
+sf::Formation formation_at(double time_s, std::vector<std::pair<sf::Point, bool>> robots) {
+  sf::Formation formation;
+  formation.time_s = time_s;
+  for (std::size_t id = 0; id < robots.size(); ++id) {
+    sf::FormationRobot& robot = formation.robots.emplace_back();
+    robot.robot_id = static_cast<std::uint32_t>(id);
+    robot.position = robot.feed_position = robots[id].first;
+    robot.observed = robots[id].second;
+  }
+  return formation;
+}
+
+TEST(MotionHistory, ARobotCarriedOverKeepsItsLastEntryAndItsVelocityCountsForTheTeam) {
+  sf::MotionConfig config;
+  config.step_s = 0.5;
+  sf::MotionHistory history(config);
+  // Robot 0 drives along x at 1 m/s, robot 1 along y at 1 m/s, both seen at 50 Hz for a second.
+  for (int i = 0; i <= 50; ++i) {
+    const double t = i / 50.0;
+    history.add(formation_at(t, {{{1000.0 * t, 0.0}, true}, {{0.0, 1000.0 * t}, true}}));
+  }
+  // Then a packet sees robot 0 only; robot 1 is where it was last seen.
+  history.add(formation_at(1.02, {{{1020.0, 0.0}, true}, {{0.0, 1000.0}, false}}));
+  const sf::MotionHistory::Entry* carried = history.latest(1);
+  ASSERT_NE(carried, nullptr);
+  EXPECT_DOUBLE_EQ(carried->time_s, 1.0);  // no entry stamped 1.02 at its 1.0 position
+  EXPECT_NEAR(carried->kinematics.velocity.y, 1000.0, 1e-6);
+  const sf::MotionHistory::Entry* seen = history.latest(0);
+  ASSERT_NE(seen, nullptr);
+  EXPECT_DOUBLE_EQ(seen->time_s, 1.02);
+  EXPECT_NEAR(seen->kinematics.velocity.x, 1000.0, 1e-6);
+  // The team's mean velocity is both robots' latest: (1000, 0) and (0, 1000).
+  EXPECT_NEAR(seen->kinematics.team_velocity.x, 500.0, 1e-6);
+  EXPECT_NEAR(seen->kinematics.team_velocity.y, 500.0, 1e-6);
+  // Seen again, it continues its track at the right spacing: the velocity is still 1 m/s.
+  history.add(formation_at(1.04, {{{1040.0, 0.0}, true}, {{0.0, 1040.0}, true}}));
+  EXPECT_NEAR(history.latest(1)->kinematics.velocity.y, 1000.0, 1e-6);
+}
+
+TEST(MotionHistory, ARobotCarriedOverLearnsNothingMoreThanOneLeftOut) {
+  sf::MotionConfig config;
+  config.step_s = 0.5;
+  config.horizons = 2;
+  config.calibration_one_in = 1000000;  // every instance counted in rows
+  // Two streams: robot 1 vanishes from the packets at 2 s; in one it is carried over (as a
+  // sampler does within its freshness window), in the other it leaves the formations.
+  const auto train = [&](bool carry_over) {
+    sf::MotionTable table(config);
+    sf::MotionHistory history(config);
+    for (int i = 0; i <= 150; ++i) {
+      const double t = i / 50.0;
+      const double seen_t = std::min(t, 2.0);
+      std::vector<std::pair<sf::Point, bool>> robots{{{1000.0 * t, 0.0}, true}};
+      if (t <= 2.0 || carry_over) robots.push_back({{0.0, 800.0 * seen_t}, t <= 2.0});
+      const sf::Formation now = formation_at(t, robots);
+      history.add(now);
+      sf::learn_motion(table, history, now);
+    }
+    return table;
+  };
+  // Instances learned per robot (the team velocity in robot 0's differs: the carried robot's
+  // last velocity still counts in it).
+  const auto per_robot = [](const sf::MotionTable& table) {
+    std::array<std::int64_t, 2> n{};
+    for (const auto& [key, row] : table.sorted_rows()) {
+      n.at(static_cast<std::size_t>(sf::decode_motion_key(key).robot_slot)) += row.n();
+    }
+    return n;
+  };
+  const std::array<std::int64_t, 2> carried = per_robot(train(true));
+  const std::array<std::int64_t, 2> left_out = per_robot(train(false));
+  EXPECT_GT(carried[0], carried[1]);  // robot 0 learns on after 2 s
+  EXPECT_GT(carried[1], 20);
+  EXPECT_EQ(carried, left_out);
 }
 
 }  // namespace

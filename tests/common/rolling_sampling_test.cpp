@@ -194,6 +194,34 @@ TEST(RollingSampling, OneCameraIdWhosePacketsEachCoverHalfTheFieldSamplesEveryRo
   }
 }
 
+TEST(RollingSampling, ARobotCarriedOverFromTheOtherHalfIsNotObservedAndCountsNoTransition) {
+  Collector out;
+  SamplerConfig config = rolling(0.5);
+  config.field = FieldSize{12000, 9000};
+  FormationSampler sampler(config, out.handler());
+  for (const auto& packet : half_field_packets(4.0)) sampler.add(packet);
+  std::size_t checked = 0;
+  for (const FormationSample& sample : out.samples) {
+    if (sample.formation.time_s < 11.0) continue;  // a step of history for every robot
+    // A packet of the left half (ids 0-4 stand at x < 0) is observed there, the right half
+    // is carried over from the packet before, and the other way round.
+    const bool left_packet = sample.formation.frame_number % 2 == 0;
+    std::vector<std::uint32_t> observed;
+    for (const FormationRobot& robot : sample.formation.robots) {
+      EXPECT_EQ(robot.observed, (robot.robot_id < 5) == left_packet)
+          << robot.robot_id << " at " << sample.formation.time_s;
+      if (robot.observed) observed.push_back(robot.robot_id);
+    }
+    // The paper's counts come from the observed robots only: the others' transition was
+    // counted at the instant of their own packet.
+    std::vector<std::uint32_t> counted;
+    for (const Transition& t : sample.transitions) counted.push_back(t.robot_id);
+    EXPECT_EQ(counted, observed) << sample.formation.time_s;
+    ++checked;
+  }
+  EXPECT_GT(checked, 200u);
+}
+
 TEST(RollingSampling, ParsesAndNamesTheModes) {
   EXPECT_EQ(parse_sampling("frame"), Sampling::frame);
   EXPECT_EQ(parse_sampling("step"), Sampling::step);

@@ -24,6 +24,11 @@ struct FormationRobot {
   Cell cell;
   Cell previous_cell;  // equal to cell when the robot starts a chain (velocity 0)
   StateIndex state = 0;
+  // Seen in a frame since the previous instant. False for a robot carried over from an earlier
+  // frame: a real log's camera packets each cover part of the field, so half the robots of an
+  // instant are the last one's again. Those add nothing new to learn from (and, stamped with
+  // this instant's time, would look as if they had stood still).
+  bool observed = true;
 };
 
 struct Formation {

@@ -320,7 +320,9 @@ class MotionHistory {
     bool has_velocity = false;
     std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
   };
-  // Records a formation; its robots' kinematics are then latest(id)->kinematics.
+  // Records a formation: an entry at its time for each robot observed in it (a robot carried
+  // over from an earlier frame keeps its latest entry, and its velocity still counts in the
+  // team's). Every robot's kinematics are then latest(id)->kinematics.
   void add(const Formation& formation);
   void clear();
 
@@ -332,6 +334,8 @@ class MotionHistory {
   // Whether an instant at `time_s` is one to learn from (once per `interval_s`); if so it is
   // remembered as the last one.
   bool take_learning_instant(double time_s, double interval_s);
+  // The learning instant before the last one taken, if any since the last clear.
+  std::optional<double> previous_learning_instant_s() const { return previous_learned_s_; }
 
  private:
   // One robot's entries in a ring buffer addressed by absolute sequence numbers, with cursors
@@ -373,6 +377,7 @@ class MotionHistory {
   std::vector<Track> tracks_;  // by robot id
   std::optional<double> last_time_s_;
   std::optional<double> last_learned_s_;
+  std::optional<double> previous_learned_s_;
   AttackDirection attacks_ = AttackDirection::positive_x;
 };
 

@@ -198,6 +198,7 @@ class FormationSampler : private DataClockListener {
     double weight = 0.0;
     std::uint32_t camera_id = 0;
     bool seen = false;
+    bool in_instant = false;  // already in an instant (FormationRobot::observed false after)
   };
 
   void add_geometry(std::int32_t field_length, std::int32_t field_width);
