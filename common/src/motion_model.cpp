@@ -110,12 +110,12 @@ void MotionRowMap::prefetch_row(std::uint32_t number) const { prefetch_object(ro
 
 std::size_t MotionRowMap::memory_bytes() const {
   std::size_t bytes = slots_.capacity() * sizeof(Slot) + row_keys_.capacity() * sizeof(MotionKey);
-  for (const std::vector<MotionRow>& block : blocks_) bytes += block.capacity() * sizeof(MotionRow);
+  for (const Block& block : blocks_) bytes += block.capacity() * sizeof(MotionRow);
   return bytes;
 }
 
 void MotionRowMap::grow() {
-  std::vector<Slot> slots(std::max<std::size_t>(64, slots_.size() * 2));
+  std::vector<Slot, ProbedAllocator<Slot>> slots(std::max<std::size_t>(64, slots_.size() * 2));
   const std::size_t mask = slots.size() - 1;
   for (std::size_t row = 0; row < row_keys_.size(); ++row) {
     std::size_t i = row_slot(row_keys_[row], mask);

@@ -8,7 +8,6 @@
 namespace ssl_formation {
 
 namespace {
-constexpr std::size_t huge_page_bytes = std::size_t{2} << 20;
 // Below this an array is allocated as usual: a huge page would be mostly empty.
 constexpr std::size_t probed_min_bytes = std::size_t{128} << 10;
 // Small arrays are aligned to a cache line (the index's slots are one line each).

@@ -309,11 +309,11 @@ TEST(MotionRowMap, RowsKeepNumberKeyAndSumsAcrossBlocksAndInACopyThatGrows) {
     row.add({i, -i}, {{{i, 1}, {2, i}, {0, 0}, {i, i}, {-1, 3}}});
   };
   sf::MotionRowMap map;
-  constexpr int first = 9000;  // more than two blocks
+  constexpr int first = 16000;  // more than two blocks (of 7281 rows, a huge page each)
   for (int i = 0; i < first; ++i) count_into(map[key_of(i)], i);
   ASSERT_EQ(map.size(), static_cast<std::size_t>(first));
   sf::MotionRowMap copy = map;
-  constexpr int more = 5000;
+  constexpr int more = 8000;
   for (int i = first; i < first + more; ++i) count_into(copy[key_of(i)], i);
   for (int i = 0; i < first; i += 7) count_into(copy[key_of(i)], i);  // old rows again
 
