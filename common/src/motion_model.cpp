@@ -495,6 +495,7 @@ void MotionHistory::clear() {
   last_time_s_.reset();
   last_learned_s_.reset();
   previous_learned_s_.reset();
+  learning_instants_ = 0;
 }
 
 bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
@@ -505,6 +506,7 @@ bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
   previous_learned_s_ =
       last_learned_s_ && *last_learned_s_ < time_s ? last_learned_s_ : std::nullopt;
   last_learned_s_ = time_s;
+  ++learning_instants_;
   return true;
 }
 
@@ -652,6 +654,9 @@ const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t rob
 void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now) {
   const MotionConfig& config = table.config();
   if (!history.take_learning_instant(now.time_s, config.learn_interval_s)) return;
+  const int horizons = (history.learning_instants() - 1) % MotionConfig::later_horizons_every == 0
+                           ? config.horizons
+                           : 1;
   // Gathered, then counted a batch at a time (MotionTable::add's prefetching), in this order.
   // The buffer outlives the call (per thread: learn_motion never reenters itself), so that 3 KiB
   // are not zeroed at every learning instant; each entry used is written in full first.
@@ -667,7 +672,7 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
     const MotionHistory::Entry* latest = history.latest(robot.robot_id);
     const bool learned_already =
         !robot.observed && previous_s && latest && latest->time_s <= *previous_s;
-    for (int k = 1; k <= config.horizons; ++k) {
+    for (int k = 1; k <= horizons; ++k) {
       const MotionHistory::Entry* then =
           learned_already ? nullptr : history.steps_before_latest(robot.robot_id, k);
       if (then) prefetch_object(*then);
@@ -677,7 +682,7 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   std::size_t pending = 0;
   std::size_t next_then = 0;
   for (const FormationRobot& robot : now.robots) {
-    for (int k = 1; k <= config.horizons; ++k) {
+    for (int k = 1; k <= horizons; ++k) {
       const MotionHistory::Entry* then = thens[next_then++];
       if (!then || !then->has_velocity || then->time_s >= now.time_s) continue;
       MotionTable::Learned& learned = batch[pending++];
