@@ -489,3 +489,63 @@ TEST(MotionPipeline, AVersionOneTableServesOnlyThePapersModelAndSaysSo) {
   config.sampler.sampling = sf::Sampling::step;
   EXPECT_THROW(sf::PredictionPipeline(config, nullptr), std::invalid_argument);
 }
+
+TEST(MotionPipeline, ARobotTheLastPacketDidNotSeeIsPredictedMovingAsItWasLastSeen) {
+  // Real logs (DESIGN.md §7): one camera id, each packet half the field, 90 packets a second.
+  // Robots 0-4 drive along +x at 1 m/s on the left half, 5-9 along -y on the right half.
+  const auto half_field_packet = [](int i) {
+    const double t = i / 90.0;
+    const bool left = i % 2 == 0;
+    sf::DetectionFrameSpec spec;
+    spec.frame_number = static_cast<std::uint32_t>(i);
+    spec.t_capture = 100.0 + t;
+    for (std::uint32_t id = 0; id < 10; ++id) {
+      if ((id < 5) != left) continue;
+      spec.yellow.push_back(
+          id < 5 ? sf::RobotDetection{id, {-5000.0 + 1000.0 * t, -3000.0 + 1000.0 * id}}
+                 : sf::RobotDetection{id, {1000.0 * (id - 4), 3000.0 - 1000.0 * t}});
+    }
+    sf::VisionFrame frame;
+    sf::to_vision_frame(sf::make_detection_packet(spec), frame);
+    return frame;
+  };
+  sf::PredictionConfig config;
+  config.sampler.grid = grid;
+  config.sampler.field = field;
+  config.sampler.step_s = 0.5;
+  config.sampler.sampling = sf::Sampling::frame;
+  config.model = sf::ModelKind::motion;
+  config.horizon = 1;
+  sf::TableMetadata metadata;
+  metadata.field = field;
+  metadata.step_s = 0.5;
+  sf::MotionConfig motion = one_second(1);
+  motion.step_s = 0.5;
+  // An empty table: every robot is predicted by damped constant velocity from its kinematics.
+  const auto stored = std::make_shared<const sf::StoredTable>(
+      sf::StoredTable{sf::TransitionTable(grid), metadata, sf::MotionTable(motion)});
+  std::size_t carried_over = 0;
+  std::size_t checked = 0;
+  sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& p) {
+    if (p.formation().time_s < 101.0) return;  // a second of history for everyone
+    for (const sf::RobotPrediction& robot : p.prediction.steps[0].robots) {
+      const sf::FormationRobot* now = p.formation().find(robot.robot_id);
+      ASSERT_NE(now, nullptr);
+      if (!now->observed) ++carried_over;
+      // 0.5 s ahead at 1 m/s, damped: well over 200 mm along its way, whether or not this
+      // packet saw it (a robot taken as standing would be predicted where it is).
+      const sf::Point moved{robot.feed_position.x - now->feed_position.x,
+                            robot.feed_position.y - now->feed_position.y};
+      if (robot.robot_id < 5) {
+        EXPECT_GT(moved.x, 200.0) << robot.robot_id << " at " << p.formation().time_s;
+      } else {
+        EXPECT_LT(moved.y, -200.0) << robot.robot_id << " at " << p.formation().time_s;
+      }
+      ++checked;
+    }
+  });
+  pipeline.set_table(stored);
+  for (int i = 0; i < 90 * 3; ++i) pipeline.add(half_field_packet(i));
+  EXPECT_GT(checked, 1500u);
+  EXPECT_GT(carried_over, checked / 3);
+}
