@@ -425,16 +425,22 @@ sf::VisionFrame straight_lines(int i) {
   return frame;
 }
 
-}  // namespace
-
-TEST(MotionPipeline, PredictsPositionsWithRadiiFromATrainedTable) {
+// The pipeline as the predictor runs it by default: frame sampling, step 0.5 s, the motion model.
+sf::PredictionConfig motion_pipeline_config(int horizon) {
   sf::PredictionConfig config;
   config.sampler.grid = grid;
   config.sampler.field = field;
   config.sampler.step_s = 0.5;
   config.sampler.sampling = sf::Sampling::frame;
   config.model = sf::ModelKind::motion;
-  config.horizon = 2;
+  config.horizon = horizon;
+  return config;
+}
+
+}  // namespace
+
+TEST(MotionPipeline, PredictsPositionsWithRadiiFromATrainedTable) {
+  const sf::PredictionConfig config = motion_pipeline_config(2);
   sf::MotionConfig motion = one_second(2);
   motion.step_s = 0.5;
   sf::Training training(config.sampler, sf::TransitionTable(grid), 0, sf::MotionTable(motion));
@@ -509,13 +515,7 @@ TEST(MotionPipeline, ARobotTheLastPacketDidNotSeeIsPredictedMovingAsItWasLastSee
     sf::to_vision_frame(sf::make_detection_packet(spec), frame);
     return frame;
   };
-  sf::PredictionConfig config;
-  config.sampler.grid = grid;
-  config.sampler.field = field;
-  config.sampler.step_s = 0.5;
-  config.sampler.sampling = sf::Sampling::frame;
-  config.model = sf::ModelKind::motion;
-  config.horizon = 1;
+  const sf::PredictionConfig config = motion_pipeline_config(1);
   sf::TableMetadata metadata;
   metadata.field = field;
   metadata.step_s = 0.5;
