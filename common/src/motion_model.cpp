@@ -494,7 +494,6 @@ void MotionHistory::clear() {
   for (Track& track : tracks_) track.clear();
   last_time_s_.reset();
   last_learned_s_.reset();
-  previous_learned_s_.reset();
   learning_instants_ = 0;
 }
 
@@ -503,8 +502,6 @@ bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
       time_s - *last_learned_s_ < interval_s - 1e-6) {
     return false;
   }
-  previous_learned_s_ =
-      last_learned_s_ && *last_learned_s_ < time_s ? last_learned_s_ : std::nullopt;
   last_learned_s_ = time_s;
   ++learning_instants_;
   return true;
@@ -653,6 +650,9 @@ const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t rob
 
 void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now) {
   const MotionConfig& config = table.config();
+  // A robot not seen since the last learning instant (its camera's packets missed it) was
+  // learned from there already.
+  const std::optional<double> previous_s = history.last_learning_instant_s();
   if (!history.take_learning_instant(now.time_s, config.learn_interval_s)) return;
   const int horizons = (history.learning_instants() - 1) % MotionConfig::later_horizons_every == 0
                            ? config.horizons
@@ -665,9 +665,6 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   // are found and fetched first, so that their misses overlap.
   static thread_local std::vector<const MotionHistory::Entry*> thens;
   thens.clear();
-  // A robot not seen since the last learning instant (its camera's packets missed it) was
-  // learned from there already.
-  const std::optional<double> previous_s = history.previous_learning_instant_s();
   for (const FormationRobot& robot : now.robots) {
     const MotionHistory::Entry* latest = history.latest(robot.robot_id);
     const bool learned_already =

@@ -100,9 +100,9 @@ bool PredictionPipeline::predict_sample(const FormationSample& sample) {
     motion_robots_.clear();
     for (const FormationRobot& robot : sample.formation.robots) {
       const MotionHistory::Entry* seen = motion_history_.latest(robot.robot_id);
-      // A robot carried over from an earlier frame moves as it was last seen moving.
-      const bool moving = seen && seen->has_velocity &&
-                          (seen->time_s == sample.formation.time_s || !robot.observed);
+      // The history has just taken this formation: `seen` is the robot's latest observation,
+      // this frame's or (a robot carried over from an earlier frame) the one before.
+      const bool moving = seen && seen->has_velocity;
       motion_robots_.push_back({robot.robot_id, robot.position,
                                 moving ? seen->kinematics : MotionKinematics{}, moving,
                                 moving ? seen->context : 0});

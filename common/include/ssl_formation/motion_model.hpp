@@ -344,8 +344,8 @@ class MotionHistory {
   // Whether an instant at `time_s` is one to learn from (once per `interval_s`); if so it is
   // remembered as the last one.
   bool take_learning_instant(double time_s, double interval_s);
-  // The learning instant before the last one taken, if any since the last clear.
-  std::optional<double> previous_learning_instant_s() const { return previous_learned_s_; }
+  // The last learning instant taken, if any since the last clear.
+  std::optional<double> last_learning_instant_s() const { return last_learned_s_; }
   // Learning instants taken since the last clear, the last one included.
   std::uint64_t learning_instants() const { return learning_instants_; }
 
@@ -389,7 +389,6 @@ class MotionHistory {
   std::vector<Track> tracks_;  // by robot id
   std::optional<double> last_time_s_;
   std::optional<double> last_learned_s_;
-  std::optional<double> previous_learned_s_;
   std::uint64_t learning_instants_ = 0;
   AttackDirection attacks_ = AttackDirection::positive_x;
 };
