@@ -466,21 +466,20 @@ MotionHistory::MotionHistory(const MotionConfig& config)
                   {config.velocity_window_s, config.settle_window_s, config.long_settle_window_s}) +
               2.0 * config.tolerance_s) {}
 
-void MotionHistory::Track::make_room() {
-  if (end - begin == ring.size()) {
-    const std::size_t size = std::max<std::size_t>(64, ring.size() * 2);
-    std::vector<Entry> grown(size);
-    std::vector<double> grown_times(size);
-    std::vector<Running> grown_running(size);
-    for (std::uint64_t seq = begin; seq < end; ++seq) {
-      grown[seq & (size - 1)] = at(seq);
-      grown_times[seq & (size - 1)] = time_at(seq);
-      grown_running[seq & (size - 1)] = running_at(seq);
-    }
-    ring = std::move(grown);
-    times = std::move(grown_times);
-    running = std::move(grown_running);
+void MotionHistory::Track::grow() {
+  const std::size_t size = std::max<std::size_t>(64, capacity * 2);
+  std::vector<Entry> grown(size);
+  std::vector<double> grown_times(size);
+  std::vector<Running> grown_running(size);
+  for (std::uint64_t seq = begin; seq < end; ++seq) {
+    grown[seq & (size - 1)] = at(seq);
+    grown_times[seq & (size - 1)] = time_at(seq);
+    grown_running[seq & (size - 1)] = running_at(seq);
   }
+  ring = std::move(grown);
+  times = std::move(grown_times);
+  running = std::move(grown_running);
+  capacity = size;
 }
 
 void MotionHistory::Track::clear() {
@@ -565,7 +564,7 @@ void MotionHistory::add(const Formation& formation) {
     track.make_room();
     const Track::Running* last =
         track.end > track.begin ? &track.running_at(track.end - 1) : nullptr;
-    Track::Running& running = track.running[track.end & (track.running.size() - 1)];
+    Track::Running& running = track.running_at(track.end);
     running.position = robot.position;
     running.sum = {robot.position.x + (last ? last->sum.x : 0.0),
                    robot.position.y + (last ? last->sum.y : 0.0)};
@@ -615,7 +614,7 @@ void MotionHistory::add(const Formation& formation) {
       entry.context = 0;
       k.velocity = k.velocity_change = k.to_recent_mean = k.to_settled_mean = {};
     }
-    track.times[track.end & (track.times.size() - 1)] = t;
+    track.times[track.end & (track.capacity - 1)] = t;
     ++track.end;
   }
   // The team's mean velocity goes into every new entry, now that each robot has its own.

@@ -201,11 +201,13 @@ namespace {
 
 // build_formation(), calling continued(robot, then) for every robot also in `previous` (`then`
 // its entry there) once its state is known. `find_in_previous(id)` is that robot's entry in
-// `previous`, or none; it is asked for ids in increasing order.
-template <class FindInPrevious, class Continued>
+// `previous`, or none; it is asked for ids in increasing order. `known_cell(robot)` is the
+// robot's cell if the caller knows it already (else null), asked in the same order.
+template <class FindInPrevious, class Continued, class KnownCell>
 void encode_formation(const StateCodec& codec, const FieldSize& field,
                       std::vector<FormationRobot>& robots, const Formation* previous,
-                      Formation& formation, FindInPrevious find_in_previous, Continued continued) {
+                      Formation& formation, FindInPrevious find_in_previous, Continued continued,
+                      KnownCell known_cell) {
   formation.time_s = 0.0;
   formation.frame_number = 0;
   formation.centroid = Point{};
@@ -230,7 +232,8 @@ void encode_formation(const StateCodec& codec, const FieldSize& field,
   formation.centroid_cell = grid.cell_of(formation.centroid, field);
   formation.continues_previous = previous != nullptr;
   for (FormationRobot& robot : robots) {
-    robot.cell = grid.cell_of(robot.position, field);
+    const Cell* known = known_cell(robot);
+    robot.cell = known ? *known : grid.cell_of(robot.position, field);
     const FormationRobot* before = previous ? find_in_previous(robot.robot_id) : nullptr;
     robot.previous_cell = before ? before->cell : robot.cell;
     robot.state =
@@ -248,7 +251,8 @@ void FormationSampler::build_formation(const StateCodec& codec, const FieldSize&
   encode_formation(
       codec, field, robots, previous, formation,
       [previous](std::uint32_t id) { return previous->find(id); },
-      [](const FormationRobot&, const FormationRobot&) {});
+      [](const FormationRobot&, const FormationRobot&) {},
+      [](const FormationRobot&) -> const Cell* { return nullptr; });
 }
 
 // The clock hands an instant on: its sample is built from the freshest observations.
@@ -300,7 +304,8 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
   const bool continues = previous_ && k - previous_k_ == 1 && !instant.in_conflict;
   if (previous_ && !continues) ++counters_.chain_breaks;
   if (instant.in_conflict) ++counters_.samples_in_conflict;
-  FormationSample& sample = build_sample(instant, robots, continues ? &*previous_ : nullptr);
+  const Formation* previous = continues ? &*previous_ : nullptr;
+  FormationSample& sample = build_sample(instant, robots, previous, previous);
   previous_k_ = k;
   // This sample becomes the previous one after the handler has run (the predictor sends its
   // prediction from there, so nothing else should come first), by swapping buffers rather than
@@ -320,10 +325,13 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
 
 // The sample of an instant, into sample_scratch_: its formation from `robots` (whose storage it
 // takes) with the previous cells from `before` (none: velocity 0), and a transition from
-// `before` for every robot in both.
+// `before` for every robot in both. `latest` is the sample before this one in the same chain, if
+// any: a robot carried over from it keeps its cell there (a real log's packets each see half the
+// field, so half of every instant's robots are the last one's again).
 FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
                                                 std::vector<FormationRobot>& robots,
-                                                const Formation* before) {
+                                                const Formation* before,
+                                                const Formation* latest) {
   FormationSample& sample = sample_scratch_;
   sample.transitions.clear();
   // `before` is a formation of this sampler's, sorted by id with each id once, and the robots
@@ -332,6 +340,12 @@ FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
   const FormationRobot* next_before = before ? before->robots.data() : nullptr;
   const FormationRobot* const before_end =
       before ? before->robots.data() + before->robots.size() : nullptr;
+  // The same walk through `latest`. Its cells were computed on the same field (a new field
+  // breaks the chain) from positions normalised the same way (so does a change of ends): an
+  // equal position is an equal cell.
+  const FormationRobot* next_latest = latest ? latest->robots.data() : nullptr;
+  const FormationRobot* const latest_end =
+      latest ? latest->robots.data() + latest->robots.size() : nullptr;
   encode_formation(
       codec_, field_, robots, before, sample.formation,
       [&](std::uint32_t id) -> const FormationRobot* {
@@ -346,6 +360,14 @@ FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
         if (robot.observed || config_.sampling == Sampling::step) {
           sample.transitions.push_back({robot.robot_id, then.state, robot.state});
         }
+      },
+      [&](const FormationRobot& robot) -> const Cell* {
+        if (robot.observed) return nullptr;
+        while (next_latest != latest_end && next_latest->robot_id < robot.robot_id) ++next_latest;
+        return next_latest != latest_end && next_latest->robot_id == robot.robot_id &&
+                       next_latest->position == robot.position
+                   ? &next_latest->cell
+                   : nullptr;
       });
   sample.formation.time_s = instant.time_s;
   sample.formation.frame_number = last_frame_number_;
@@ -387,7 +409,8 @@ void FormationSampler::on_frame_instant(const ClockInstant& instant,
     ++counters_.samples_in_conflict;
     before = nullptr;
   }
-  FormationSample& sample = build_sample(instant, robots, before);
+  FormationSample& sample =
+      build_sample(instant, robots, before, history_.empty() ? nullptr : &history_.back());
   // The sample joins the history after the handler has run (the predictor sends its prediction
   // from there), by swapping buffers rather than copying (build_sample() overwrites all of
   // sample_scratch_ next time); a handler that starts a new stream forgets it too.

@@ -222,6 +222,44 @@ TEST(RollingSampling, ARobotCarriedOverFromTheOtherHalfIsNotObservedAndCountsNoT
   EXPECT_GT(checked, 200u);
 }
 
+// Half of every instant's robots are carried over from the packet before, and keep the cell they
+// had there; a new field size in between must not leave them with a cell of the old field.
+TEST(RollingSampling, ACarriedOverRobotsCellIsItsPositionsOnTheFieldOfItsInstant) {
+  for (const Sampling sampling : {Sampling::frame, Sampling::step}) {
+    SCOPED_TRACE(std::string(to_string(sampling)));
+    SamplerConfig config = rolling(0.5);
+    config.sampling = sampling;
+    config.grid = Grid(12, 9);
+    config.field = FieldSize{12000, 9000};
+    const FormationSampler* sampler_seen = nullptr;
+    std::size_t robots_checked = 0;
+    std::size_t carried_checked = 0;
+    FormationSampler sampler(config, [&](const FormationSample& sample) {
+      for (const FormationRobot& robot : sample.formation.robots) {
+        EXPECT_EQ(robot.cell, config.grid.cell_of(robot.position, sampler_seen->field()))
+            << robot.robot_id << " at " << sample.formation.time_s;
+        ++robots_checked;
+        if (!robot.observed) ++carried_checked;
+      }
+    });
+    sampler_seen = &sampler;
+    const std::vector<SSL_WrapperPacket> packets = half_field_packets(4.0);
+    for (std::size_t i = 0; i < packets.size(); ++i) {
+      // A smaller field from the middle on, between a left packet and a right one: the right
+      // half's robots are carried over into the left packet's instant after it.
+      if (i == packets.size() / 4 * 2) {  // a left packet: they come first of each pair
+        SSL_WrapperPacket geometry;
+        fill_geometry(*geometry.mutable_geometry(), FieldSize{9000, 6000});
+        sampler.add(geometry);
+      }
+      sampler.add(packets[i]);
+    }
+    EXPECT_EQ(sampler.field(), (FieldSize{9000, 6000}));
+    EXPECT_GT(robots_checked, sampling == Sampling::frame ? 2000u : 50u);
+    EXPECT_GT(carried_checked, sampling == Sampling::frame ? 1000u : 0u);
+  }
+}
+
 TEST(RollingSampling, ParsesAndNamesTheModes) {
   EXPECT_EQ(parse_sampling("frame"), Sampling::frame);
   EXPECT_EQ(parse_sampling("step"), Sampling::step);

@@ -366,18 +366,25 @@ class MotionHistory {
       Point sum;  // of the positions up to this one since the track last had no entry kept
     };
     std::vector<Running> running;
+    // The three rings' size (a power of two, or 0 before the first entry), kept rather than
+    // computed from a vector's at every access: the cursors' scans make several a frame, and an
+    // entry's size is not a power of two (a division by it, made a multiplication).
+    std::uint64_t capacity = 0;
     std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
     std::uint64_t velocity_cursor = 0, settle_cursor = 0, long_settle_cursor = 0;
     // k steps before the latest entry; moved by steps_before_latest, not by add.
     std::array<std::uint64_t, MotionConfig::max_horizons> horizon_cursor{};
     std::optional<double> still_since_s;  // when the robot last came to a stand, if it stands
-    const Entry& at(std::uint64_t seq) const { return ring[seq & (ring.size() - 1)]; }
-    Entry& at(std::uint64_t seq) { return ring[seq & (ring.size() - 1)]; }
-    double time_at(std::uint64_t seq) const { return times[seq & (times.size() - 1)]; }
-    const Running& running_at(std::uint64_t seq) const {
-      return running[seq & (running.size() - 1)];
+    const Entry& at(std::uint64_t seq) const { return ring[seq & (capacity - 1)]; }
+    Entry& at(std::uint64_t seq) { return ring[seq & (capacity - 1)]; }
+    double time_at(std::uint64_t seq) const { return times[seq & (capacity - 1)]; }
+    const Running& running_at(std::uint64_t seq) const { return running[seq & (capacity - 1)]; }
+    Running& running_at(std::uint64_t seq) { return running[seq & (capacity - 1)]; }
+    // Grows the rings if full: at(end) is then a free slot.
+    void make_room() {
+      if (end - begin == capacity) grow();
     }
-    void make_room();  // grows the ring if full: at(end) is then a free slot
+    void grow();
     void clear();
   };
   // Inline (defined in motion_model.cpp, its only user): add calls it for every robot and

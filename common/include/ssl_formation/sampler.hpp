@@ -214,7 +214,7 @@ class FormationSampler : private DataClockListener {
   void break_chain();
   void on_frame_instant(const ClockInstant& instant, std::vector<FormationRobot>& robots);
   FormationSample& build_sample(const ClockInstant& instant, std::vector<FormationRobot>& robots,
-                                const Formation* before);
+                                const Formation* before, const Formation* latest);
 
   SamplerConfig config_;
   StateCodec codec_;
