@@ -767,6 +767,50 @@ TEST(VisionFrameDecode, FloatsAreCopiedBitForBit) {
   EXPECT_TRUE(std::isinf(decoded_frame(infinities).detection.robots_yellow[0].x));
 }
 
+// Robots come in two layouts nearly always (every field with a one-byte id, 37 bytes; grSim's
+// without height, 32), which the decoder reads by their size and their keys at fixed offsets.
+// Every byte of such a robot changed to values that make other keys, long varints or other sizes
+// must still decode exactly as protobuf parses, or be left to it.
+TEST(VisionFrameDecode, EveryByteOfARobotInACommonLayoutChangedStillAgreesWithProtobuf) {
+  for (const bool with_height : {true, false}) {
+    SCOPED_TRACE(with_height ? "with height" : "without height (grSim)");
+    SSL_WrapperPacket packet =
+        make_detection_packet(frame_spec(1, 9, 3.5, {{7, {-1234.5, 678.25}, 0.5F, 0.75F}}, {}));
+    SSL_DetectionRobot& robot = *packet.mutable_detection()->mutable_robots_yellow(0);
+    if (!with_height) robot.clear_height();
+    const std::string robot_bytes = robot.SerializeAsString();
+    ASSERT_EQ(robot_bytes.size(), with_height ? 37u : 32u);
+    const std::string datagram = packet.SerializeAsString();
+    const std::size_t at = datagram.find(robot_bytes);
+    ASSERT_NE(at, std::string::npos);
+
+    const VisionFrame frame = decoded_frame(datagram);
+    ASSERT_EQ(frame.detection.robots_yellow.size(), 1u);
+    const VisionRobot& decoded = frame.detection.robots_yellow[0];
+    EXPECT_TRUE(decoded.has_robot_id);
+    EXPECT_EQ(decoded.robot_id, 7u);
+    EXPECT_EQ(decoded.x, -1234.5F);
+    EXPECT_EQ(decoded.y, 678.25F);
+    EXPECT_EQ(decoded.confidence, 0.75F);
+
+    int still_decoded = 0;
+    int left_to_protobuf = 0;
+    for (std::size_t i = 0; i < robot_bytes.size(); ++i) {
+      for (const unsigned value : {0x00U, 0x01U, 0x05U, 0x0DU, 0x10U, 0x15U, 0x1DU, 0x25U, 0x2DU,
+                                   0x35U, 0x3DU, 0x45U, 0x4DU, 0x7FU, 0x80U, 0x81U, 0xFFU}) {
+        std::string changed = datagram;
+        if (static_cast<unsigned char>(changed[at + i]) == value) continue;
+        changed[at + i] = static_cast<char>(value);
+        SCOPED_TRACE("byte " + std::to_string(i) + " = " + std::to_string(value));
+        (decodes(changed) ? still_decoded : left_to_protobuf) += 1;
+      }
+    }
+    // Changed floats and ids still decode; changed keys mostly do not.
+    EXPECT_GT(still_decoded, 200);
+    EXPECT_GT(left_to_protobuf, 50);
+  }
+}
+
 TEST(VisionFrameDecode, AReusedFrameKeepsNothingOfTheLastDatagram) {
   SSL_WrapperPacket small_packet = make_detection_packet(frame_spec(1, 9, 3.0, {{2, {1, 1}}}, {}));
   small_packet.mutable_detection()->mutable_robots_yellow(0)->clear_robot_id();
