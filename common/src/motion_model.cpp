@@ -155,8 +155,10 @@ bool MotionConfig::valid() const {
 }
 
 int MotionFeatures::cell(Point p) {
-  const double fx = std::floor((p.x + cells_x * cell_mm / 2.0) / cell_mm);
-  const double fy = std::floor((p.y + cells_y * cell_mm / 2.0) / cell_mm);
+  // Clamped, then truncated: the floor of a value already in [0, cells - 1] (one below 0 clamps
+  // to 0 either way), without floor's code.
+  const double fx = (p.x + cells_x * cell_mm / 2.0) / cell_mm;
+  const double fy = (p.y + cells_y * cell_mm / 2.0) / cell_mm;
   const int x = static_cast<int>(std::clamp(fx, 0.0, static_cast<double>(cells_x - 1)));
   const int y = static_cast<int>(std::clamp(fy, 0.0, static_cast<double>(cells_y - 1)));
   return x * cells_y + y;
@@ -533,8 +535,14 @@ void MotionHistory::add(const Formation& formation) {
   // The team's mean velocity, summed as each robot gets its own (in the formation's order).
   Point team{};
   int with_velocity = 0;
+  // Every robot's track made first, so that the loops index them without a size check each (a
+  // Track's size is no power of two: a vector's size() is a multiplication).
+  std::uint32_t highest_id = 0;
   for (const FormationRobot& robot : formation.robots) {
-    if (robot.robot_id >= tracks_.size()) tracks_.resize(robot.robot_id + 1);
+    highest_id = std::max(highest_id, robot.robot_id);
+  }
+  if (!formation.robots.empty() && highest_id >= tracks_.size()) tracks_.resize(highest_id + 1);
+  for (const FormationRobot& robot : formation.robots) {
     Track& track = tracks_[robot.robot_id];
     if (!robot.observed) {
       // No entry: the robot's latest is still its last observation, and counts for the team.
