@@ -173,6 +173,10 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
     instances = training.motion()->instances();
   }
   state.SetItemsProcessed(frames);
+  // The log's length, for figures per frame from counts over the whole run
+  // (scripts/bench-instructions.sh divides callgrind's instruction count by it).
+  state.counters["frames_per_pass"] =
+      static_cast<double>(frames) / static_cast<double>(state.iterations());
   benchmark::DoNotOptimize(instances);
   state.SetLabel(path.filename().string() + ", frame sampling + motion model");
 }
