@@ -28,11 +28,7 @@ if [ -n "$baseline_dir" ] && [ ! -x "$baseline_dir/benchmarks/log_benchmarks" ];
 fi
 SSLF_PACKAGES+=(valgrind)
 sslf_install_packages
-mkdir -p "$(dirname "$build_dir")"
-sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
-  tail -50 "$build_dir.build.log" >&2
-  exit 1
-}
+sslf_build_quietly "$build_dir" || exit 1
 work="$(mktemp -d "${TMPDIR:-/tmp}/sslf-instructions.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 gzip -dc "$recording" >"$work/grsim-match-A-600s.log"

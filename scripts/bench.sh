@@ -12,11 +12,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 sslf_install_packages
-mkdir -p "$(dirname "$build_dir")"
-sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
-  tail -50 "$build_dir.build.log" >&2
-  exit 1
-}
+sslf_build_quietly "$build_dir" || exit 1
 work="$(mktemp -d "${TMPDIR:-/tmp}/sslf-bench.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Shared by scripts/test.sh and scripts/demo.sh: installs what the build needs from Debian and
-# configures and builds the project. Sourced, not run.
+# Shared by the scripts: installs what the build needs from Debian and configures and builds the
+# project. Sourced, not run.
 
 SSLF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
@@ -36,4 +36,15 @@ sslf_build() {
     return 1
   }
   cmake --build "$build_dir" -j "$(nproc)"
+}
+
+# sslf_build_quietly BUILD_DIR: a Release build whose output goes to BUILD_DIR.build.log, of which
+# the last 50 lines are shown if it fails. Returns the build's status.
+sslf_build_quietly() {
+  local build_dir="$1"
+  mkdir -p "$(dirname "$build_dir")"
+  sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
+    tail -50 "$build_dir.build.log" >&2
+    return 1
+  }
 }

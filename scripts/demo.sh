@@ -51,10 +51,7 @@ fi
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 sslf_install_packages
 echo "Building in $build_dir ..."
-sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
-  tail -50 "$build_dir.build.log" >&2
-  exit 1
-}
+sslf_build_quietly "$build_dir" || exit 1
 
 run_dir="$build_dir/demo"
 mkdir -p "$run_dir"

@@ -21,10 +21,7 @@ out="${1:-$SSLF_ROOT/build/eval}"
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 SSLF_PACKAGES+=(python3 python3-matplotlib)
 sslf_install_packages
-sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
-  tail -50 "$build_dir.build.log" >&2
-  exit 1
-}
+sslf_build_quietly "$build_dir" || exit 1
 mkdir -p "$out"
 evaluate="$build_dir/predictor/ssl-evaluate"
 # shellcheck disable=SC2086

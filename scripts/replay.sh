@@ -35,8 +35,5 @@ shift
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 sslf_install_packages
-sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.build.log" 2>&1 || {
-  tail -50 "$build_dir.build.log" >&2
-  exit 1
-}
+sslf_build_quietly "$build_dir" || exit 1
 exec "$build_dir/producer/ssl-producer" --replay "$file" "$@"
