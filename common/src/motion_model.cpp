@@ -155,12 +155,8 @@ bool MotionConfig::valid() const {
 }
 
 int MotionFeatures::cell(Point p) {
-  // Clamped, then truncated: the floor of a value already in [0, cells - 1] (one below 0 clamps
-  // to 0 either way), without floor's code.
-  const double fx = (p.x + cells_x * cell_mm / 2.0) / cell_mm;
-  const double fy = (p.y + cells_y * cell_mm / 2.0) / cell_mm;
-  const int x = static_cast<int>(std::clamp(fx, 0.0, static_cast<double>(cells_x - 1)));
-  const int y = static_cast<int>(std::clamp(fy, 0.0, static_cast<double>(cells_y - 1)));
+  const int x = clamped_cell((p.x + cells_x * cell_mm / 2.0) / cell_mm, cells_x);
+  const int y = clamped_cell((p.y + cells_y * cell_mm / 2.0) / cell_mm, cells_y);
   return x * cells_y + y;
 }
 
@@ -622,7 +618,7 @@ void MotionHistory::add(const Formation& formation) {
       entry.context = 0;
       k.velocity = k.velocity_change = k.to_recent_mean = k.to_settled_mean = {};
     }
-    track.times[track.end & (track.capacity - 1)] = t;
+    track.time_at(track.end) = t;
     ++track.end;
   }
   // The team's mean velocity goes into every new entry, now that each robot has its own.

@@ -53,6 +53,15 @@ inline Point normalise(Point feed_point, AttackDirection opponent_attacks) {
   return Point{-feed_point.x, -feed_point.y};
 }
 
+// The cell, 0 to cells - 1, holding a position measured in cells from the first cell's edge;
+// positions before the first cell or past the last land in it. NaN never comes here (the sampler
+// rejects it). Clamped in double first, so that huge positions cannot overflow the int
+// conversion; then truncated, which for a value in [0, cells - 1] is its floor (one below 0
+// clamps to 0 either way) without floor's code: this runs for every robot of every sample.
+inline int clamped_cell(double position_in_cells, int cells) {
+  return static_cast<int>(std::clamp(position_in_cells, 0.0, static_cast<double>(cells - 1)));
+}
+
 class Grid {
  public:
   // Upper bound on L*W: keeps S = (L*W)^3 within 32-bit state indices.
@@ -73,14 +82,11 @@ class Grid {
   // anything beyond land in the edge cells. Inline, as centre_of: both run for every robot of
   // every packet, and a call into another file's code costs a cold page per packet.
   Cell cell_of(Point normalised_point, const FieldSize& field) const {
-    // NaN never reaches here (the sampler rejects it); clamping in double first keeps huge
-    // coordinates from overflowing the int conversion. Truncating a value clamped to
-    // [0, cells - 1] is taking its floor (one below 0 clamps to 0 either way), without floor's
-    // code: this runs for every robot of every sample.
-    const double fx = (normalised_point.x + field.length_mm / 2.0) / field.length_mm * length_;
-    const double fy = (normalised_point.y + field.width_mm / 2.0) / field.width_mm * width_;
-    return Cell{static_cast<int>(std::clamp(fx, 0.0, static_cast<double>(length_ - 1))),
-                static_cast<int>(std::clamp(fy, 0.0, static_cast<double>(width_ - 1)))};
+    return Cell{
+        clamped_cell((normalised_point.x + field.length_mm / 2.0) / field.length_mm * length_,
+                     length_),
+        clamped_cell((normalised_point.y + field.width_mm / 2.0) / field.width_mm * width_,
+                     width_)};
   }
   Point centre_of(Cell cell, const FieldSize& field) const {
     return Point{(cell.x + 0.5) * field.length_mm / length_ - field.length_mm / 2.0,

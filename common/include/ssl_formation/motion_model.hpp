@@ -378,6 +378,7 @@ class MotionHistory {
     const Entry& at(std::uint64_t seq) const { return ring[seq & (capacity - 1)]; }
     Entry& at(std::uint64_t seq) { return ring[seq & (capacity - 1)]; }
     double time_at(std::uint64_t seq) const { return times[seq & (capacity - 1)]; }
+    double& time_at(std::uint64_t seq) { return times[seq & (capacity - 1)]; }
     const Running& running_at(std::uint64_t seq) const { return running[seq & (capacity - 1)]; }
     Running& running_at(std::uint64_t seq) { return running[seq & (capacity - 1)]; }
     // Grows the rings if full: at(end) is then a free slot.
