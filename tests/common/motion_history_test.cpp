@@ -1,5 +1,6 @@
-// The training side of the motion model (common/src/motion_model.cpp): whole_mm's rounding, on
-// which every learned row depends, kept bit for bit through its speed-ups.
+// The training side of the motion model (common/src/motion_model.cpp): whole_mm's rounding (one
+// value or a point's two at once), on which every learned row depends, kept bit for bit through
+// its speed-ups.
 
 #include <gtest/gtest.h>
 
@@ -57,6 +58,20 @@ TEST(MotionWholeMm, RoundsEveryValueAsTablesWereTrained) {
   for (int i = -2000; i <= 2000; ++i) values.push_back(i / 4.0);  // every half and quarter
   for (const double value : values) {
     EXPECT_EQ(sf::whole_mm(value), whole_mm_as_trained(value)) << value;
+  }
+  // The two-at-a-time form training uses (SSE2 where there is one), each value in each place and
+  // next to each of a few others.
+  const std::array<double, 6> partners{
+      0.0, -0.5, 2.5, -1.0e12, 1.0e9 - 0.5, std::numeric_limits<double>::infinity()};
+  for (const double value : values) {
+    for (const double partner : partners) {
+      const sf::WholePoint first = sf::whole_mm(sf::Point{value, partner});
+      const sf::WholePoint second = sf::whole_mm(sf::Point{partner, value});
+      ASSERT_EQ(first.x, whole_mm_as_trained(value)) << value << " beside " << partner;
+      ASSERT_EQ(first.y, whole_mm_as_trained(partner)) << partner << " beside " << value;
+      ASSERT_EQ(second.x, whole_mm_as_trained(partner)) << partner << " beside " << value;
+      ASSERT_EQ(second.y, whole_mm_as_trained(value)) << value << " beside " << partner;
+    }
   }
 }
 

@@ -180,6 +180,11 @@ struct MotionInstance {
 };
 
 std::int32_t whole_mm(double value);  // rounded and clamped to +-1e9
+// whole_mm of each coordinate, the two at once.
+struct WholePoint {
+  std::int32_t x = 0, y = 0;
+};
+WholePoint whole_mm(Point p);
 
 // The values of an instance besides its robot id and context, in the order table files store
 // them.
