@@ -579,6 +579,12 @@ void MotionHistory::add(const Formation& formation) {
       }
       continue;
     }
+    if (track.end > track.begin) {
+      const Track::Running& last = track.running_at(track.end - 1);
+      if (MotionFeatures::is_jump(last.position, track.time_at(track.end - 1), robot.position, t)) {
+        track.clear();
+      }
+    }
     while (track.begin < track.end && track.time_at(track.begin) < t - keep_s_) ++track.begin;
     // Cursors: the first entry at or after each window's start.
     const auto advance = [&](std::uint64_t& cursor, double from_s) {

@@ -5,6 +5,7 @@
 #include <memory>
 #include <numeric>
 
+#include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_vision_wrapper.pb.h"
@@ -61,6 +62,9 @@ std::optional<Point> RobotTracks::velocity(std::uint32_t robot_id, double time_s
   const auto now = nearest(robot_id, time_s, tolerance_s);
   const auto then = nearest(robot_id, time_s - window_s, tolerance_s);
   if (!now || !then || !(now->time_s > then->time_s)) return std::nullopt;
+  if (MotionFeatures::is_jump(then->position, then->time_s, now->position, now->time_s)) {
+    return std::nullopt;
+  }
   const double dt = now->time_s - then->time_s;
   return Point{(now->position.x - then->position.x) / dt, (now->position.y - then->position.y) / dt};
 }
@@ -198,7 +202,11 @@ void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks&
       if (!after) continue;
       const std::optional<Point> v =
           tracks.velocity(robot.robot_id, now.time_s, setup.velocity_window_s, setup.tolerance_s);
-      if (!v) continue;
+      // A jump before `later` (a ghost there) is no displacement to fit the damping to.
+      if (!v || MotionFeatures::is_jump(robot.feed_position, now.time_s, after->feed_position,
+                                        later->time_s)) {
+        continue;
+      }
       fit.add({after->feed_position.x - robot.feed_position.x,
                after->feed_position.y - robot.feed_position.y},
               {v->x * horizon_s, v->y * horizon_s});

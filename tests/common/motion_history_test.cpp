@@ -9,7 +9,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "ssl_formation/motion_model.hpp"
@@ -176,6 +178,58 @@ TEST(MotionHistory, LaterHorizonsAreLearnedAtEverySecondLearningInstant) {
   EXPECT_NEAR(static_cast<double>(per_horizon[0]), 10 * (10.0 - 0.6), 2.0);
   EXPECT_NEAR(static_cast<double>(per_horizon[1]), 5 * (10.0 - 1.1), 2.0);
   EXPECT_NEAR(static_cast<double>(per_horizon[2]), 5 * (10.0 - 1.6), 2.0);
+}
+
+// A vision ghost carrying a robot's id (real logs have them, DESIGN.md section 7): robot 0 drives
+// along x at 1 m/s and for 5 frames is reported 3 m away.
+TEST(MotionHistory, ARobotThatJumpsStartsItsTrackAgainAndNothingIsLearnedAcrossTheJump) {
+  sf::MotionConfig config;
+  config.step_s = 0.5;
+  config.horizons = 2;
+  config.calibration_one_in = 1000000;  // every instance counted in rows
+  const auto ghost_from = [](int frame) { return frame >= 150 && frame < 155; };
+  const auto train = [&](bool with_ghost) {
+    sf::MotionTable table(config);
+    sf::MotionHistory history(config);
+    std::optional<sf::Point> velocity_at_ghost;
+    for (int i = 0; i <= 300; ++i) {
+      const double t = i / 50.0;
+      const bool ghost = with_ghost && ghost_from(i);
+      const sf::Point at =
+          ghost ? sf::Point{1000.0 * t, 3000.0} : sf::Point{1000.0 * t - 3000.0, 0.0};
+      const sf::Formation now = formation_at(t, {{at, true}});
+      history.add(now);
+      if (i == 152 && history.latest(0)->has_velocity) {
+        velocity_at_ghost = history.latest(0)->kinematics.velocity;
+      }
+      sf::learn_motion(table, history, now);
+    }
+    // The largest mean square displacement of a row: no row holds the ghost's 3 m moves.
+    std::int64_t largest_square = 0;
+    for (const auto& [key, row] : table.sorted_rows()) {
+      largest_square = std::max(largest_square, row.dd() / std::max<std::int64_t>(row.n(), 1));
+    }
+    return std::tuple(table.instances(), largest_square, velocity_at_ghost);
+  };
+  const auto [clean_instances, clean_largest, clean_velocity] = train(false);
+  const auto [instances, largest, velocity] = train(true);
+  // The ghost's frames have no velocity (a track started there 2 frames before) ...
+  ASSERT_TRUE(clean_velocity.has_value());
+  EXPECT_FALSE(velocity.has_value());
+  // ... and the instances learned across them are left out, not learned as 3 m moves: fewer
+  // instances, none larger than a clean stream's.
+  EXPECT_LT(instances, clean_instances);
+  EXPECT_GT(instances, clean_instances / 2);
+  EXPECT_EQ(largest, clean_largest);
+}
+
+TEST(MotionFeatures, AJumpIsFurtherThanARobotCanMove) {
+  // 4 m/s for 0.1 s is 400 mm: motion. Half a metre in 11 ms: a jump. Vision noise is not.
+  EXPECT_FALSE(sf::MotionFeatures::is_jump({0.0, 0.0}, 1.0, {400.0, 0.0}, 1.1));
+  EXPECT_TRUE(sf::MotionFeatures::is_jump({0.0, 0.0}, 1.0, {0.0, 500.0}, 1.011));
+  EXPECT_FALSE(sf::MotionFeatures::is_jump({0.0, 0.0}, 1.0, {30.0, -30.0}, 1.011));
+  // Unseen for a second, a robot may turn up metres away.
+  EXPECT_FALSE(sf::MotionFeatures::is_jump({0.0, 0.0}, 1.0, {3000.0, 3000.0}, 2.0));
 }
 
 }  // namespace

@@ -15,7 +15,7 @@
 namespace ssl_formation::evaluation {
 namespace {
 
-constexpr double frame_s = 0.05;     // 20 frames a second, one camera
+constexpr double frame_s = 0.05;      // 20 frames a second, one camera
 constexpr double acceleration = 200;  // mm/s², robot 0 along +x
 constexpr double start_x = -4000;
 
@@ -117,8 +117,8 @@ TEST(PositionEvaluation, BaselineErrorsInMillimetresMatchTheKnownMotion) {
         const Point velocity = velocity_at(id, t, w).value_or(Point{});
         sum[1] += distance(now, later);
         sum[2] += distance({now.x + velocity.x * h, now.y + velocity.y * h}, later);
-        sum[3] += distance({now.x + damping * velocity.x * h, now.y + damping * velocity.y * h},
-                           later);
+        sum[3] +=
+            distance({now.x + damping * velocity.x * h, now.y + damping * velocity.y * h}, later);
         ++robots;
       }
     }
@@ -243,6 +243,17 @@ TEST(PositionEvaluation, RobotTracksFindTheNearestPositionWithinTheTolerance) {
   ASSERT_TRUE(v);
   EXPECT_NEAR(v->x, 1000.0, 1e-9);
   EXPECT_FALSE(tracks.velocity(7, 10.0, 0.2, 0.01));
+  // A ghost with the robot's id 4 m away at 10.5 s: no velocity spans it, for the baselines
+  // as for the model (MotionFeatures::is_jump).
+  Formation ghost;
+  ghost.time_s = 10.5;
+  FormationRobot r;
+  r.robot_id = 7;
+  r.feed_position = {400.0, 4000.0};
+  ghost.robots.push_back(r);
+  tracks.add(ghost);
+  EXPECT_FALSE(tracks.velocity(7, 10.5, 0.2, 0.01));
+  EXPECT_TRUE(tracks.velocity(7, 10.4, 0.2, 0.01));
 }
 
 }  // namespace

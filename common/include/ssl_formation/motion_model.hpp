@@ -16,6 +16,7 @@
 // out of the rows, and a deterministic sample of its instances (the lowest hashes, so that it
 // merges exactly too) is what MotionModel fits its calibration on.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -88,6 +89,21 @@ struct MotionFeatures {
   static std::uint32_t standing_context(double standing_s);
   static int robot_slot(std::uint32_t robot_id) {
     return robot_id < 16 ? static_cast<int>(robot_id) : 16;
+  }
+
+  // A robot seen further from where it last was than it can have moved is a jump, not motion:
+  // a vision ghost carrying its id, two ids swapped, a robot put down elsewhere, or a change of
+  // ends not yet noticed. Real logs have them (DESIGN.md section 7), and one jump of metres
+  // counts in a row's sums of squares as thousands of ordinary instances. The limit is above any
+  // SSL robot's top speed (about 4 m/s), with room for the vision's noise and for the offset
+  // between two cameras' views of one robot at their seam.
+  static constexpr double jump_speed_mm_s = 8000.0;
+  static constexpr double jump_slack_mm = 150.0;
+  static bool is_jump(Point from, double from_s, Point to, double to_s) {
+    const double reach = jump_slack_mm + jump_speed_mm_s * std::abs(to_s - from_s);
+    const double dx = to.x - from.x;
+    const double dy = to.y - from.y;
+    return dx * dx + dy * dy > reach * reach;
   }
 };
 
@@ -337,7 +353,9 @@ class MotionHistory {
   };
   // Records a formation: an entry at its time for each robot observed in it (a robot carried
   // over from an earlier frame keeps its latest entry, and its velocity still counts in the
-  // team's). Every robot's kinematics are then latest(id)->kinematics.
+  // team's). Every robot's kinematics are then latest(id)->kinematics. A robot whose position
+  // jumped (MotionFeatures::is_jump) starts its track again there: nothing is learned across
+  // the jump and its velocity starts anew.
   void add(const Formation& formation);
   void clear();
 

@@ -43,7 +43,9 @@ class RobotTracks {
   std::optional<Seen> nearest(std::uint32_t robot_id, double time_s, double tolerance_s) const;
   // The robot's velocity at `time_s` over the last `window_s` (mm/s): the displacement from the
   // position nearest `time_s - window_s` (within `tolerance_s`) to the one at `time_s`, over the
-  // time between them. Nothing when either is missing or no time passed.
+  // time between them. Nothing when either is missing, no time passed or the robot jumped
+  // between them (MotionFeatures::is_jump: a ghost or a swapped id is no velocity, for the
+  // baselines as for the model).
   std::optional<Point> velocity(std::uint32_t robot_id, double time_s, double window_s,
                                 double tolerance_s) const;
 
