@@ -7,10 +7,10 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <random>
 
 #include "ssl_formation/log_file.hpp"
+#include "ssl_formation/real_log_shape.hpp"
 #include "ssl_formation/training.hpp"
 #include "ssl_formation/vision_packet.hpp"
 
@@ -181,55 +181,21 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
   state.SetLabel(path.filename().string() + ", frame sampling + motion model");
 }
 
-// The recording reshaped as recorded Division A matches come (DESIGN.md section 7): every packet
-// with camera id 0, 90 packets a second, each holding the robots of one half of the field (as
-// last seen in the recording). Each such packet completes an instant with every opponent robot,
-// so this is the costliest shape per packet. Written once per process, when first asked for, in
-// the temp folder.
+// The recording reshaped as recorded Division A matches come (DESIGN.md section 7,
+// common/include/ssl_formation/real_log_shape.hpp): every packet with camera id 0, 90 packets a
+// second, each holding the robots of one half of the field. Each such packet completes an
+// instant with every opponent robot, so this is the costliest shape per packet. Written once per
+// process, when first asked for, in the temp folder.
 const std::filesystem::path& one_camera_halves_log(const std::filesystem::path& recording) {
   static const std::filesystem::path out =
       std::filesystem::temp_directory_path() /
       ("sslf-bench-halves-" + std::to_string(::getpid()) + ".log");
   static const bool written = [&] {
-    auto reader = sf::LogReader::open(recording).value();  // throws with the reason
-    auto writer = sf::LogWriter::create(out);
-    if (!writer) throw std::runtime_error(writer.error().message);
     std::atexit([] {
       std::error_code ignored;
       std::filesystem::remove(out, ignored);
     });
-    std::map<std::uint32_t, sf::Point> yellow, blue;
-    SSL_WrapperPacket packet;
-    std::uint32_t frame_number = 0;
-    double next_pair_s = 0.0;
-    while (reader.next_vision(packet)) {
-      if (!packet.has_detection()) continue;
-      const auto& detection = packet.detection();
-      for (const auto& robot : detection.robots_yellow()) {
-        yellow[robot.robot_id()] = {robot.x(), robot.y()};
-      }
-      for (const auto& robot : detection.robots_blue()) {
-        blue[robot.robot_id()] = {robot.x(), robot.y()};
-      }
-      const double t = detection.t_capture();
-      if (t < next_pair_s) continue;
-      // 45 pairs a second on the recording's 60 Hz frames (a pause in it starts the beat again).
-      next_pair_s = (t - next_pair_s > 1.0 ? t : next_pair_s) + 1.0 / 45.0;
-      for (const bool left : {true, false}) {
-        sf::DetectionFrameSpec spec;
-        spec.frame_number = frame_number++;
-        spec.t_capture = left ? t : t + 0.011;
-        for (const auto& [id, p] : yellow) {
-          if ((p.x < 0.0) == left) spec.yellow.push_back({id, p});
-        }
-        for (const auto& [id, p] : blue) {
-          if ((p.x < 0.0) == left) spec.blue.push_back({id, p});
-        }
-        writer->write_vision(sf::make_detection_packet(spec),
-                             static_cast<std::int64_t>(spec.t_capture * 1e9));
-      }
-    }
-    if (!writer->close()) throw std::runtime_error(writer->error());
+    sf::write_as_real_log(recording, out, sf::RealLogMess{}).value();  // throws with the reason
     return true;
   }();
   (void)written;

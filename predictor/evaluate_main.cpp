@@ -13,8 +13,10 @@ int main(int argc, char** argv) {
     sf::evaluate::EvaluateOptions o;
     std::string horizons = "0.2,0.5,1,2";
     po::options_description general("Options");
-    general.add_options()("mode", po::value(&o.mode)->required(), "paper, holdout or grid-sweep")(
-        "seed", po::value(&o.seed)->default_value(o.seed), "seed of the simulated training stream")(
+    general.add_options()("mode", po::value(&o.mode)->required(),
+                          "paper, holdout, grid-sweep or as-real-log")(
+        "seed", po::value(&o.seed)->default_value(o.seed),
+        "seed of the simulated training stream; as-real-log: of the ghosts and the noise")(
         "test-seed", po::value(&o.test_seed)->default_value(o.test_seed),
         "seed of the simulated test stream (holdout) or of the random test formations (paper)")(
         "train-formations", po::value(&o.train_formations)->default_value(o.train_formations),
@@ -41,14 +43,22 @@ int main(int argc, char** argv) {
         "grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
         "grid-sweep: the grids to compare")("output-dir",
                                             po::value(&o.output_dir)->default_value(o.output_dir),
-                                            "where the CSV files go");
+                                            "where the CSV files go")(
+        "from-log", po::value(&o.from_log)->value_name("FILE"),
+        "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
+        "write-log", po::value(&o.write_log)->value_name("FILE"),
+        "as-real-log: the log to write (uncompressed)")(
+        "mess", po::value(&o.mess)->default_value(o.mess),
+        "as-real-log: none, all, or a comma-separated list of ghosts, substitutions, stoppages, "
+        "cuts, ends (a change of ends at half time) and noise (3 mm)");
     sf::app::add_model_options(general, o.model);
     po::positional_options_description positional;
     positional.add("mode", 1);
     if (!sf::app::parse_command_line(argc, argv, general,
-                                     "ssl-evaluate paper|holdout|grid-sweep [options]",
+                                     "ssl-evaluate paper|holdout|grid-sweep|as-real-log [options]",
                                      "Evaluates the predictions: the paper's protocol, held-out "
-                                     "accuracy against baselines, and a grid sweep.",
+                                     "accuracy against baselines, and a grid sweep; writes a "
+                                     "recording the way real match logs come, to evaluate on.",
                                      &positional)) {
       return 0;
     }
@@ -62,6 +72,8 @@ int main(int argc, char** argv) {
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});
     if (o.mode == "grid-sweep") return sf::evaluate::run_holdout(o, o.grids);
-    throw sf::app::UsageError("mode must be paper, holdout or grid-sweep, not '" + o.mode + "'");
+    if (o.mode == "as-real-log") return sf::evaluate::run_as_real_log(o);
+    throw sf::app::UsageError("mode must be paper, holdout, grid-sweep or as-real-log, not '" +
+                              o.mode + "'");
   });
 }

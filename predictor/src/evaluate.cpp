@@ -12,6 +12,7 @@
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/position_evaluation.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/real_log_shape.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/training.hpp"
 
@@ -104,10 +105,9 @@ int run_paper(const EvaluateOptions& options) {
   SamplerConfig config = paper.sampler_config();
   const auto started = std::chrono::steady_clock::now();
   const PacketSource training_data =
-      options.train_logs.empty()
-          ? PacketSource::simulated(options.seed, options.train_formations, options.jitter_mm,
-                                    options.cameras)
-          : PacketSource::from_logs(options.train_logs);
+      options.train_logs.empty() ? PacketSource::simulated(options.seed, options.train_formations,
+                                                           options.jitter_mm, options.cameras)
+                                 : PacketSource::from_logs(options.train_logs);
   FieldSize field = config.field;
   std::uint64_t training_samples = 0;
   const TransitionTable table = train(config, training_data, &field, &training_samples);
@@ -258,7 +258,8 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
   };
   for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);
   evaluate(base.step_s, options.chain_steps);
-  report.prediction_us = time_predictions(report.sections.back().evaluation.table->table, test, base);
+  report.prediction_us =
+      time_predictions(report.sections.back().evaluation.table->table, test, base);
   return report;
 }
 
@@ -305,8 +306,7 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
   }
   if (report.sections.front().evaluation.horizons.front().radii.robots == 0) return;
   std::printf("The model's radii: how often the robot was within them (aim: 50%% and 90%%):\n");
-  std::printf("%9s %5s %12s %12s %12s\n", "horizon", "steps", "within r50", "within r90",
-              "robots");
+  std::printf("%9s %5s %12s %12s %12s\n", "horizon", "steps", "within r50", "within r90", "robots");
   for (const Section& section : report.sections) {
     for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
       const ev::HorizonScore& score = section.evaluation.horizons[h];
@@ -361,8 +361,10 @@ std::vector<double> parse_horizons(const std::string& text) {
     const auto [rest, error] = std::from_chars(item.data(), item.data() + item.size(), value);
     if (item.empty() || error != std::errc() || rest != item.data() + item.size() ||
         !(value > 0.0) || value > 600.0) {
-      throw app::UsageError("--horizons takes positive seconds separated by commas (e.g. "
-                            "0.2,0.5,1,2), not '" + text + "'");
+      throw app::UsageError(
+          "--horizons takes positive seconds separated by commas (e.g. "
+          "0.2,0.5,1,2), not '" +
+          text + "'");
     }
     horizons.push_back(value);
     begin = end + 1;
@@ -421,6 +423,35 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
             << h1.error[0].mean() << '\n';
     }
   }
+  return 0;
+}
+
+// ---- as-real-log
+
+int run_as_real_log(const EvaluateOptions& options) {
+  if (options.from_log.empty() || options.write_log.empty()) {
+    throw app::UsageError("as-real-log needs --from-log FILE and --write-log FILE");
+  }
+  std::optional<RealLogMess> mess = parse_real_log_mess(options.mess);
+  if (!mess) {
+    throw app::UsageError(
+        "--mess must be none, all or a comma-separated list of ghosts, "
+        "substitutions, stoppages, cuts, ends and noise, not '" +
+        options.mess + "'");
+  }
+  mess->seed = options.seed;
+  const Result<RealLogCounts> counts =
+      write_as_real_log(options.from_log, options.write_log, *mess);
+  if (!counts) {
+    spdlog::error("{}", counts.error().message);
+    return 1;
+  }
+  std::printf(
+      "%s: %llu vision packets over %.1f s rewritten as %llu half-field packets (camera "
+      "id 0, no geometry), mess: %s, %llu ghost detections\n",
+      options.write_log.c_str(), static_cast<unsigned long long>(counts->packets_read),
+      counts->recording_s, static_cast<unsigned long long>(counts->packets_written),
+      options.mess.c_str(), static_cast<unsigned long long>(counts->ghost_detections));
   return 0;
 }
 

@@ -6,6 +6,8 @@
 //               millimetres and the cells of the model against persistence, constant velocity
 //               and damped constant velocity, and the calibration of every probability stated
 //   grid-sweep  the holdout report for several grids, with table memory and prediction time
+//   as-real-log a clean recording rewritten as real match logs come (half-field packets with
+//               camera id 0, no geometry) with the mess chosen, to evaluate on
 
 #include <cstdint>
 #include <string>
@@ -37,6 +39,11 @@ struct EvaluateOptions {
   double velocity_window_s = 0.1;
   std::string output_dir = ".";
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
+  // as-real-log: the recording, the log written and the mess (parse_real_log_mess); `seed`
+  // places its ghosts and draws its noise.
+  std::string from_log;
+  std::string write_log;
+  std::string mess = "none";
 };
 
 // "0.2,0.5,1,2" -> {0.2, 0.5, 1, 2}; throws app::UsageError naming --horizons.
@@ -45,5 +52,6 @@ std::vector<double> parse_horizons(const std::string& text);
 // Each prints its report, writes its CSV files into output_dir and returns the exit status.
 int run_paper(const EvaluateOptions& options);
 int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& grids);
+int run_as_real_log(const EvaluateOptions& options);
 
 }  // namespace ssl_formation::evaluate
