@@ -45,7 +45,7 @@ TEST(DaemonReports, StatusLinesGiveTheFastPathShareAndTheFieldSizeIsLoggedWithIt
   ASSERT_EQ(write_log(dir, "a.log", {"--field-length", "12000", "--field-width", "9000"}).exit_code,
             0);
   const std::string vision = new_group();
-  for (const std::filesystem::path program : {trainer_program, predictor_program}) {
+  for (const std::filesystem::path& program : {trainer_program, predictor_program}) {
     SCOPED_TRACE(program.filename().string());
     std::vector<std::string> args{"--vision-address", vision, "--table",
                                   (dir / "t.bin").string(), "--status-interval", "0.1"};
