@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
         "from-log", po::value(&o.from_log)->value_name("FILE"),
         "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
         "write-log", po::value(&o.write_log)->value_name("FILE"),
-        "as-real-log: the log to write (uncompressed)")(
+        "as-real-log: the log to write (gzip if it ends in .gz)")(
         "mess", po::value(&o.mess)->default_value(o.mess),
         "as-real-log: none, all, or a comma-separated list of ghosts, substitutions, stoppages, "
         "cuts, ends (a change of ends at half time) and noise (3 mm)");

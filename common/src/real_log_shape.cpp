@@ -181,6 +181,10 @@ class Messer {
 Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
                                         const std::filesystem::path& out, const RealLogMess& mess) {
   RealLogCounts counts;
+  std::error_code same_error;
+  if (std::filesystem::equivalent(recording, out, same_error)) {
+    return fail(out.string() + ": is the recording itself; writing it would destroy it");
+  }
   SSL_WrapperPacket packet;
   // First pass: the recording's length, which places the mess.
   double first_s = 0.0;

@@ -60,7 +60,9 @@ TEST_F(RealLogShape, EveryPacketIsOneHalfOfTheFieldFromCameraZeroNinetyASecond) 
       ids.insert(robot.robot_id());
     }
     for (const auto& robot : detection.robots_blue()) EXPECT_EQ(robot.x() < 0.0F, left);
-    if (i > 0) EXPECT_GT(detection.t_capture(), packets[i - 1].detection().t_capture());
+    if (i > 0) {
+      EXPECT_GT(detection.t_capture(), packets[i - 1].detection().t_capture());
+    }
   }
   EXPECT_EQ(ids, (std::set<std::uint32_t>{0, 1, 2, 3, 4, 5}));
 }
@@ -190,6 +192,15 @@ TEST(RealLogMess, ParsesNamesAllAndNone) {
   EXPECT_FALSE(sf::parse_real_log_mess("ghost"));
   EXPECT_FALSE(sf::parse_real_log_mess(""));
   EXPECT_FALSE(sf::parse_real_log_mess("ghosts,,cuts"));
+}
+
+TEST_F(RealLogShape, WritingOverTheRecordingIsRefusedAndLosesNothing) {
+  const auto before = std::filesystem::file_size(recording_);
+  const auto counts = sf::write_as_real_log(recording_, recording_, sf::RealLogMess{});
+  ASSERT_FALSE(counts);
+  EXPECT_NE(counts.error().message.find("recording itself"), std::string::npos);
+  EXPECT_EQ(std::filesystem::file_size(recording_), before);
+  EXPECT_TRUE(sf::read_vision_log(recording_).has_value());
 }
 
 TEST(RealLogShapeErrors, AMissingRecordingIsAnErrorNamingIt) {

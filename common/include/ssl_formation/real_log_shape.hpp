@@ -48,8 +48,9 @@ struct RealLogCounts {
   double recording_s = 0.0;  // the recording's first to last capture time
 };
 
-// Writes `recording`'s vision reshaped (and messed up) to `out`, an uncompressed log. Errors:
-// the recording cannot be read or holds no detection, `out` cannot be written.
+// Writes `recording`'s vision reshaped (and messed up) to `out` (gzip if its name ends in .gz).
+// Errors: the recording cannot be read or holds no detection, `out` is the recording itself or
+// cannot be written.
 Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
                                         const std::filesystem::path& out, const RealLogMess& mess);
 
