@@ -4,6 +4,7 @@
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/predictor/evaluate.hpp"
+#include "ssl_formation/real_log_shape.hpp"
 
 namespace sf = ssl_formation;
 namespace po = boost::program_options;
@@ -12,6 +13,10 @@ int main(int argc, char** argv) {
   return sf::app::run_main("ssl-evaluate", [&] {
     sf::evaluate::EvaluateOptions o;
     std::string horizons = "0.2,0.5,1,2";
+    const std::string mess_help = "as-real-log: none, all, or a comma-separated list of " +
+                                  std::string(sf::real_log_mess_names) +
+                                  ", written without spaces as in ghosts,cuts (ends: a change of "
+                                  "ends at half time; noise: 3 mm)";
     po::options_description general("Options");
     general.add_options()("mode", po::value(&o.mode)->required(),
                           "paper, holdout, grid-sweep or as-real-log")(
@@ -48,9 +53,7 @@ int main(int argc, char** argv) {
         "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
         "write-log", po::value(&o.write_log)->value_name("FILE"),
         "as-real-log: the log to write (gzip if it ends in .gz)")(
-        "mess", po::value(&o.mess)->default_value(o.mess),
-        "as-real-log: none, all, or a comma-separated list of ghosts, substitutions, stoppages, "
-        "cuts, ends (a change of ends at half time) and noise (3 mm)");
+        "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str());
     sf::app::add_model_options(general, o.model);
     po::positional_options_description positional;
     positional.add("mode", 1);

@@ -16,7 +16,11 @@ namespace ssl_formation {
 std::optional<RealLogMess> parse_real_log_mess(std::string_view text) {
   RealLogMess mess;
   if (text == "none") return mess;
-  if (text == "all") text = "ghosts,substitutions,stoppages,cuts,ends,noise";
+  if (text == "all") {
+    mess.ghosts = mess.substitutions = mess.stoppages = mess.cuts = mess.change_of_ends = true;
+    mess.noise_mm = 3.0;
+    return mess;
+  }
   std::istringstream parts{std::string(text)};
   std::string part;
   bool any = false;
@@ -217,8 +221,9 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
     for (const auto& robot : detection.robots_yellow()) {
       yellow[robot.robot_id()] = {robot.x(), robot.y()};
     }
-    for (const auto& robot : detection.robots_blue())
+    for (const auto& robot : detection.robots_blue()) {
       blue[robot.robot_id()] = {robot.x(), robot.y()};
+    }
     const double t = detection.t_capture();
     if (t < next_pair_s) continue;
     // A pause in the recording starts the beat again.

@@ -434,10 +434,8 @@ int run_as_real_log(const EvaluateOptions& options) {
   }
   std::optional<RealLogMess> mess = parse_real_log_mess(options.mess);
   if (!mess) {
-    throw app::UsageError(
-        "--mess must be none, all or a comma-separated list of ghosts, "
-        "substitutions, stoppages, cuts, ends and noise, not '" +
-        options.mess + "'");
+    throw app::UsageError("--mess must be none, all or a comma-separated list of " +
+                          std::string(real_log_mess_names) + ", not '" + options.mess + "'");
   }
   mess->seed = options.seed;
   const Result<RealLogCounts> counts =

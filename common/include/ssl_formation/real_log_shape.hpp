@@ -37,8 +37,11 @@ struct RealLogMess {
   friend bool operator==(const RealLogMess&, const RealLogMess&) = default;
 };
 
-// "none", "all" (noise 3 mm) or a comma-separated list of ghosts, substitutions, stoppages, cuts,
-// ends and noise; nothing for anything else.
+// Every part of the mess by name, for messages: what parse_real_log_mess takes in a list.
+inline constexpr std::string_view real_log_mess_names =
+    "ghosts, substitutions, stoppages, cuts, ends, noise";
+// "none", "all" (every part; noise 3 mm) or a comma-separated list (no spaces) of
+// real_log_mess_names; nothing for anything else.
 std::optional<RealLogMess> parse_real_log_mess(std::string_view text);
 
 struct RealLogCounts {
