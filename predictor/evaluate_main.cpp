@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
         "as-real-log: the log to write (gzip if it ends in .gz)")(
         "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str());
     sf::app::add_model_options(general, o.model);
+    sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
     po::positional_options_description positional;
     positional.add("mode", 1);
     if (!sf::app::parse_command_line(argc, argv, general,

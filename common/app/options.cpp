@@ -93,6 +93,24 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "keep --field-length/--field-width even when geometry packets arrive");
 }
 
+void add_recalibration_option(po::options_description& options, double& half_life_s) {
+  options.add_options()(
+      "recalibration-half-life", po::value(&half_life_s)->default_value(half_life_s),
+      "--model motion: seconds of the data clock over which the stated probabilities follow how "
+      "often predictions like them came true lately (half the weight is older than this); 0 = "
+      "off: as the table's calibration states them");
+}
+
+std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s) {
+  if (half_life_s == 0.0) return std::nullopt;
+  if (!(half_life_s > 0.0) || !std::isfinite(half_life_s)) {
+    throw UsageError("--recalibration-half-life must be positive seconds, or 0 for off");
+  }
+  OnlineCalibrationSettings settings;
+  settings.half_life_s = half_life_s;
+  return settings;
+}
+
 void add_vision_options(po::options_description& options, NetworkOptions& network) {
   options.add_options()("vision-address",
                         po::value(&network.vision_address)->default_value(network.vision_address),

@@ -285,6 +285,7 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   prediction.sampler = config.sampler;
   prediction.horizon = config.steps;
   prediction.model = config.model;
+  prediction.recalibration = config.recalibration;
   for (const auto& stream : test) {
     std::vector<Formation> formations;
     std::vector<std::vector<PredictedStep>> predicted;

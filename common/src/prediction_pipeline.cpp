@@ -23,10 +23,16 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
     : config_(config),
       on_prediction_(std::move(on_prediction)),
       motion_history_(motion_history_config(config)),
+      online_calibration_(config.recalibration.value_or(OnlineCalibrationSettings{})),
       sampler_(config.sampler, [this](const FormationSample& sample) { on_sample(sample); }) {
   if (config_.model == ModelKind::motion && config_.sampler.sampling != Sampling::frame) {
     throw std::invalid_argument(
         "the motion model predicts from every frame's velocities: it needs --sampling frame");
+  }
+  if (config_.recalibration && !config_.recalibration->valid()) {
+    throw std::invalid_argument(
+        "the recalibration's half-life must be positive seconds, its prior weight and tolerance "
+        "not negative");
   }
   if (config_.horizon < 1 || config_.horizon > PredictionConfig::max_horizon) {
     throw std::invalid_argument("the horizon must be 1 to " +
@@ -66,7 +72,11 @@ void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
 }
 
 void PredictionPipeline::on_sample(const FormationSample& sample) {
-  if (config_.model == ModelKind::motion) motion_history_.add(sample.formation);
+  const bool motion = config_.model == ModelKind::motion;
+  if (motion) {
+    motion_history_.add(sample.formation);
+    if (config_.recalibration) online_calibration_.observe(sample.formation);
+  }
   last_sample_ = &sample;
   // Holds the table for the handler's call even if the handler sets another one: the context
   // points into it.
@@ -75,6 +85,11 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
     ++samples_without_table_;
     return;
   }
+  if (motion && config_.recalibration) {
+    online_calibration_.remember(prediction_, sample.formation.time_s, config_.sampler.step_s,
+                                 sample.formation.opponent_attacks);
+    online_calibration_.adjust(prediction_);
+  }
   ++predictions_;
   if (on_prediction_) on_prediction_(PredictedFormation{sample, prediction_, context_});
 }
@@ -82,6 +97,9 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
 bool PredictionPipeline::rehearse(const Handler& on_rehearsal) {
   const std::shared_ptr<const StoredTable> stored = table_;  // as in on_sample
   if (!last_sample_ || !predict_sample(*last_sample_)) return false;
+  if (config_.model == ModelKind::motion && config_.recalibration) {
+    online_calibration_.adjust(prediction_);
+  }
   if (on_rehearsal) on_rehearsal(PredictedFormation{*last_sample_, prediction_, context_});
   return true;
 }

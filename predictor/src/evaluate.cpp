@@ -254,6 +254,7 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.steps = steps;
     config.velocity_window_s = options.velocity_window_s;
     config.model = model.parsed_model();
+    config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
   for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);

@@ -341,6 +341,7 @@ PredictionConfig prediction_config(const PredictorOptions& options) {
                           std::to_string(PredictionConfig::max_horizon));
   }
   config.horizon = options.horizon;
+  config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
   return config;
 }
 

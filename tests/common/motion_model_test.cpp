@@ -549,3 +549,83 @@ TEST(MotionPipeline, ARobotTheLastPacketDidNotSeeIsPredictedMovingAsItWasLastSee
   EXPECT_GT(checked, 1500u);
   EXPECT_GT(carried_over, checked / 3);
 }
+
+TEST(MotionPipeline, ATeamStandingStillForAMinuteIsSaidToStayAsOftenAsItDoes) {
+  // Trained on robots that keep moving, then shown the team standing in a stoppage: the table's
+  // calibration knows nothing of that, the recalibration learns it from the predictions that
+  // came true. Positions and radii are the model's either way; only probabilities move.
+  sf::PredictionConfig config = motion_pipeline_config(1);
+  sf::MotionConfig motion = one_second(1);
+  motion.step_s = 0.5;
+  sf::Training training(config.sampler, sf::TransitionTable(grid), 0, sf::MotionTable(motion));
+  for (int i = 0; i < 60 * 120; ++i) training.add(straight_lines(i));
+  sf::TableMetadata metadata;
+  metadata.field = field;
+  metadata.step_s = 0.5;
+  const auto stored = std::make_shared<const sf::StoredTable>(
+      sf::StoredTable{training.table(), metadata, training.motion()});
+  const auto standing = [](int i) {
+    sf::DetectionFrameSpec spec;
+    spec.frame_number = static_cast<std::uint32_t>(i);
+    spec.t_capture = 500.0 + i / 60.0;
+    // Each 10 mm inside a corner of its 1 m cell: the model's spread, however small, puts some
+    // of the robot in the neighbouring cells.
+    for (std::uint32_t id = 0; id < 11; ++id) {
+      spec.yellow.push_back({id, {-4010.0 + 1000.0 * (id % 8), -2510.0 + 2000.0 * (id / 8)}});
+    }
+    sf::VisionFrame frame;
+    sf::to_vision_frame(sf::make_detection_packet(spec), frame);
+    return frame;
+  };
+  // Each prediction of both pipelines, in order.
+  std::vector<sf::Prediction> recalibrated, as_stated;
+  std::vector<double> times;
+  sf::PredictionPipeline on(config, [&](const sf::PredictedFormation& p) {
+    recalibrated.push_back(p.prediction);
+    times.push_back(p.formation().time_s);
+  });
+  config.recalibration.reset();
+  sf::PredictionPipeline off(config, [&](const sf::PredictedFormation& p) {
+    as_stated.push_back(p.prediction);
+  });
+  on.set_table(stored);
+  off.set_table(stored);
+  for (int i = 0; i < 60 * 60; ++i) {
+    on.add(standing(i));
+    off.add(standing(i));
+  }
+  ASSERT_EQ(recalibrated.size(), as_stated.size());
+  ASSERT_GT(recalibrated.size(), 3000u);
+  double stated_at_end = 0.0;
+  for (std::size_t k = 0; k < recalibrated.size(); ++k) {
+    const auto& a = recalibrated[k].steps[0].robots;
+    const auto& b = as_stated[k].steps[0].robots;
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t r = 0; r < a.size(); ++r) {
+      EXPECT_EQ(a[r].position, b[r].position);
+      EXPECT_EQ(a[r].feed_position.x, b[r].feed_position.x);
+      EXPECT_EQ(a[r].radius90_mm, b[r].radius90_mm);
+      // Nothing can have been checked before the first step (0.5 s) has passed.
+      if (times[k] < 500.5) {
+        EXPECT_EQ(a[r].probability, b[r].probability);
+      }
+    }
+  }
+  // At the end of the minute: every robot stayed in its cell, and that is what is now stated.
+  for (const sf::RobotPrediction& robot : recalibrated.back().steps[0].robots) {
+    EXPECT_GT(robot.probability, 0.95) << robot.robot_id;
+  }
+  for (const sf::RobotPrediction& robot : as_stated.back().steps[0].robots) {
+    stated_at_end = std::max(stated_at_end, robot.probability);
+  }
+  EXPECT_LT(stated_at_end, 0.95) << "the table alone already said the team stays";
+  EXPECT_NEAR(recalibrated.back().steps[0].formation_probability,
+              [&] {
+                double product = 1.0;
+                for (const auto& robot : recalibrated.back().steps[0].robots) {
+                  product *= robot.probability;
+                }
+                return product;
+              }(),
+              1e-12);
+}

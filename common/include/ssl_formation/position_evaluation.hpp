@@ -21,6 +21,7 @@
 #include "ssl_formation/evaluation.hpp"
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/online_calibration.hpp"
 #include "ssl_formation/predictor.hpp"
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/table_file.hpp"
@@ -144,6 +145,8 @@ struct PositionEvaluationConfig {
   double velocity_window_s = 0.1;
   // How far from t + horizon the truth may be sampled (and from t - window the velocity's start).
   double tolerance_s = 0.05;
+  // The motion model's recalibration while it predicts the test streams (PredictionConfig).
+  std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
 };
 
 struct PositionEvaluation {

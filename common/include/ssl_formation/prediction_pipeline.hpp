@@ -7,8 +7,10 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "ssl_formation/motion_predictor.hpp"
+#include "ssl_formation/online_calibration.hpp"
 #include "ssl_formation/prediction_message.hpp"
 #include "ssl_formation/predictor.hpp"
 #include "ssl_formation/sampler.hpp"
@@ -22,6 +24,9 @@ struct PredictionConfig {
   SamplerConfig sampler;
   int horizon = 2;  // formations predicted ahead, 1 to max_horizon
   ModelKind model = ModelKind::paper;
+  // How the motion model's stated probabilities follow what the play lately did
+  // (OnlineCalibration); none: as the table's calibration states them.
+  std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
   static constexpr int max_horizon = 100;
 };
 
@@ -57,6 +62,7 @@ class PredictionPipeline {
   void start_new_stream() {
     sampler_.start_new_stream();
     motion_history_.clear();
+    online_calibration_.clear();
     last_sample_ = nullptr;
   }
 
@@ -83,6 +89,7 @@ class PredictionPipeline {
   std::shared_ptr<const MotionModel> motion_model_;  // built from table_ for the motion model
   MotionModel::Cache motion_cache_;
   MotionHistory motion_history_;
+  OnlineCalibration online_calibration_;
   FormationSampler sampler_;
   // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
   std::vector<RobotStateById> robot_states_;

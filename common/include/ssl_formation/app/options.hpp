@@ -4,12 +4,14 @@
 // --opponent-attacks, --field-length, --field-width.
 
 #include <boost/program_options.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/motion_model.hpp"
+#include "ssl_formation/online_calibration.hpp"
 #include "ssl_formation/sampler.hpp"
 
 namespace ssl_formation::app {
@@ -48,6 +50,14 @@ struct ModelOptions {
   SamplerConfig sampler_config() const;  // validates everything; throws UsageError
 };
 void add_model_options(po::options_description& options, ModelOptions& model);
+
+// --recalibration-half-life, for the programs that predict (ssl-predictor, ssl-evaluate): how
+// fast the motion model's stated probabilities follow what the play lately did
+// (OnlineCalibration); 0 turns that off.
+void add_recalibration_option(po::options_description& options, double& half_life_s);
+// The settings a --recalibration-half-life asks for; none for 0. Throws UsageError for a
+// negative or non-finite one.
+std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s);
 
 struct NetworkOptions {
   std::string vision_address = default_vision_address;

@@ -37,6 +37,7 @@ struct EvaluateOptions {
   std::vector<double> horizons{0.2, 0.5, 1.0, 2.0};
   int chain_steps = 3;
   double velocity_window_s = 0.1;
+  double recalibration_half_life_s = OnlineCalibrationSettings{}.half_life_s;  // 0: off
   std::string output_dir = ".";
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
   // as-real-log: the recording, the log written and the mess (parse_real_log_mess); `seed`

@@ -21,6 +21,7 @@ struct PredictorOptions {
   std::string prediction_interface;  // empty: as --interface (127.0.0.1 when that is 'all')
   int ttl = net::kDefaultMulticastTtl;
   int horizon = 2;
+  double recalibration_half_life_s = OnlineCalibrationSettings{}.half_life_s;  // 0: off
   double reload_interval_s = 0.5;
   double status_interval_s = 5.0;
   int receive_buffer_bytes = net::kDefaultReceiveBufferBytes;
