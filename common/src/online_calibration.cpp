@@ -8,8 +8,29 @@ namespace ssl_formation {
 namespace {
 // Predictions remembered per step at most: ten seconds of a 100 Hz feed's 16 robots. Only a
 // caller that remembers without observing could reach it; the oldest go first.
-constexpr std::size_t max_pending_per_step = 16000;
+constexpr std::size_t max_pending_per_step = 16384;
+constexpr std::size_t first_ring_size = 256;
+// How often the corrections adjust() adds are worked out again, in seconds of the data clock: a
+// division per bin, where the evidence behind them changes by a thousandth in this time.
+constexpr double correction_refresh_s = 0.1;
+// Instants a whole interval apart on the data clock may differ by a rounding less.
+constexpr double interval_slack_s = 1e-9;
 }  // namespace
+
+void OnlineCalibration::Step::push(const Pending& pending) {
+  if (size == ring.size()) {
+    if (size >= max_pending_per_step) {
+      head = (head + 1) & (ring.size() - 1);  // the oldest goes
+      --size;
+    } else {
+      std::vector<Pending> grown(std::max(first_ring_size, 2 * ring.size()));
+      for (std::size_t i = 0; i < size; ++i) grown[i] = at(i);
+      ring = std::move(grown);
+      head = 0;
+    }
+  }
+  at(size++) = pending;
+}
 
 OnlineCalibration::OnlineCalibration(OnlineCalibrationSettings settings) : settings_(settings) {}
 
@@ -21,74 +42,104 @@ std::size_t OnlineCalibration::bin_of(double probability) {
 void OnlineCalibration::clear() {
   steps_.clear();
   last_time_s_.reset();
+  corrected_s_.reset();
+  remembered_s_.reset();
   checked_ = 0;
 }
 
 std::size_t OnlineCalibration::pending() const {
   std::size_t total = 0;
-  for (const Step& step : steps_) total += step.pending.size();
+  for (const Step& step : steps_) total += step.size;
   return total;
 }
 
 void OnlineCalibration::observe(const Formation& formation) {
   const double t = formation.time_s;
   if (last_time_s_ && t < *last_time_s_) clear();
-  if (last_time_s_ && t > *last_time_s_) {
-    const double fade = std::exp2(-(t - *last_time_s_) / settings_.half_life_s);
-    for (Step& step : steps_) {
+  const double fade =
+      last_time_s_ && t > *last_time_s_ ? std::exp2(-(t - *last_time_s_) / settings_.half_life_s)
+                                        : 1.0;
+  last_time_s_ = t;
+  for (Step& step : steps_) {
+    if (fade != 1.0) {
       for (Bin& bin : step.bins) {
         bin.weight *= fade;
         bin.hits *= fade;
         bin.stated *= fade;
       }
     }
-  }
-  last_time_s_ = t;
-  for (Step& step : steps_) {
-    // The predictions due by now, front first; those waiting for their robot (not seen in this
-    // frame, still within the tolerance) are kept, in order, at the front.
+    // The predictions due by now, front first. Those waiting for their robot (not seen in this
+    // frame, still within the tolerance) are gathered at the front, in order, and stay.
     std::size_t due = 0;
     std::size_t kept = 0;
-    for (; due < step.pending.size() && step.pending[due].due_s <= t; ++due) {
-      const Pending& p = step.pending[due];
+    // One prediction's robots come in the formation's order (by id), so each is found by walking
+    // on from the last; a lower id starts the next prediction's.
+    const std::vector<FormationRobot>& robots = formation.robots;
+    std::size_t walk = 0;
+    for (; due < step.size && step.at(due).due_s <= t; ++due) {
+      const Pending& p = step.at(due);
       if (p.attacks != formation.opponent_attacks) continue;  // its cells mean another side
       if (t - p.due_s > settings_.tolerance_s) continue;       // passed unseen
-      const FormationRobot* robot = formation.find(p.robot_id);
+      if (walk > 0 && (walk == robots.size() || robots[walk].robot_id > p.robot_id)) walk = 0;
+      while (walk < robots.size() && robots[walk].robot_id < p.robot_id) ++walk;
+      const FormationRobot* robot =
+          walk < robots.size() && robots[walk].robot_id == p.robot_id ? &robots[walk] : nullptr;
       if (robot && robot->observed) {
         Bin& bin = step.bins[bin_of(p.probability)];
         bin.weight += 1.0;
-        bin.hits += robot->cell == p.cell ? 1.0 : 0.0;
+        bin.hits += robot->cell.x == p.cell_x && robot->cell.y == p.cell_y ? 1.0 : 0.0;
         bin.stated += p.probability;
         ++checked_;
       } else {
-        step.pending[kept++] = p;
+        step.at(kept++) = p;
       }
     }
-    step.pending.erase(step.pending.begin() + static_cast<std::ptrdiff_t>(kept),
-                       step.pending.begin() + static_cast<std::ptrdiff_t>(due));
+    // Drops the `due - kept` handled ones: the kept move up against the not yet due.
+    const std::size_t handled = due - kept;
+    for (std::size_t i = kept; i-- > 0;) step.at(handled + i) = step.at(i);
+    if (!step.ring.empty()) step.head = (step.head + handled) & (step.ring.size() - 1);
+    step.size -= handled;
+  }
+  if (corrected_s_ && t >= *corrected_s_ &&
+      t - *corrected_s_ < correction_refresh_s - interval_slack_s) {
+    return;
+  }
+  corrected_s_ = t;
+  for (Step& step : steps_) {
+    for (std::size_t b = 0; b < step.bins.size(); ++b) {
+      const Bin& bin = step.bins[b];
+      step.correction[b] =
+          bin.weight > 0.0
+              ? (bin.hits - bin.stated) / (bin.weight + settings_.prior_weight)  // evidence x shift
+              : 0.0;
+    }
   }
 }
 
 void OnlineCalibration::remember(const Prediction& prediction, double time_s, double step_s,
                                  AttackDirection attacks) {
+  if (remembered_s_ && time_s >= *remembered_s_ &&
+      time_s - *remembered_s_ < settings_.remember_interval_s - interval_slack_s) {
+    return;
+  }
+  remembered_s_ = time_s;
   if (steps_.size() < prediction.steps.size()) steps_.resize(prediction.steps.size());
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
     Step& step = steps_[s];
     const double due_s = time_s + static_cast<double>(s + 1) * step_s;
     for (const RobotPrediction& robot : prediction.steps[s].robots) {
-      if (step.pending.size() >= max_pending_per_step) step.pending.pop_front();
-      step.pending.push_back({due_s, robot.robot_id, robot.position, robot.probability, attacks});
+      step.push({due_s, robot.robot_id, static_cast<float>(robot.probability),
+                 static_cast<std::int16_t>(robot.position.x),
+                 static_cast<std::int16_t>(robot.position.y), attacks});
     }
   }
 }
 
 double OnlineCalibration::adjusted(std::size_t step, double stated) const {
   if (step >= steps_.size()) return stated;
-  const Bin& bin = steps_[step].bins[bin_of(stated)];
-  if (!(bin.weight > 0.0)) return stated;
-  const double evidence = bin.weight / (bin.weight + settings_.prior_weight);
-  const double shift = (bin.hits - bin.stated) / bin.weight;
-  return std::clamp(stated + evidence * shift, min_probability, max_probability);
+  const double correction = steps_[step].correction[bin_of(stated)];
+  if (correction == 0.0) return stated;
+  return std::clamp(stated + correction, min_probability, max_probability);
 }
 
 void OnlineCalibration::adjust(Prediction& prediction) const {

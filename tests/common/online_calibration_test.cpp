@@ -132,12 +132,26 @@ TEST(OnlineCalibration, OnlyPredictionsWhoseInstantHasComeAreChecked) {
   EXPECT_EQ(calibration.adjusted(0, 0.3), 0.3);
   calibration.observe(formation_at(10.5, 1, home));
   EXPECT_EQ(calibration.checked(), 1u);  // the first step; the second is due at 11.0
+  // The corrections are worked out again a tenth of a second later.
+  calibration.observe(formation_at(10.6, 2, home));
   EXPECT_GT(calibration.adjusted(0, 0.3), 0.3);
   EXPECT_EQ(calibration.adjusted(1, 0.3), 0.3);
   calibration.observe(formation_at(11.0, 1, elsewhere));
   EXPECT_EQ(calibration.checked(), 2u);
+  calibration.observe(formation_at(11.1, 2, home));
   EXPECT_LT(calibration.adjusted(1, 0.3), 0.3);
   EXPECT_EQ(calibration.pending(), 0u);
+}
+
+TEST(OnlineCalibration, PredictionsAreRememberedATenthOfASecondApart) {
+  // Frames 16 ms apart say almost the same thing: one in six is checked at 60 Hz.
+  sf::OnlineCalibration calibration;
+  const auto attacks = sf::AttackDirection::positive_x;
+  for (int i = 0; i < 60; ++i) {
+    calibration.remember(prediction_of({{{1, home, 0.3}, {2, home, 0.3}}}), 10.0 + i / 60.0, 2.0,
+                         attacks);
+  }
+  EXPECT_EQ(calibration.pending(), 2u * 10u);
 }
 
 TEST(OnlineCalibration, ARobotNotSeenWhenDueWaitsWithinTheToleranceOnly) {
