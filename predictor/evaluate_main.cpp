@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
     }
     if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
     o.horizons = sf::evaluate::parse_horizons(horizons);
+    (void)sf::app::recalibration_settings(o.recalibration_half_life_s);  // checked before any work
     sf::app::init_logging("ssl-evaluate");
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});

@@ -422,5 +422,23 @@ TEST(SecondsOption, AcceptsPositiveSecondsAndNamesTheOptionOtherwise) {
   }
 }
 
+TEST(RecalibrationOption, ZeroIsOffAndABadHalfLifeNamesTheOption) {
+  EXPECT_FALSE(recalibration_settings(0.0).has_value());
+  const auto settings = recalibration_settings(30.0);
+  ASSERT_TRUE(settings.has_value());
+  EXPECT_EQ(settings->half_life_s, 30.0);
+  EXPECT_EQ(settings->prior_weight, OnlineCalibrationSettings{}.prior_weight);
+  for (double bad : {-1.0, std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::infinity()}) {
+    try {
+      (void)recalibration_settings(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const UsageError& error) {
+      EXPECT_NE(std::string(error.what()).find("--recalibration-half-life"), std::string::npos)
+          << error.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ssl_formation::app

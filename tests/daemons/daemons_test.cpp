@@ -398,6 +398,10 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
     EXPECT_NE(help.out.find("--model arg (=motion)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--sampling arg (=auto)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--step arg (=auto)"), std::string::npos) << program;
+    // Only the predictor predicts.
+    EXPECT_EQ(help.out.find("--recalibration-half-life arg (=60)") != std::string::npos,
+              program == predictor_program)
+        << program;
   }
 }
 

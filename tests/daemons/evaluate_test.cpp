@@ -268,6 +268,8 @@ TEST(Evaluate, BadModeAndOptionsExitWithTwo) {
   EXPECT_EQ(evaluate(dir, {"holdout", "--horizons", "0.5,-1"}, "horizons").exit_code, 2);
   EXPECT_EQ(evaluate(dir, {"holdout", "--horizons", "0.5,,1"}, "empty-horizon").exit_code, 2);
   EXPECT_EQ(evaluate(dir, {"holdout", "--sampling", "sometimes"}, "sampling").exit_code, 2);
+  EXPECT_EQ(
+      evaluate(dir, {"holdout", "--recalibration-half-life", "-1"}, "recalibration").exit_code, 2);
 }
 
 }  // namespace
