@@ -6,9 +6,10 @@
 namespace ssl_formation {
 
 namespace {
-// Predictions remembered per step at most: ten seconds of a 100 Hz feed's 16 robots. Only a
-// caller that remembers without observing could reach it; the oldest go first.
-constexpr std::size_t max_pending_per_step = 16384;
+// Predictions remembered per step at most, the oldest going first: 16 robots remembered 10
+// times a second for 400 s. Only a step further ahead than that (or a caller that remembers
+// without observing) reaches it.
+constexpr std::size_t max_pending_per_step = 65536;
 constexpr std::size_t first_ring_size = 256;
 // How often the corrections adjust() adds are worked out again, in seconds of the data clock: a
 // division per bin, where the evidence behind them changes by a thousandth in this time.
@@ -30,6 +31,13 @@ void OnlineCalibration::Step::push(const Pending& pending) {
     }
   }
   at(size++) = pending;
+}
+
+bool OnlineCalibrationSettings::valid() const {
+  const auto finite = [](double value) { return std::isfinite(value); };
+  return finite(half_life_s) && finite(prior_weight) && finite(tolerance_s) &&
+         finite(remember_interval_s) && half_life_s > 0.0 && prior_weight >= 0.0 &&
+         tolerance_s >= 0.0 && remember_interval_s >= 0.0;
 }
 
 OnlineCalibration::OnlineCalibration(OnlineCalibrationSettings settings) : settings_(settings) {}
@@ -85,7 +93,7 @@ void OnlineCalibration::observe(const Formation& formation) {
       const FormationRobot* robot =
           walk < robots.size() && robots[walk].robot_id == p.robot_id ? &robots[walk] : nullptr;
       if (robot && robot->observed) {
-        Bin& bin = step.bins[bin_of(p.probability)];
+        Bin& bin = step.bins[p.bin];
         bin.weight += 1.0;
         bin.hits += robot->cell.x == p.cell_x && robot->cell.y == p.cell_y ? 1.0 : 0.0;
         bin.stated += p.probability;
@@ -128,15 +136,17 @@ void OnlineCalibration::remember(const Prediction& prediction, double time_s, do
     Step& step = steps_[s];
     const double due_s = time_s + static_cast<double>(s + 1) * step_s;
     for (const RobotPrediction& robot : prediction.steps[s].robots) {
+      if (!std::isfinite(robot.probability)) continue;  // nothing to learn of it
       step.push({due_s, robot.robot_id, static_cast<float>(robot.probability),
                  static_cast<std::int16_t>(robot.position.x),
-                 static_cast<std::int16_t>(robot.position.y), attacks});
+                 static_cast<std::int16_t>(robot.position.y),
+                 static_cast<std::uint8_t>(bin_of(robot.probability)), attacks});
     }
   }
 }
 
 double OnlineCalibration::adjusted(std::size_t step, double stated) const {
-  if (step >= steps_.size()) return stated;
+  if (step >= steps_.size() || !std::isfinite(stated)) return stated;
   const double correction = steps_[step].correction[bin_of(stated)];
   if (correction == 0.0) return stated;
   return std::clamp(stated + correction, min_probability, max_probability);

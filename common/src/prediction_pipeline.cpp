@@ -31,8 +31,8 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
   }
   if (config_.recalibration && !config_.recalibration->valid()) {
     throw std::invalid_argument(
-        "the recalibration's half-life must be positive seconds, its prior weight and tolerance "
-        "not negative");
+        "the recalibration's half-life must be positive seconds, its prior weight, tolerance and "
+        "remember interval finite and not negative");
   }
   if (config_.horizon < 1 || config_.horizon > PredictionConfig::max_horizon) {
     throw std::invalid_argument("the horizon must be 1 to " +

@@ -584,15 +584,34 @@ TEST(MotionPipeline, ATeamStandingStillForAMinuteIsSaidToStayAsOftenAsItDoes) {
     recalibrated.push_back(p.prediction);
     times.push_back(p.formation().time_s);
   });
+  // The daemon's warm-up runs the last prediction again between frames: it must not be
+  // remembered (checked twice), so a pipeline rehearsing every frame states the same.
+  std::vector<sf::Prediction> rehearsing;
+  sf::PredictionPipeline warmed(config, [&](const sf::PredictedFormation& p) {
+    rehearsing.push_back(p.prediction);
+  });
   config.recalibration.reset();
   sf::PredictionPipeline off(config, [&](const sf::PredictedFormation& p) {
     as_stated.push_back(p.prediction);
   });
   on.set_table(stored);
   off.set_table(stored);
+  warmed.set_table(stored);
+  std::size_t rehearsals = 0;
   for (int i = 0; i < 60 * 60; ++i) {
     on.add(standing(i));
     off.add(standing(i));
+    warmed.add(standing(i));
+    for (int r = 0; r < 3; ++r) rehearsals += warmed.rehearse(nullptr) ? 1 : 0;
+  }
+  EXPECT_GT(rehearsals, 10000u);
+  ASSERT_EQ(rehearsing.size(), recalibrated.size());
+  for (std::size_t k = 0; k < recalibrated.size(); ++k) {
+    for (std::size_t r = 0; r < recalibrated[k].steps[0].robots.size(); ++r) {
+      ASSERT_EQ(rehearsing[k].steps[0].robots[r].probability,
+                recalibrated[k].steps[0].robots[r].probability)
+          << "prediction " << k << " robot " << r;
+    }
   }
   ASSERT_EQ(recalibrated.size(), as_stated.size());
   ASSERT_GT(recalibrated.size(), 3000u);

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace sf = ssl_formation;
@@ -46,18 +48,25 @@ sf::Formation formation_at(double time_s, std::uint32_t id, sf::Cell cell, bool 
   return formation;
 }
 
-// A small prior weight: ten checks a second of one robot are a tenth of what a match gives.
-const sf::OnlineCalibrationSettings quick{60.0, 20.0, 0.05};
+// A small prior weight: eight checks a second of one robot are a tenth of what a match gives.
+sf::OnlineCalibrationSettings settings(double half_life_s, double prior_weight) {
+  sf::OnlineCalibrationSettings settings;
+  settings.half_life_s = half_life_s;
+  settings.prior_weight = prior_weight;
+  return settings;
+}
+const sf::OnlineCalibrationSettings quick = settings(60.0, 20.0);
 
 constexpr sf::Cell home{2, 3};
 constexpr sf::Cell elsewhere{5, 1};
 
-// Ten predictions a second of robot 1 in `home` at `stated`, for `seconds` from `from_s`, each
-// checked one step (0.5 s) later against the robot's cell `actual`.
+// Eight predictions a second of robot 1 in `home` at `stated`, for `seconds` from `from_s`, each
+// checked one step (0.5 s) later against the robot's cell `actual`. Every time is a multiple of
+// 1/8 s, exact in binary, so that each prediction falls due exactly at a later frame.
 void play(sf::OnlineCalibration& calibration, double from_s, double seconds, double stated,
           sf::Cell actual) {
-  for (int i = 0; i < static_cast<int>(seconds * 10.0); ++i) {
-    const double t = from_s + 0.1 * i;
+  for (int i = 0; i < static_cast<int>(seconds * 8.0); ++i) {
+    const double t = from_s + 0.125 * i;
     calibration.observe(formation_at(t, 1, actual));
     calibration.remember(prediction_of({{{1, home, stated}}}), t, 0.5,
                          sf::AttackDirection::positive_x);
@@ -85,7 +94,7 @@ TEST(OnlineCalibration, ARobotThatAlwaysStaysRaisesAStatedThirdAndTheFormationWi
   // A long stoppage: the table says 0.33 (running play), the robot never leaves its cell.
   sf::OnlineCalibration calibration(quick);
   play(calibration, 100.0, 60.0, 0.33, home);
-  EXPECT_GT(calibration.checked(), 500u);
+  EXPECT_GT(calibration.checked(), 400u);  // 8 a second for a minute
   EXPECT_GT(calibration.adjusted(0, 0.33), 0.9);
   EXPECT_LE(calibration.adjusted(0, 0.33), sf::OnlineCalibration::max_probability);
   // Other tenths of probability have seen nothing and stand.
@@ -115,12 +124,34 @@ TEST(OnlineCalibration, WhatHappensAsStatedChangesNothing) {
   // Hits at the rate stated: the correction stays near zero.
   sf::OnlineCalibration calibration;
   for (int i = 0; i < 600; ++i) {
-    const double t = 0.1 * i;
+    const double t = 0.125 * i;
     calibration.observe(formation_at(t, 1, i % 2 == 0 ? home : elsewhere));
     calibration.remember(prediction_of({{{1, home, 0.5}}}), t, 0.5,
                          sf::AttackDirection::positive_x);
   }
+  EXPECT_GT(calibration.checked(), 500u);
   EXPECT_NEAR(calibration.adjusted(0, 0.5), 0.5, 0.02);
+}
+
+TEST(OnlineCalibration, AProbabilityOnATenthIsCheckedAndAdjustedInTheSameBin) {
+  // 0.7 and 0.9 are a hair below their tenth as floats: the evidence must still go to the bin
+  // adjust() reads for them.
+  for (const double stated : {0.3, 0.7, 0.9}) {
+    sf::OnlineCalibration calibration(quick);
+    play(calibration, 100.0, 60.0, stated, home);
+    EXPECT_GT(calibration.adjusted(0, stated), 0.95) << stated;
+  }
+}
+
+TEST(OnlineCalibration, ANonFiniteProbabilityIsLeftAsItIsAndLearnsNothing) {
+  sf::OnlineCalibration calibration(quick);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  calibration.remember(prediction_of({{{1, home, nan}, {2, home, 0.5}}}), 10.0, 0.5,
+                       sf::AttackDirection::positive_x);
+  EXPECT_EQ(calibration.pending(), 1u);
+  play(calibration, 100.0, 20.0, 0.5, home);
+  EXPECT_GT(calibration.adjusted(0, 0.5), 0.5);
+  EXPECT_TRUE(std::isnan(calibration.adjusted(0, nan)));
 }
 
 TEST(OnlineCalibration, OnlyPredictionsWhoseInstantHasComeAreChecked) {
@@ -183,7 +214,7 @@ TEST(OnlineCalibration, PredictionsMadeBeforeAChangeOfEndsAreNotCheckedAfterIt) 
 }
 
 TEST(OnlineCalibration, EvidenceFadesWithTheDataClock) {
-  sf::OnlineCalibration calibration(sf::OnlineCalibrationSettings{10.0, 20.0, 0.05});
+  sf::OnlineCalibration calibration(settings(10.0, 20.0));
   play(calibration, 100.0, 30.0, 0.33, home);
   const double fresh = calibration.adjusted(0, 0.33);
   EXPECT_GT(fresh, 0.8);

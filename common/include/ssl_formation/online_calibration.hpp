@@ -35,10 +35,8 @@ struct OnlineCalibrationSettings {
   // How long after its instant a prediction may still be checked (a robot may be missing from
   // the frame that reaches it; a later one within this may see it).
   double tolerance_s = 0.05;
-  bool valid() const {
-    return half_life_s > 0.0 && prior_weight >= 0.0 && tolerance_s >= 0.0 &&
-           remember_interval_s >= 0.0;
-  }
+  // Every value finite, the half-life positive and the others not negative.
+  bool valid() const;
 };
 
 class OnlineCalibration {
@@ -63,6 +61,9 @@ class OnlineCalibration {
   // Moves every robot probability of `prediction` towards its bin's recent hit rate, and the
   // steps' formation probabilities and confidences with them.
   void adjust(Prediction& prediction) const;
+  // Forgets everything. A new table does not call for it: the live trainer replaces the table
+  // every few seconds and it changes little each time, while the evidence of the last minute
+  // stays true of the play; a table of another opponent is outweighed within a minute or two.
   void clear();
 
   // What has been checked so far (since the last clear), for status lines and tests.
@@ -76,8 +77,9 @@ class OnlineCalibration {
   struct Pending {
     double due_s = 0.0;
     std::uint32_t robot_id = 0;
-    float probability = 0.0f;  // as stated; a float is as fine as its bin needs
-    std::int16_t cell_x = 0, cell_y = 0;
+    float probability = 0.0f;  // as stated, for the bin's sum (its bin is kept exactly apart)
+    std::int16_t cell_x = 0, cell_y = 0;  // grids have at most a few hundred cells
+    std::uint8_t bin = 0;                 // bin_of the stated probability, as a double
     AttackDirection attacks = AttackDirection::positive_x;
   };
   // Faded sums over the checked predictions of one bin.
