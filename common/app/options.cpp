@@ -103,11 +103,11 @@ void add_recalibration_option(po::options_description& options, double& half_lif
 
 std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s) {
   if (half_life_s == 0.0) return std::nullopt;
-  if (!(half_life_s > 0.0) || !std::isfinite(half_life_s)) {
-    throw UsageError("--recalibration-half-life must be positive seconds, or 0 for off");
-  }
   OnlineCalibrationSettings settings;
   settings.half_life_s = half_life_s;
+  if (!settings.valid()) {
+    throw UsageError("--recalibration-half-life must be positive seconds, or 0 for off");
+  }
   return settings;
 }
 

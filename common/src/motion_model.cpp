@@ -519,16 +519,12 @@ void MotionHistory::Track::clear() {
 void MotionHistory::clear() {
   for (Track& track : tracks_) track.clear();
   last_time_s_.reset();
-  last_learned_s_.reset();
+  learning_gate_.reset();
   learning_instants_ = 0;
 }
 
 bool MotionHistory::take_learning_instant(double time_s, double interval_s) {
-  if (last_learned_s_ && time_s >= *last_learned_s_ &&
-      time_s - *last_learned_s_ < interval_s - 1e-6) {
-    return false;
-  }
-  last_learned_s_ = time_s;
+  if (!learning_gate_.pass(time_s, interval_s)) return false;
   ++learning_instants_;
   return true;
 }

@@ -14,8 +14,6 @@ constexpr std::size_t first_ring_size = 256;
 // How often the corrections adjust() adds are worked out again, in seconds of the data clock: a
 // division per bin, where the evidence behind them changes by a thousandth in this time.
 constexpr double correction_refresh_s = 0.1;
-// Instants a whole interval apart on the data clock may differ by a rounding less.
-constexpr double interval_slack_s = 1e-9;
 }  // namespace
 
 void OnlineCalibration::Step::push(const Pending& pending) {
@@ -50,8 +48,8 @@ std::size_t OnlineCalibration::bin_of(double probability) {
 void OnlineCalibration::clear() {
   steps_.clear();
   last_time_s_.reset();
-  corrected_s_.reset();
-  remembered_s_.reset();
+  correcting_.reset();
+  remembering_.reset();
   checked_ = 0;
 }
 
@@ -108,11 +106,7 @@ void OnlineCalibration::observe(const Formation& formation) {
     if (!step.ring.empty()) step.head = (step.head + handled) & (step.ring.size() - 1);
     step.size -= handled;
   }
-  if (corrected_s_ && t >= *corrected_s_ &&
-      t - *corrected_s_ < correction_refresh_s - interval_slack_s) {
-    return;
-  }
-  corrected_s_ = t;
+  if (!correcting_.pass(t, correction_refresh_s)) return;
   for (Step& step : steps_) {
     for (std::size_t b = 0; b < step.bins.size(); ++b) {
       const Bin& bin = step.bins[b];
@@ -126,11 +120,7 @@ void OnlineCalibration::observe(const Formation& formation) {
 
 void OnlineCalibration::remember(const Prediction& prediction, double time_s, double step_s,
                                  AttackDirection attacks) {
-  if (remembered_s_ && time_s >= *remembered_s_ &&
-      time_s - *remembered_s_ < settings_.remember_interval_s - interval_slack_s) {
-    return;
-  }
-  remembered_s_ = time_s;
+  if (!remembering_.pass(time_s, settings_.remember_interval_s)) return;
   if (steps_.size() < prediction.steps.size()) steps_.resize(prediction.steps.size());
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
     Step& step = steps_[s];

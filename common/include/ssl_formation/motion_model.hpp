@@ -26,6 +26,7 @@
 
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/interval_gate.hpp"
 #include "ssl_formation/probed_memory.hpp"
 
 namespace ssl_formation {
@@ -368,7 +369,7 @@ class MotionHistory {
   // remembered as the last one.
   bool take_learning_instant(double time_s, double interval_s);
   // The last learning instant taken, if any since the last clear.
-  std::optional<double> last_learning_instant_s() const { return last_learned_s_; }
+  std::optional<double> last_learning_instant_s() const { return learning_gate_.last_s(); }
   // Learning instants taken since the last clear, the last one included.
   std::uint64_t learning_instants() const { return learning_instants_; }
 
@@ -419,7 +420,7 @@ class MotionHistory {
   double keep_s_;
   std::vector<Track> tracks_;  // by robot id
   std::optional<double> last_time_s_;
-  std::optional<double> last_learned_s_;
+  IntervalGate learning_gate_;
   std::uint64_t learning_instants_ = 0;
   AttackDirection attacks_ = AttackDirection::positive_x;
 };

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "ssl_formation/formation.hpp"
+#include "ssl_formation/interval_gate.hpp"
 #include "ssl_formation/predictor.hpp"
 
 namespace ssl_formation {
@@ -108,8 +109,8 @@ class OnlineCalibration {
   OnlineCalibrationSettings settings_;
   std::vector<Step> steps_;
   std::optional<double> last_time_s_;
-  std::optional<double> corrected_s_;    // when the corrections were last worked out
-  std::optional<double> remembered_s_;   // when a prediction was last remembered
+  IntervalGate correcting_;    // when the corrections are worked out
+  IntervalGate remembering_;  // when predictions are remembered
   std::uint64_t checked_ = 0;
 };
 
