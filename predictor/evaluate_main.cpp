@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
         "chain-steps", po::value(&o.chain_steps)->default_value(o.chain_steps),
         "holdout: also chains of 1 to this many steps of --step")(
         "velocity-window", po::value(&o.velocity_window_s)->default_value(o.velocity_window_s),
-        "seconds over which the constant-velocity baselines take a robot's velocity")(
+        "seconds: a robot's velocity (from its tracker) counts once its track has run half this long")(
         "jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm),
         "noise of the simulated vision, mm")("cameras",
                                              po::value(&o.cameras)->default_value(o.cameras),

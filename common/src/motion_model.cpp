@@ -483,7 +483,8 @@ bool operator==(const MotionTable& a, const MotionTable& b) {
 // ---- MotionHistory -----------------------------------------------------------------------------
 
 namespace {
-constexpr double forget_after_gap_s = 1.0;  // no robot data for this long: the play moved on
+// No robot data for this long: the play moved on.
+constexpr double forget_after_gap_s = RobotTracker::forget_after_s;
 }
 
 MotionHistory::MotionHistory(const MotionConfig& config)
@@ -511,7 +512,8 @@ void MotionHistory::Track::grow() {
 
 void MotionHistory::Track::clear() {
   begin = end;
-  velocity_cursor = settle_cursor = long_settle_cursor = end;
+  settle_cursor = long_settle_cursor = end;
+  tracker.reset();
   horizon_cursor.fill(end);
   still_since_s.reset();
 }
@@ -590,7 +592,6 @@ void MotionHistory::add(const Formation& formation) {
       while (at < track.end && track.time_at(at) < from_s) ++at;
       cursor = at;
     };
-    advance(track.velocity_cursor, t - config_.velocity_window_s);
     advance(track.settle_cursor, t - config_.settle_window_s);
     advance(track.long_settle_cursor, t - config_.long_settle_window_s);
 
@@ -610,15 +611,21 @@ void MotionHistory::add(const Formation& formation) {
     entry.position = robot.position;
     MotionKinematics& k = entry.kinematics;
     k.team_velocity = {};  // set after the loop if any robot of the formation has a velocity
-    const Entry* then = nearest(track, track.velocity_cursor, t - config_.velocity_window_s);
-    if (then && t - then->time_s > config_.velocity_window_s / 2.0) {
-      const double dt = t - then->time_s;
-      k.velocity = {(robot.position.x - then->position.x) / dt,
-                    (robot.position.y - then->position.y) / dt};
+    if (track.tracker.observations() > 0 &&
+        t - track.tracker.last_s() > RobotTracker::forget_after_s) {
+      track.tracker.reset();
+    }
+    track.tracker.observe(t, robot.position);
+    // A velocity once the track has gone on for half the velocity window: before that the
+    // filter has seen too little of the robot to tell its motion from the vision's noise.
+    if (track.tracker.observations() >= 2 &&
+        t - track.tracker.first_s() > config_.velocity_window_s / 2.0) {
+      k.velocity = track.tracker.velocity();
       entry.has_velocity = true;
-      k.velocity_change = then->has_velocity ? Point{k.velocity.x - then->kinematics.velocity.x,
-                                                     k.velocity.y - then->kinematics.velocity.y}
-                                             : Point{};
+      // The change of velocity over one velocity window at the filter's acceleration now.
+      const Point acceleration = track.tracker.acceleration();
+      k.velocity_change = {acceleration.x * config_.velocity_window_s,
+                           acceleration.y * config_.velocity_window_s};
       // From the robot to its mean position since the window's first entry (the new one
       // included), from the running sums. They run unbroken over every kept entry (they restart
       // only when none is kept), so the number of positions summed is that of sequence numbers.

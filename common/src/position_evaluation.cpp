@@ -41,9 +41,31 @@ std::optional<std::size_t> nearest_index(const Items& items, double time_s, doub
 }  // namespace
 
 void RobotTracks::add(const Formation& formation) {
+  const double t = formation.time_s;
   for (const FormationRobot& robot : formation.robots) {
-    if (robot.robot_id >= by_id_.size()) by_id_.resize(robot.robot_id + 1);
-    by_id_[robot.robot_id].push_back({formation.time_s, robot.feed_position});
+    if (robot.robot_id >= by_id_.size()) {
+      by_id_.resize(robot.robot_id + 1);
+      followed_.resize(robot.robot_id + 1);
+    }
+    Followed& followed = followed_[robot.robot_id];
+    RobotTracker& tracker = followed.tracker;
+    if (robot.observed) {
+      // A robot carried over from an earlier frame (not observed) tells the tracker nothing.
+      if (tracker.observations() > 0 &&
+          (t <= tracker.last_s() || t - tracker.last_s() > RobotTracker::forget_after_s ||
+           MotionFeatures::is_jump(followed.last_position, tracker.last_s(), robot.feed_position,
+                                   t))) {
+        tracker.reset();
+      }
+      tracker.observe(t, robot.feed_position);
+      followed.last_position = robot.feed_position;
+    }
+    Seen seen{t, robot.feed_position, {}, std::nullopt};
+    if (tracker.observations() >= 2) {
+      seen.velocity = tracker.velocity();
+      seen.tracked_since_s = tracker.first_s();
+    }
+    by_id_[robot.robot_id].push_back(seen);
   }
 }
 
@@ -60,13 +82,10 @@ std::optional<RobotTracks::Seen> RobotTracks::nearest(std::uint32_t robot_id, do
 std::optional<Point> RobotTracks::velocity(std::uint32_t robot_id, double time_s, double window_s,
                                            double tolerance_s) const {
   const auto now = nearest(robot_id, time_s, tolerance_s);
-  const auto then = nearest(robot_id, time_s - window_s, tolerance_s);
-  if (!now || !then || !(now->time_s > then->time_s)) return std::nullopt;
-  if (MotionFeatures::is_jump(then->position, then->time_s, now->position, now->time_s)) {
+  if (!now || !now->tracked_since_s || !(now->time_s - *now->tracked_since_s > window_s / 2.0)) {
     return std::nullopt;
   }
-  const double dt = now->time_s - then->time_s;
-  return Point{(now->position.x - then->position.x) / dt, (now->position.y - then->position.y) / dt};
+  return now->velocity;
 }
 
 double ErrorStats::mean() const {

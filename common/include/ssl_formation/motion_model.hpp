@@ -28,6 +28,7 @@
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/interval_gate.hpp"
 #include "ssl_formation/probed_memory.hpp"
+#include "ssl_formation/robot_tracker.hpp"
 
 namespace ssl_formation {
 
@@ -42,7 +43,9 @@ std::string_view to_string(ModelKind model);
 struct MotionConfig {
   double step_s = 2.0;             // the table's step
   int horizons = 3;                // steps learned: k x step_s ahead for k = 1..horizons
-  double velocity_window_s = 0.1;  // a robot's velocity is its displacement over this window
+  // A robot has a velocity once its track has gone on for half this window, and its change of
+  // velocity is its acceleration over this window (both from its RobotTracker).
+  double velocity_window_s = 0.1;
   // Instances are learned at most this often per robot: frames 16 ms apart say almost the same
   // thing. On the inner splits of both recordings, 10 a second forecast as well as 15 (2 s:
   // 10.7 / 11.9% below damped constant velocity against 10.6 / 11.7%; 0.2 s 0.5 mm worse) and 60
@@ -134,8 +137,8 @@ MotionKey coarser_motion_key(MotionKey key);
 
 // What the model knows of a robot's recent motion, normalised (mm, mm/s).
 struct MotionKinematics {
-  Point velocity;         // over the velocity window
-  Point velocity_change;  // the velocity now minus one velocity window earlier
+  Point velocity;         // now, from the robot's tracker
+  Point velocity_change;  // the tracker's acceleration times the velocity window
   Point to_recent_mean;   // from the robot to its mean position over the settle window
   Point to_settled_mean;  // the same over the long settle window
   Point team_velocity;    // the mean velocity of the formation's robots that have one
@@ -395,10 +398,11 @@ class MotionHistory {
     // entry's size is not a power of two (a division by it, made a multiplication).
     std::uint64_t capacity = 0;
     std::uint64_t begin = 0, end = 0;  // the kept entries' sequence numbers, [begin, end)
-    std::uint64_t velocity_cursor = 0, settle_cursor = 0, long_settle_cursor = 0;
+    std::uint64_t settle_cursor = 0, long_settle_cursor = 0;
     // k steps before the latest entry; moved by steps_before_latest, not by add.
     std::array<std::uint64_t, MotionConfig::max_horizons> horizon_cursor{};
     std::optional<double> still_since_s;  // when the robot last came to a stand, if it stands
+    RobotTracker tracker;                 // the velocity and acceleration
     const Entry& at(std::uint64_t seq) const { return ring[seq & (capacity - 1)]; }
     Entry& at(std::uint64_t seq) { return ring[seq & (capacity - 1)]; }
     double time_at(std::uint64_t seq) const { return times[seq & (capacity - 1)]; }

@@ -7,7 +7,8 @@
 // The baselines SSL teams use today, computed from each robot's own observed positions at the
 // same instants:
 //   persistence                 it stays where it is;
-//   constant velocity           it goes on at its velocity over the last `velocity_window_s`;
+//   constant velocity           it goes on at its velocity now, from its RobotTracker (as the
+//                               model's), once its track has run for half `velocity_window_s`;
 //   damped constant velocity    the same velocity scaled by one factor per horizon, fitted on
 //                               the training part by least squares (DampingFit).
 
@@ -23,6 +24,7 @@
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/online_calibration.hpp"
 #include "ssl_formation/predictor.hpp"
+#include "ssl_formation/robot_tracker.hpp"
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/table_file.hpp"
 
@@ -31,27 +33,36 @@ class SSL_WrapperPacket;
 namespace ssl_formation::evaluation {
 
 // Where each robot was seen in one stream, on the data clock, in the feed's coordinates: every
-// sampled formation's robots by id. Formations must come in time order.
+// sampled formation's robots by id, and each robot's velocity from a RobotTracker fed with its
+// observed positions (the model's own tracker: the baselines extrapolate what a team's tracker
+// would). Formations must come in time order.
 class RobotTracks {
  public:
   void add(const Formation& formation);
   // The position recorded nearest to `time_s`, if one lies within `tolerance_s` of it; with the
-  // time it was recorded at.
+  // time it was recorded at and the tracker's velocity then.
   struct Seen {
     double time_s = 0.0;
     Point position;
+    Point velocity;               // valid if tracked_since_s is set
+    std::optional<double> tracked_since_s;  // when the robot's current track started
   };
   std::optional<Seen> nearest(std::uint32_t robot_id, double time_s, double tolerance_s) const;
-  // The robot's velocity at `time_s` over the last `window_s` (mm/s): the displacement from the
-  // position nearest `time_s - window_s` (within `tolerance_s`) to the one at `time_s`, over the
-  // time between them. Nothing when either is missing, no time passed or the robot jumped
-  // between them (MotionFeatures::is_jump: a ghost or a swapped id is no velocity, for the
-  // baselines as for the model).
+  // The robot's velocity at `time_s` (mm/s): its tracker's at the record nearest `time_s`
+  // (within `tolerance_s`), once that track had gone on for half of `window_s`, as the model's
+  // (MotionHistory). A track starts again where the robot jumped (MotionFeatures::is_jump: a
+  // ghost or a swapped id is no velocity, for the baselines as for the model), after
+  // RobotTracker::forget_after_s unseen, or where time went back.
   std::optional<Point> velocity(std::uint32_t robot_id, double time_s, double window_s,
                                 double tolerance_s) const;
 
  private:
   std::vector<std::vector<Seen>> by_id_;  // indexed by robot id, each in time order
+  struct Followed {
+    RobotTracker tracker;
+    Point last_position;  // observed, for the jump check
+  };
+  std::vector<Followed> followed_;  // indexed by robot id
 };
 
 // Errors in millimetres: mean, median and 90th percentile (linear interpolation between order
@@ -143,7 +154,7 @@ struct PositionEvaluationConfig {
   ModelKind model = ModelKind::paper;
   int steps = 1;          // horizons 1..steps, step k being k x step_s ahead
   double velocity_window_s = 0.1;
-  // How far from t + horizon the truth may be sampled (and from t - window the velocity's start).
+  // How far from t + horizon the truth may be sampled (and from t the velocity's record).
   double tolerance_s = 0.05;
   // The motion model's recalibration while it predicts the test streams (PredictionConfig).
   std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
