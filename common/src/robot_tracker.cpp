@@ -38,43 +38,38 @@ void RobotTracker::observe(double time_s, Point position) {
     return;
   }
   ++observations_;
-  // Prediction: x <- F x with F = [1 dt dt^2/2; 0 1 dt; 0 0 1], P <- F P F' + Q, where Q is the
-  // white-jerk model's noise over dt.
+  const double h = dt * dt / 2.0;
+  // Prediction: x <- F x with F = [1 dt h; 0 1 dt; 0 0 1] (h = dt^2 / 2), P <- F P F' + Q, where
+  // Q is the white-jerk model's noise over dt. Written out on the six distinct entries of the
+  // symmetric P (tests/common/robot_tracker_test.cpp holds it to the plain matrix products):
+  // this runs for every observed robot of every frame, in training too.
   const double dt2 = dt * dt, dt3 = dt2 * dt, dt4 = dt3 * dt, dt5 = dt4 * dt;
   const double q = settings_.jerk_density;
-  const std::array<std::array<double, 3>, 3> f{{{1.0, dt, dt2 / 2.0}, {0.0, 1.0, dt}, {0.0, 0.0, 1.0}}};
-  const std::array<std::array<double, 3>, 3> process{{{q * dt5 / 20.0, q * dt4 / 8.0, q * dt3 / 6.0},
-                                                      {q * dt4 / 8.0, q * dt3 / 3.0, q * dt2 / 2.0},
-                                                      {q * dt3 / 6.0, q * dt2 / 2.0, q * dt}}};
-  std::array<std::array<double, 3>, 3> fp{};
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      for (int k = i; k < 3; ++k) fp[i][j] += f[i][k] * covariance_[k][j];  // F is upper
-    }
-  }
-  std::array<std::array<double, 3>, 3> predicted = process;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      for (int k = j; k < 3; ++k) predicted[i][j] += fp[i][k] * f[j][k];
-    }
-  }
+  auto& c = covariance_;
+  const double c00 = c[0][0], c01 = c[0][1], c02 = c[0][2], c11 = c[1][1], c12 = c[1][2],
+               c22 = c[2][2];
+  const double p00 = c00 + 2.0 * dt * c01 + 2.0 * h * c02 + dt2 * c11 + 2.0 * dt * h * c12 +
+                     h * h * c22 + q * dt5 / 20.0;
+  const double p01 =
+      c01 + dt * (c02 + c11) + (dt2 + h) * c12 + h * dt * c22 + q * dt4 / 8.0;
+  const double p02 = c02 + dt * c12 + h * c22 + q * dt3 / 6.0;
+  const double p11 = c11 + 2.0 * dt * c12 + dt2 * c22 + q * dt3 / 3.0;
+  const double p12 = c12 + dt * c22 + q * dt2 / 2.0;
+  const double p22 = c22 + q * dt;
   // Update with the observed position: gain K = P H' / (H P H' + R), H = [1 0 0].
-  const double innovation_variance = predicted[0][0] + noise;
-  const std::array<double, 3> gain{predicted[0][0] / innovation_variance,
-                                   predicted[1][0] / innovation_variance,
-                                   predicted[2][0] / innovation_variance};
+  const double inverse = 1.0 / (p00 + noise);
+  const double k0 = p00 * inverse, k1 = p01 * inverse, k2 = p02 * inverse;
   const double observed[2] = {position.x, position.y};
   for (int axis = 0; axis < 2; ++axis) {
     std::array<double, 3>& x = state_[static_cast<std::size_t>(axis)];
-    const double p = x[0] + dt * x[1] + dt2 / 2.0 * x[2];
-    const double v = x[1] + dt * x[2];
-    const double a = x[2];
-    const double residual = observed[axis] - p;
-    x = {p + gain[0] * residual, v + gain[1] * residual, a + gain[2] * residual};
+    const double predicted_position = x[0] + dt * x[1] + h * x[2];
+    const double residual = observed[axis] - predicted_position;
+    x = {predicted_position + k0 * residual, x[1] + dt * x[2] + k1 * residual,
+         x[2] + k2 * residual};
   }
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) covariance_[i][j] = predicted[i][j] - gain[i] * predicted[0][j];
-  }
+  const double n00 = p00 - k0 * p00, n01 = p01 - k0 * p01, n02 = p02 - k0 * p02;
+  const double n11 = p11 - k1 * p01, n12 = p12 - k1 * p02, n22 = p22 - k2 * p02;
+  c = {{{n00, n01, n02}, {n01, n11, n12}, {n02, n12, n22}}};
 }
 
 }  // namespace ssl_formation

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -78,6 +79,91 @@ TEST(RobotTracker, UnderNoiseItIsAboutAsSteadyAsDifferences) {
   const double difference_change_rms = std::sqrt(difference_change_squares / n);
   EXPECT_NEAR(difference_change_rms, 73.5, 5.0);
   EXPECT_LT(std::sqrt(change_squares / n), difference_change_rms);
+}
+
+// The filter written plainly, 3x3 matrices and all, updating its covariance at every step.
+struct ReferenceFilter {
+  using Matrix = std::array<std::array<double, 3>, 3>;
+  static Matrix product(const Matrix& a, const Matrix& b) {
+    Matrix c{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) c[i][j] += a[i][k] * b[k][j];
+    return c;
+  }
+  static Matrix transposed(const Matrix& a) {
+    Matrix t{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) t[i][j] = a[j][i];
+    return t;
+  }
+  sf::RobotTrackerSettings settings;
+  int n = 0;
+  double last_s = 0.0;
+  sf::Point first;
+  std::array<std::array<double, 3>, 2> x{};
+  Matrix p{};
+  void observe(double t, sf::Point z) {
+    const double r = settings.position_noise_mm * settings.position_noise_mm;
+    const double a0 = settings.initial_acceleration_mm_s2;
+    const double dt = t - last_s;
+    last_s = t;
+    if (n++ == 0) {
+      first = z;
+      return;
+    }
+    if (n == 2) {
+      x = {{{z.x, (z.x - first.x) / dt, 0.0}, {z.y, (z.y - first.y) / dt, 0.0}}};
+      p = {{{r, r / dt, 0.0},
+            {r / dt, 2 * r / (dt * dt) + a0 * a0 * dt * dt / 4, a0 * a0 * dt / 2},
+            {0.0, a0 * a0 * dt / 2, a0 * a0}}};
+      return;
+    }
+    const Matrix f{{{1, dt, dt * dt / 2}, {0, 1, dt}, {0, 0, 1}}};
+    const double q = settings.jerk_density;
+    const Matrix noise{{{q * std::pow(dt, 5) / 20, q * std::pow(dt, 4) / 8, q * std::pow(dt, 3) / 6},
+                        {q * std::pow(dt, 4) / 8, q * std::pow(dt, 3) / 3, q * dt * dt / 2},
+                        {q * std::pow(dt, 3) / 6, q * dt * dt / 2, q * dt}}};
+    Matrix predicted = product(product(f, p), transposed(f));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) predicted[i][j] += noise[i][j];
+    const double s = predicted[0][0] + r;
+    const std::array<double, 3> k{predicted[0][0] / s, predicted[1][0] / s, predicted[2][0] / s};
+    const double observed[2] = {z.x, z.y};
+    for (int axis = 0; axis < 2; ++axis) {
+      std::array<double, 3> moved{};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) moved[i] += f[i][j] * x[axis][j];
+      const double residual = observed[axis] - moved[0];
+      for (int i = 0; i < 3; ++i) x[axis][i] = moved[i] + k[i] * residual;
+    }
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) p[i][j] = predicted[i][j] - k[i] * predicted[0][j];
+  }
+};
+
+TEST(RobotTracker, ItIsTheFullKalmanFilterThroughChangesOfPace) {
+  // 60 frames a second, then 45, then irregular, then 90: the tracker (its covariance written
+  // out on its six distinct entries) against the plain filter.
+  std::mt19937_64 random(3);
+  std::normal_distribution<double> noise(0.0, 3.0);
+  std::uniform_real_distribution<double> jitter(0.008, 0.03);
+  sf::RobotTracker tracker;
+  ReferenceFilter reference;
+  double t = 100.0;
+  for (int i = 0; i < 1200; ++i) {
+    const double dt = i < 400 ? 1.0 / 60.0 : i < 700 ? 1.0 / 45.0 : i < 800 ? jitter(random) : 1.0 / 90.0;
+    t += dt;
+    const sf::Point z{1000.0 * std::sin(0.7 * t) + noise(random), 500.0 * std::cos(t) + noise(random)};
+    tracker.observe(t, z);
+    reference.observe(t, z);
+    if (i < 2) continue;
+    SCOPED_TRACE(i);
+    EXPECT_NEAR(tracker.velocity().x, reference.x[0][1], 1e-6);
+    EXPECT_NEAR(tracker.velocity().y, reference.x[1][1], 1e-6);
+    EXPECT_NEAR(tracker.acceleration().x, reference.x[0][2], 1e-5);
+    EXPECT_NEAR(tracker.position().y, reference.x[1][0], 1e-7);
+  }
 }
 
 TEST(RobotTracker, ATimeGoingBackOrAResetStartsANewTrack) {
