@@ -26,6 +26,7 @@ TEST(RobotTracker, AConstantVelocityIsExactFromTheSecondObservation) {
     EXPECT_NEAR(tracker.velocity().x, 1500.0, 1e-6);
     EXPECT_NEAR(tracker.velocity().y, -400.0, 1e-6);
     EXPECT_NEAR(tracker.acceleration().x, 0.0, 1e-6);
+    EXPECT_NEAR(tracker.acceleration().y, 0.0, 1e-6);
   }
   EXPECT_EQ(tracker.observations(), 120);
   EXPECT_DOUBLE_EQ(tracker.first_s(), 10.0);
@@ -179,6 +180,10 @@ TEST(RobotTracker, ATimeGoingBackOrAResetStartsANewTrack) {
   tracker.observe(0.6, {5000.0, 50.0});
   EXPECT_NEAR(tracker.velocity().x, 0.0, 1e-6);
   EXPECT_NEAR(tracker.velocity().y, 500.0, 1e-6);
+  // At the same instant again: no time passed, so no velocity can come of it; a new track.
+  tracker.observe(0.6, {5100.0, 50.0});
+  EXPECT_EQ(tracker.observations(), 1);
+  EXPECT_DOUBLE_EQ(tracker.position().x, 5100.0);
   tracker.reset();
   EXPECT_EQ(tracker.observations(), 0);
   tracker.observe(0.7, {0.0, 0.0});

@@ -379,8 +379,8 @@ class MotionHistory {
  private:
   // One robot's entries in a ring buffer addressed by absolute sequence numbers, with cursors
   // that only move forward (time does): every frame adds an entry per robot, and the searches
-  // for "one velocity window ago" and "the start of the settle windows" are a step or two, not
-  // a binary search.
+  // for "the start of the settle windows" and "k steps before" are a step or two, not a binary
+  // search.
   struct Track {
     std::vector<Entry> ring;  // a power-of-two size
     // The entries' times again, packed: the cursors' scans read only these, from a few cache
