@@ -611,10 +611,6 @@ void MotionHistory::add(const Formation& formation) {
     entry.position = robot.position;
     MotionKinematics& k = entry.kinematics;
     k.team_velocity = {};  // set after the loop if any robot of the formation has a velocity
-    if (track.tracker.observations() > 0 &&
-        t - track.tracker.last_s() > RobotTracker::forget_after_s) {
-      track.tracker.reset();
-    }
     track.tracker.observe(t, robot.position);
     // A velocity once the track has gone on for half the velocity window: before that the
     // filter has seen too little of the robot to tell its motion from the vision's noise.

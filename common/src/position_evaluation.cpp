@@ -50,11 +50,12 @@ void RobotTracks::add(const Formation& formation) {
     Followed& followed = followed_[robot.robot_id];
     RobotTracker& tracker = followed.tracker;
     if (robot.observed) {
-      // A robot carried over from an earlier frame (not observed) tells the tracker nothing.
+      // A robot carried over from an earlier frame (not observed) tells the tracker nothing. A
+      // jump starts a new track here as in MotionHistory (time going back and long gaps the
+      // tracker handles itself).
       if (tracker.observations() > 0 &&
-          (t <= tracker.last_s() || t - tracker.last_s() > RobotTracker::forget_after_s ||
-           MotionFeatures::is_jump(followed.last_position, tracker.last_s(), robot.feed_position,
-                                   t))) {
+          MotionFeatures::is_jump(followed.last_position, tracker.last_s(), robot.feed_position,
+                                  t)) {
         tracker.reset();
       }
       tracker.observe(t, robot.feed_position);

@@ -12,7 +12,9 @@ bool RobotTrackerSettings::valid() const {
 
 void RobotTracker::observe(double time_s, Point position) {
   const double noise = settings_.position_noise_mm * settings_.position_noise_mm;
-  if (observations_ > 0 && !(time_s > last_s_)) observations_ = 0;
+  if (observations_ > 0 && !(time_s > last_s_ && time_s - last_s_ <= forget_after_s)) {
+    observations_ = 0;
+  }
   if (observations_ == 0) {
     observations_ = 1;
     first_s_ = last_s_ = time_s;

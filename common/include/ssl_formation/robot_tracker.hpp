@@ -15,7 +15,7 @@
 
 #include <array>
 
-#include "ssl_formation/formation.hpp"
+#include "ssl_formation/grid.hpp"
 
 namespace ssl_formation {
 
@@ -41,8 +41,9 @@ class RobotTracker {
 
   // Forgets the robot: the next observation starts a new track.
   void reset() { observations_ = 0; }
-  // Takes a position observed at `time_s` (the data clock). Times must increase within a track;
-  // an observation at or before the last one starts a new track.
+  // Takes a position observed at `time_s` (the data clock). Times must increase within a track:
+  // an observation at or before the last one, or more than forget_after_s after it, starts a
+  // new track.
   void observe(double time_s, Point position);
 
   // Observations since the track started; velocity and acceleration exist from the second.
