@@ -191,6 +191,23 @@ TEST(RobotTracker, ATimeGoingBackOrAResetStartsANewTrack) {
   EXPECT_DOUBLE_EQ(tracker.first_s(), 0.7);
 }
 
+TEST(RobotTracker, ARobotUnseenForMoreThanASecondIsFollowedAnew) {
+  sf::RobotTracker tracker;
+  tracker.observe(1.0, {0.0, 0.0});
+  tracker.observe(1.1, {100.0, 0.0});
+  // Exactly the limit later: the same track.
+  tracker.observe(1.1 + sf::RobotTracker::forget_after_s, {200.0, 0.0});
+  EXPECT_EQ(tracker.observations(), 3);
+  // Beyond it: a new track from this observation, nothing of the old velocity kept.
+  const double later_s = 1.1 + 2.0 * sf::RobotTracker::forget_after_s + 0.01;
+  tracker.observe(later_s, {-3000.0, 500.0});
+  EXPECT_EQ(tracker.observations(), 1);
+  EXPECT_DOUBLE_EQ(tracker.first_s(), later_s);
+  tracker.observe(later_s + 0.1, {-3000.0, 600.0});
+  EXPECT_NEAR(tracker.velocity().x, 0.0, 1e-6);
+  EXPECT_NEAR(tracker.velocity().y, 1000.0, 1e-6);
+}
+
 TEST(RobotTracker, DefaultSettingsAreValidAndBadOnesAreNot) {
   EXPECT_TRUE(sf::RobotTrackerSettings{}.valid());
   sf::RobotTrackerSettings bad;
