@@ -218,6 +218,23 @@ std::uint32_t MotionFeatures::standing_context(double standing_s) {
   return bin;
 }
 
+int MotionFeatures::team_phase(Point centroid) {
+  if (centroid.x < -team_phase_edge_mm) return 0;
+  return centroid.x <= team_phase_edge_mm ? 1 : 2;
+}
+
+int MotionFeatures::zone_of_cell(int cell) {
+  // The cell's centre decides (no cell straddles an edge: the edges are whole metres).
+  const auto band = [](double centre_mm, const auto& edges) {
+    int index = 0;
+    while (index < static_cast<int>(edges.size()) && centre_mm >= edges[index]) ++index;
+    return index;
+  };
+  const double x = (cell / cells_y + 0.5) * cell_mm - cells_x * cell_mm / 2.0;
+  const double y = (cell % cells_y + 0.5) * cell_mm - cells_y * cell_mm / 2.0;
+  return band(x, zone_length_edges_mm) * zones_y + band(y, zone_width_edges_mm);
+}
+
 namespace {
 // Bit fields of a key, low to high: context 24, velocity class 8, cell 12, robot slot 8,
 // level 4, horizon 8.
@@ -249,7 +266,7 @@ MotionKey encode_motion_key(MotionKeyParts p) {
       p.cell = 0;
       p.context = 0;
       [[fallthrough]];
-    case MotionLevel::cell:
+    case MotionLevel::zone:
       p.robot_slot = 0;
       [[fallthrough]];
     case MotionLevel::robot:
@@ -276,6 +293,7 @@ MotionKeyParts decode_motion_key(MotionKey key) {
 
 MotionKey coarser_motion_key(MotionKey key) {
   MotionKeyParts p = decode_motion_key(key);
+  if (p.level == MotionLevel::robot) p.cell = MotionFeatures::zone_of_cell(p.cell);
   if (p.level != MotionLevel::all)
     p.level = static_cast<MotionLevel>(static_cast<int>(p.level) + 1);
   return encode_motion_key(p);
@@ -555,6 +573,7 @@ void MotionHistory::add(const Formation& formation) {
   last_time_s_ = t;
   attacks_ = formation.opponent_attacks;
   const double limit = MotionFeatures::speed_limits_mm_s[0];
+  const int team_phase = MotionFeatures::team_phase(formation.centroid);
   // The team's mean velocity, summed as each robot gets its own (in the formation's order).
   Point team{};
   int with_velocity = 0;
@@ -643,13 +662,14 @@ void MotionHistory::add(const Formation& formation) {
       } else if (!track.still_since_s) {
         track.still_since_s = t;
       }
-      entry.context = standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0;
+      entry.context = MotionFeatures::context(
+          standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0, team_phase);
       team.x += k.velocity.x;
       team.y += k.velocity.y;
       ++with_velocity;
     } else {
       entry.has_velocity = false;
-      entry.context = 0;
+      entry.context = MotionFeatures::context(0, team_phase);
       k.velocity = k.velocity_change = k.to_recent_mean = k.to_settled_mean = {};
     }
     track.time_at(track.end) = t;

@@ -393,7 +393,8 @@ std::optional<std::string> motion_row_problem(MotionKey key, const MotionRow& ro
   if (parts.level != MotionLevel::robot) return std::string("not a robot-level key");
   if (parts.horizon_index >= config.horizons) return std::string("horizon out of range");
   if (parts.robot_slot >= MotionFeatures::robot_slots || parts.cell >= MotionFeatures::cell_count ||
-      parts.velocity_class >= MotionFeatures::velocity_classes) {
+      parts.velocity_class >= MotionFeatures::velocity_classes ||
+      parts.context >= MotionFeatures::context_count) {
     return std::string("feature out of range");
   }
   if (row.n() < 1) return "count " + std::to_string(row.n());

@@ -233,3 +233,26 @@ TEST(MotionFeatures, AJumpIsFurtherThanARobotCanMove) {
 }
 
 }  // namespace
+
+TEST(MotionHistory, AnEntrysContextIsItsStandingTimeAndWhereItsTeamIs) {
+  sf::MotionConfig config;
+  config.step_s = 0.5;
+  sf::MotionHistory history(config);
+  // Robot 0 stands still, robot 1 drives along x at 1 m/s; the team's centroid is 2 m into its
+  // own half for 1.5 s, then 2 m into the half it attacks.
+  const auto at = [](double t, double centroid_x) {
+    sf::Formation formation =
+        formation_at(t, {{{-2000.0, 500.0}, true}, {{-2000.0 + 1000.0 * t, -500.0}, true}});
+    formation.centroid = {centroid_x, 0.0};
+    return formation;
+  };
+  for (int i = 0; i <= 75; ++i) history.add(at(i / 50.0, -2000.0));
+  const std::uint32_t stood_1_5_s = sf::MotionFeatures::standing_context(1.5);
+  EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, 0));
+  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, 0));
+  history.add(at(1.52, 2000.0));
+  // The team moved on; the standing robot's clock did not restart.
+  EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, 2));
+  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, 2));
+  EXPECT_NE(sf::MotionFeatures::context(stood_1_5_s, 0), sf::MotionFeatures::context(stood_1_5_s, 2));
+}

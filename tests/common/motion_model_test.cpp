@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <set>
 
 #include "ssl_formation/motion_predictor.hpp"
 #include "ssl_formation/prediction_pipeline.hpp"
@@ -83,15 +84,54 @@ TEST(MotionFeatures, CellsCoverTheFieldWithItsBoundaryAndClampBeyond) {
   EXPECT_NE(sf::MotionFeatures::cell({0.0, 0.0}), sf::MotionFeatures::cell({600.0, 0.0}));
 }
 
+TEST(MotionFeatures, ZonesSplitTheLengthInQuartersAndTheWidthInACentreLaneAndTwoWings) {
+  const auto zone = [](double x, double y) {
+    return sf::MotionFeatures::zone_of_cell(sf::MotionFeatures::cell({x, y}));
+  };
+  // Cells 3 m apart or less in one zone share it; across an edge they do not.
+  EXPECT_EQ(zone(250.0, -1250.0), zone(2750.0, 1250.0));
+  EXPECT_NE(zone(-250.0, 0.0), zone(250.0, 0.0));        // the halfway line
+  EXPECT_NE(zone(2750.0, 0.0), zone(3250.0, 0.0));       // a quarter of the length
+  EXPECT_NE(zone(1000.0, 1250.0), zone(1000.0, 1750.0));  // the centre lane and a wing
+  EXPECT_NE(zone(1000.0, -1250.0), zone(1000.0, -1750.0));
+  // The edge zones reach beyond the field; every zone is numbered below zone_count.
+  EXPECT_EQ(zone(-99999.0, -99999.0), zone(-3250.0, -1750.0));
+  EXPECT_EQ(zone(99999.0, 99999.0), sf::MotionFeatures::zone_count - 1);
+  std::set<int> zones;
+  for (int cell = 0; cell < sf::MotionFeatures::cell_count; ++cell) {
+    zones.insert(sf::MotionFeatures::zone_of_cell(cell));
+  }
+  EXPECT_EQ(zones.size(), static_cast<std::size_t>(sf::MotionFeatures::zone_count));
+  EXPECT_EQ(*zones.rbegin(), sf::MotionFeatures::zone_count - 1);
+}
+
+TEST(MotionFeatures, TheContextTellsTheStandingTimeAndTheTeamPhaseApart) {
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-1500.0, 0.0}), 0);  // back in its own half
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-900.0, 2000.0}), 1);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({900.0, -2000.0}), 1);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}), 2);  // into the half it attacks
+  std::set<std::uint32_t> contexts;
+  for (int phase = 0; phase < sf::MotionFeatures::team_phases; ++phase) {
+    for (std::uint32_t standing = 0; standing < sf::MotionFeatures::standing_contexts;
+         ++standing) {
+      contexts.insert(sf::MotionFeatures::context(standing, phase));
+    }
+  }
+  EXPECT_EQ(contexts.size(), sf::MotionFeatures::context_count);
+  EXPECT_EQ(*contexts.rbegin(), sf::MotionFeatures::context_count - 1);
+  EXPECT_EQ(sf::MotionFeatures::standing_context(99.0), sf::MotionFeatures::standing_contexts - 1);
+}
+
 TEST(MotionKey, EachLevelKeepsItsFeaturesAndTheCoarserKeyDropsThem) {
   const sf::MotionKey robot = key_of(3, {1000.0, 500.0}, {1000.0, 0.0});
   const sf::MotionKeyParts parts = sf::decode_motion_key(robot);
   EXPECT_EQ(parts.level, sf::MotionLevel::robot);
   EXPECT_EQ(parts.robot_slot, 3);
-  const sf::MotionKeyParts cell = sf::decode_motion_key(sf::coarser_motion_key(robot));
-  EXPECT_EQ(cell.level, sf::MotionLevel::cell);
-  EXPECT_EQ(cell.robot_slot, 0);
-  EXPECT_EQ(cell.cell, parts.cell);
+  const sf::MotionKeyParts zone = sf::decode_motion_key(sf::coarser_motion_key(robot));
+  EXPECT_EQ(zone.level, sf::MotionLevel::zone);
+  EXPECT_EQ(zone.robot_slot, 0);
+  EXPECT_EQ(zone.cell, sf::MotionFeatures::zone_of_cell(parts.cell));
+  EXPECT_EQ(zone.velocity_class, parts.velocity_class);
   const sf::MotionKeyParts velocity =
       sf::decode_motion_key(sf::coarser_motion_key(sf::coarser_motion_key(robot)));
   EXPECT_EQ(velocity.level, sf::MotionLevel::velocity);
@@ -185,7 +225,7 @@ TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
 
   // A robot never seen in that cell gets the cell's row (every robot): it stops.
   const sf::MotionForecast stranger = model.forecast(0, moving_robot(9, position, velocity));
-  EXPECT_EQ(stranger.level, sf::MotionLevel::cell);
+  EXPECT_EQ(stranger.level, sf::MotionLevel::zone);
   EXPECT_LT(std::hypot(stranger.position.x - position.x, stranger.position.y - position.y), 30.0);
 
   // Elsewhere on the field only the velocity class is known.

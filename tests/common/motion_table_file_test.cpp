@@ -450,12 +450,22 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
     expect_corrupt(bytes, "rows out of order");
   }
   {
-    Bytes bytes = saved.bytes;  // the first row's key at the cell level
+    Bytes bytes = saved.bytes;  // the first row's key at the zone level
     const MotionKey key = get_u64(bytes, m + rows_offset);
     MotionKeyParts parts = decode_motion_key(key);
-    parts.level = MotionLevel::cell;
+    parts.level = MotionLevel::zone;
     put_u64(bytes, m + rows_offset, encode_motion_key(parts));
     expect_corrupt(bytes, "motion row 0");
+  }
+  {
+    Bytes bytes = saved.bytes;  // the last row's context beyond every context there is (the
+                                // key grows, so the rows stay in order)
+    const std::size_t last = motion.rows() - 1;
+    const std::size_t at = m + rows_offset + last * row_size;
+    MotionKeyParts parts = decode_motion_key(get_u64(bytes, at));
+    parts.context = MotionFeatures::context_count;
+    put_u64(bytes, at, encode_motion_key(parts));
+    expect_corrupt(bytes, "motion row " + std::to_string(last) + ": feature out of range");
   }
   {
     Bytes bytes = saved.bytes;  // a row with a count of 0

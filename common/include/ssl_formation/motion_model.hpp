@@ -3,13 +3,14 @@
 // counting. Beyond the paper's cells it sees each robot's velocity (from its last frames) and
 // learns, per state, how the robot's real displacement differs from damped constant velocity.
 //
-// A state is (robot id, 0.5 m feature cell, velocity class): 8 directions x 3 speeds plus
-// "standing". Each row holds integer sums (count, displacement, extrapolated velocity and their
-// products), so training is counting, tables merge by adding, and merging two tables equals
-// training on both streams bit for bit. Prediction backs off from the robot's own row to the
-// cell's row (every robot), to the velocity class's row, to damped constant velocity, each row
-// shrunk towards the coarser one by its count: a young table predicts like damped constant
-// velocity and an old one like what the opponent really does.
+// A state is (robot id, 0.5 m feature cell, velocity class, context): 8 directions x 3 speeds
+// plus "standing"; the context is how long a standing robot has stood and where its team is
+// (MotionFeatures::context). Each row holds integer sums (count, displacement, extrapolated
+// velocity and their products), so training is counting, tables merge by adding, and merging two
+// tables equals training on both streams bit for bit. Prediction backs off from the robot's own
+// row to its 3 m zone's row (every robot), to the velocity class's row, to damped constant
+// velocity, each row shrunk towards the coarser one by its count: a young table predicts like
+// damped constant velocity and an old one like what the opponent really does.
 //
 // Probabilities and radii are calibrated on held-out data kept inside the table: every
 // `calibration_block_s` of the data clock whose hash falls in one `calibration_one_in` is held
@@ -91,6 +92,30 @@ struct MotionFeatures {
   // 1 + standing_limits_s.size(); 0 is a moving robot's.
   static constexpr std::array<double, 3> standing_limits_s{0.5, 1.0, 2.0};
   static std::uint32_t standing_context(double standing_s);
+  static constexpr std::uint32_t standing_contexts = 2 + standing_limits_s.size();
+  // Where the team is, from its centroid (normalised): 0 more than `team_phase_edge_mm` into its
+  // own half (defending), 1 about the halfway line, 2 as far into the half it attacks. A robot
+  // standing in the same spot leaves it for different places when its team attacks and when
+  // it falls back.
+  static constexpr double team_phase_edge_mm = 1000.0;
+  static constexpr int team_phases = 3;
+  static int team_phase(Point normalised_centroid);
+  // A row's context: the standing context and the team phase.
+  static constexpr std::uint32_t context_count = standing_contexts * team_phases;
+  static std::uint32_t context(std::uint32_t standing_context, int team_phase) {
+    return standing_context + standing_contexts * static_cast<std::uint32_t>(team_phase);
+  }
+  // Zones: where every robot's rows are pooled, 3 m across, numbered like cells. The length in
+  // quarters (own half in two, the attacked half in two) and the width in a centre lane and two
+  // wings, on a Division A field; beyond them, the edge zones. Set plays put each role at places
+  // that vary by a few hundred millimetres from one run to the next: the 0.5 m cells split what
+  // one role does there among many rows, and pooling every robot over a zone gathers it again.
+  static constexpr std::array<double, 3> zone_length_edges_mm{-3000.0, 0.0, 3000.0};
+  static constexpr std::array<double, 2> zone_width_edges_mm{-1500.0, 1500.0};
+  static constexpr int zones_y = static_cast<int>(zone_width_edges_mm.size()) + 1;
+  static constexpr int zone_count =
+      (static_cast<int>(zone_length_edges_mm.size()) + 1) * zones_y;
+  static int zone_of_cell(int cell);
   static int robot_slot(std::uint32_t robot_id) {
     return robot_id < 16 ? static_cast<int>(robot_id) : 16;
   }
@@ -111,8 +136,9 @@ struct MotionFeatures {
   }
 };
 
-// The back-off levels, finest first.
-enum class MotionLevel : std::uint8_t { robot = 0, cell = 1, velocity = 2, all = 3 };
+// The back-off levels, finest first: the robot's own row (cell, velocity class, context), every
+// robot's in the cell's zone (velocity class, context), every robot's with the velocity class, all.
+enum class MotionLevel : std::uint8_t { robot = 0, zone = 1, velocity = 2, all = 3 };
 inline constexpr int motion_levels = 4;
 
 // A row's key: the horizon, the level and the features that level keeps (the others zero).
@@ -120,9 +146,9 @@ struct MotionKeyParts {
   int horizon_index = 0;
   MotionLevel level = MotionLevel::robot;
   int robot_slot = 0;
-  int cell = 0;
+  int cell = 0;  // the zone (MotionFeatures::zone_of_cell) at the zone level
   int velocity_class = 0;
-  std::uint32_t context = 0;  // how long the robot has stood (MotionFeatures::standing_context)
+  std::uint32_t context = 0;  // MotionFeatures::context
   friend bool operator==(const MotionKeyParts&, const MotionKeyParts&) = default;
 };
 using MotionKey = std::uint64_t;
@@ -353,7 +379,7 @@ class MotionHistory {
     Point position;
     MotionKinematics kinematics;  // valid if has_velocity
     bool has_velocity = false;
-    std::uint32_t context = 0;  // MotionFeatures::standing_context, 0 when moving
+    std::uint32_t context = 0;  // MotionFeatures::context
   };
   // Records a formation: an entry at its time for each robot observed in it (a robot carried
   // over from an earlier frame keeps its latest entry, and its velocity still counts in the
