@@ -185,6 +185,13 @@ int MotionFeatures::cell(Point p) {
   return x * cells_y + y;
 }
 
+int MotionFeatures::team_phase(Point centroid, Point team_velocity) {
+  const int place = centroid.x < -team_place_edge_mm ? 0 : centroid.x <= team_place_edge_mm ? 1 : 2;
+  const bool moving = team_velocity.x * team_velocity.x + team_velocity.y * team_velocity.y >=
+                      speed_limits_mm_s[0] * speed_limits_mm_s[0];
+  return place * 2 + (moving ? 1 : 0);
+}
+
 int MotionFeatures::velocity_class(Point v) {
   const double speed_squared = v.x * v.x + v.y * v.y;
   int band = 0;
@@ -216,11 +223,6 @@ std::uint32_t MotionFeatures::standing_context(double standing_s) {
     ++bin;
   }
   return bin;
-}
-
-int MotionFeatures::team_phase(Point centroid) {
-  if (centroid.x < -team_phase_edge_mm) return 0;
-  return centroid.x <= team_phase_edge_mm ? 1 : 2;
 }
 
 int MotionFeatures::zone_of_cell(int cell) {
@@ -573,7 +575,6 @@ void MotionHistory::add(const Formation& formation) {
   last_time_s_ = t;
   attacks_ = formation.opponent_attacks;
   const double limit = MotionFeatures::speed_limits_mm_s[0];
-  const int team_phase = MotionFeatures::team_phase(formation.centroid);
   // The team's mean velocity, summed as each robot gets its own (in the formation's order).
   Point team{};
   int with_velocity = 0;
@@ -662,26 +663,28 @@ void MotionHistory::add(const Formation& formation) {
       } else if (!track.still_since_s) {
         track.still_since_s = t;
       }
-      entry.context = MotionFeatures::context(
-          standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0, team_phase);
+      // The standing context for now: the team's phase is added below, once the team's mean
+      // velocity is known.
+      entry.context = standing ? MotionFeatures::standing_context(t - *track.still_since_s) : 0;
       team.x += k.velocity.x;
       team.y += k.velocity.y;
       ++with_velocity;
     } else {
       entry.has_velocity = false;
-      entry.context = MotionFeatures::context(0, team_phase);
+      entry.context = 0;
       k.velocity = k.velocity_change = k.to_recent_mean = k.to_settled_mean = {};
     }
     track.time_at(track.end) = t;
     ++track.end;
   }
-  // The team's mean velocity goes into every new entry, now that each robot has its own.
-  if (with_velocity == 0) return;
-  team = {team.x / with_velocity, team.y / with_velocity};
+  // The team's mean velocity and phase go into every new entry, now that each robot has its own.
+  if (with_velocity > 0) team = {team.x / with_velocity, team.y / with_velocity};
+  const int team_phase = MotionFeatures::team_phase(formation.centroid, team);
   for (const FormationRobot& robot : formation.robots) {
     if (!robot.observed) continue;
-    Track& track = tracks_[robot.robot_id];
-    track.at(track.end - 1).kinematics.team_velocity = team;
+    Entry& entry = tracks_[robot.robot_id].at(tracks_[robot.robot_id].end - 1);
+    entry.kinematics.team_velocity = team;
+    entry.context = MotionFeatures::context(entry.context, team_phase);
   }
 }
 

@@ -247,12 +247,26 @@ TEST(MotionHistory, AnEntrysContextIsItsStandingTimeAndWhereItsTeamIs) {
     return formation;
   };
   for (int i = 0; i <= 75; ++i) history.add(at(i / 50.0, -2000.0));
+  // The team's mean velocity is 500 mm/s: on the move.
   const std::uint32_t stood_1_5_s = sf::MotionFeatures::standing_context(1.5);
-  EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, 0));
-  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, 0));
+  const int behind_moving = sf::MotionFeatures::team_phase({-2000.0, 0.0}, {500.0, 0.0});
+  EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, behind_moving));
+  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, behind_moving));
   history.add(at(1.52, 2000.0));
   // The team moved on; the standing robot's clock did not restart.
-  EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, 2));
-  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, 2));
-  EXPECT_NE(sf::MotionFeatures::context(stood_1_5_s, 0), sf::MotionFeatures::context(stood_1_5_s, 2));
+  const int ahead_moving = sf::MotionFeatures::team_phase({2000.0, 0.0}, {500.0, 0.0});
+  EXPECT_NE(ahead_moving, behind_moving);
+  EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, ahead_moving));
+  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, ahead_moving));
+  // When the driving robot stops too, the team stands: another phase.
+  for (int i = 77; i <= 150; ++i) {
+    sf::Formation formation =
+        formation_at(i / 50.0, {{{-2000.0, 500.0}, true}, {{-480.0, -500.0}, true}});
+    formation.centroid = {2000.0, 0.0};
+    history.add(formation);
+  }
+  const int ahead_standing = sf::MotionFeatures::team_phase({2000.0, 0.0}, {0.0, 0.0});
+  EXPECT_NE(ahead_standing, ahead_moving);
+  EXPECT_EQ(history.latest(0)->context,
+            sf::MotionFeatures::context(sf::MotionFeatures::standing_context(3.0), ahead_standing));
 }

@@ -106,10 +106,14 @@ TEST(MotionFeatures, ZonesSplitTheLengthInQuartersAndTheWidthInACentreLaneAndTwo
 }
 
 TEST(MotionFeatures, TheContextTellsTheStandingTimeAndTheTeamPhaseApart) {
-  EXPECT_EQ(sf::MotionFeatures::team_phase({-1500.0, 0.0}), 0);  // back in its own half
-  EXPECT_EQ(sf::MotionFeatures::team_phase({-900.0, 2000.0}), 1);
-  EXPECT_EQ(sf::MotionFeatures::team_phase({900.0, -2000.0}), 1);
-  EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}), 2);  // into the half it attacks
+  const sf::Point still{100.0, -100.0}, moving{0.0, 300.0};
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-1500.0, 0.0}, still), 0);  // back in its own half
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-1500.0, 0.0}, moving), 1);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-900.0, 2000.0}, still), 2);  // about the halfway line
+  EXPECT_EQ(sf::MotionFeatures::team_phase({900.0, -2000.0}, still), 2);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({900.0, -2000.0}, {-260.0, 0.0}), 3);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}, still), 4);  // into the half it attacks
+  EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}, moving), 5);
   std::set<std::uint32_t> contexts;
   for (int phase = 0; phase < sf::MotionFeatures::team_phases; ++phase) {
     for (std::uint32_t standing = 0; standing < sf::MotionFeatures::standing_contexts;

@@ -93,13 +93,14 @@ struct MotionFeatures {
   static constexpr std::array<double, 3> standing_limits_s{0.5, 1.0, 2.0};
   static std::uint32_t standing_context(double standing_s);
   static constexpr std::uint32_t standing_contexts = 2 + standing_limits_s.size();
-  // Where the team is, from its centroid (normalised): 0 more than `team_phase_edge_mm` into its
-  // own half (defending), 1 about the halfway line, 2 as far into the half it attacks. A robot
-  // standing in the same spot leaves it for different places when its team attacks and when
-  // it falls back.
-  static constexpr double team_phase_edge_mm = 1000.0;
-  static constexpr int team_phases = 3;
-  static int team_phase(Point normalised_centroid);
+  // Where the team is and whether it is on the move: its centroid (normalised) more than
+  // `team_place_edge_mm` into its own half, about the halfway line, or as far into the half it
+  // attacks; and its mean velocity above the first speed limit (the team leaving its set-play
+  // places together) or not. A robot standing in one spot leaves it for other places when its
+  // team attacks than when it falls back, and sooner when the others have set off.
+  static constexpr double team_place_edge_mm = 1000.0;
+  static constexpr int team_phases = 3 * 2;
+  static int team_phase(Point normalised_centroid, Point team_velocity_mm_s);
   // A row's context: the standing context and the team phase.
   static constexpr std::uint32_t context_count = standing_contexts * team_phases;
   static std::uint32_t context(std::uint32_t standing_context, int team_phase) {
