@@ -110,7 +110,7 @@ sf::net::InterfaceChoice interface_option(const std::string& text) {
 
 // The paper's model: a formation every `step_s` of the simulated opponent, a version-1 table.
 // The motion model (what the predictor runs by default): the same opponent sampled at 60 Hz, a
-// formation per frame, into a version-2 table of the predictor's default motion step.
+// formation per frame, into a version-3 table of the predictor's default motion step.
 int make_table(const std::string& path, std::uint64_t formations, std::uint64_t seed,
                double step_s, sf::ModelKind model) {
   const bool motion = model == sf::ModelKind::motion;
@@ -423,7 +423,7 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
 
   // The predictor's per-packet path: net::VisionReceiver's decode, then the PredictionPipeline
   // and the encoding the daemon runs, with their buffers reused the same way.
-  // The model the table serves (a version-2 table: the motion model, the daemon's default), at
+  // The model the table serves (a version-3 table: the motion model, the daemon's default), at
   // the table's own step; `step_s` is the data-clock time between packets.
   sf::PredictionConfig config;
   config.sampler.grid = stored.table.grid();
@@ -618,7 +618,7 @@ int main(int argc, char** argv) {
         "frames; the predictor's --step for the paper's); make-table --model paper: the "
         "table's step")(
         "model", po::value(&model)->default_value(model),
-        "make-table: motion (a version-2 table at the predictor's default motion step, trained "
+        "make-table: motion (a version-3 table at the predictor's default motion step, trained "
         "on 60 Hz frames) or paper (a version-1 table)")(
         "spin-us", po::value(&latency.spin_us)->default_value(latency.spin_us),
         "latency: microseconds spun before each send instead of slept")(

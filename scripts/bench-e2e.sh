@@ -96,7 +96,7 @@ row() { rows+=("$(printf '%-40s %7s %6s %5s %8s %8s %8s %8s  %-22s %s' "$@")"); 
 # judge OK: sets $result to PASS (OK = 1) or FAIL, and counts failures.
 judge() { if [ "$1" = 1 ]; then result=PASS; else result=FAIL; failures=$((failures + 1)); fi; }
 
-# The predictor runs its default model, the motion model: a version-2 table at its default
+# The predictor runs its default model, the motion model: a version-3 table at its default
 # step, and vision packets one 60 Hz frame apart on the data clock (frame sampling: a prediction
 # at every packet, every robot with a velocity).
 frame_s=0.0166667

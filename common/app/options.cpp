@@ -80,7 +80,7 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "its goalkeeper stands; follows a change of ends)")(
       "model", po::value(&model.model)->default_value(model.model),
       "motion: positions in mm with calibrated radii, learned from every frame (needs a "
-      "version-2 table); paper: the paper's Markov model on cells")(
+      "version-3 table); paper: the paper's Markov model on cells")(
       "sampling", po::value(&model.sampling)->default_value(model.sampling),
       "step: a formation every --step (the paper's protocol); frame: a formation at every frame, "
       "each robot's previous cell from --step earlier; auto: frame for --model motion, step for "

@@ -226,7 +226,7 @@ std::uint32_t MotionFeatures::standing_context(double standing_s) {
 }
 
 int MotionFeatures::zone_of_cell(int cell) {
-  // The cell's centre decides (no cell straddles an edge: the edges are whole metres).
+  // The cell's centre decides (no cell straddles an edge: the edges are multiples of cell_mm).
   const auto band = [](double centre_mm, const auto& edges) {
     int index = 0;
     while (index < static_cast<int>(edges.size()) && centre_mm >= edges[index]) ++index;

@@ -4,7 +4,6 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 
 namespace ssl_formation {
@@ -63,7 +62,6 @@ std::uint64_t next_model_id() {
 MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
                          MotionModelSettings settings)
     : config_(table.config()), settings_(settings), id_(next_model_id()) {
-  if (const char* k = std::getenv("SSLF_EXP_K")) settings_.shrinkage = std::atof(k);
   const int horizons = config_.horizons;
   horizon_.resize(static_cast<std::size_t>(horizons));
 

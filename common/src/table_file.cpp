@@ -330,7 +330,7 @@ BodyProblem read_sparse_body(ChunkReader& reader, const Header& header, Transiti
   return {};
 }
 
-// ---- The motion section (version 2)
+// ---- The motion section (version 3)
 
 // The fields of a row and of a calibration instance, in file order, are MotionRow::sums and
 // motion_instance_values (motion_model.hpp; motion_table_file_test.cpp checks that no field of
@@ -526,6 +526,11 @@ BodyProblem read_motion_section(ChunkReader& reader, double header_step_s,
         return {std::nullopt, error};
       }
       sample.push_back(decode_held_out(held_bytes.data()));
+      if (sample.back().instance.context >= MotionFeatures::context_count) {
+        return {where + ": instance " + std::to_string(i) + ": context " +
+                    std::to_string(sample.back().instance.context) + " out of range",
+                0};
+      }
       table.add_held_out(h, sample.back());
     }
     // Within its capacity every instance is kept, so the file's order must be the table's
@@ -708,6 +713,14 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                             " bytes, the header is cut off before the format version");
   }
   const std::uint32_t version = get_u32(&header_bytes[version_offset]);
+  if (version == table_file_retired_motion_version) {
+    return load_failure(TableFileError::wrong_version, path,
+                        "format version " + std::to_string(version) +
+                            ": a motion table keyed by the features before 2026-12-03 (0.5 m "
+                            "cells for every robot, no team phase), which this program would "
+                            "misread; train it again from its logs (version " +
+                            std::to_string(table_file_motion_version) + ")");
+  }
   if (version != table_file_version && version != table_file_motion_version) {
     return load_failure(TableFileError::wrong_version, path,
                         "format version " + std::to_string(version) +

@@ -238,35 +238,51 @@ TEST(MotionHistory, AnEntrysContextIsItsStandingTimeAndWhereItsTeamIs) {
   sf::MotionConfig config;
   config.step_s = 0.5;
   sf::MotionHistory history(config);
-  // Robot 0 stands still, robot 1 drives along x at 1 m/s; the team's centroid is 2 m into its
-  // own half for 1.5 s, then 2 m into the half it attacks.
+  // Robot 0 stands still, robots 1 and 2 drive along x at 0.4 m/s: the team's mean velocity is
+  // 267 mm/s, on the move. The team's centroid is 2 m into its own half for 1.5 s, then 2 m into
+  // the half it attacks.
   const auto at = [](double t, double centroid_x) {
     sf::Formation formation =
-        formation_at(t, {{{-2000.0, 500.0}, true}, {{-2000.0 + 1000.0 * t, -500.0}, true}});
+        formation_at(t, {{{-2000.0, 500.0}, true},
+                         {{-2000.0 + 400.0 * t, -500.0}, true},
+                         {{-2000.0 + 400.0 * t, 1500.0}, true}});
     formation.centroid = {centroid_x, 0.0};
     return formation;
   };
   for (int i = 0; i <= 75; ++i) history.add(at(i / 50.0, -2000.0));
-  // The team's mean velocity is 500 mm/s: on the move.
+  // The team's mean velocity is 267 mm/s: on the move.
   const std::uint32_t stood_1_5_s = sf::MotionFeatures::standing_context(1.5);
-  const int behind_moving = sf::MotionFeatures::team_phase({-2000.0, 0.0}, {500.0, 0.0});
+  const int behind_moving = sf::MotionFeatures::team_phase({-2000.0, 0.0}, {267.0, 0.0});
   EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, behind_moving));
   EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, behind_moving));
   history.add(at(1.52, 2000.0));
   // The team moved on; the standing robot's clock did not restart.
-  const int ahead_moving = sf::MotionFeatures::team_phase({2000.0, 0.0}, {500.0, 0.0});
+  const int ahead_moving = sf::MotionFeatures::team_phase({2000.0, 0.0}, {267.0, 0.0});
   EXPECT_NE(ahead_moving, behind_moving);
   EXPECT_EQ(history.latest(0)->context, sf::MotionFeatures::context(stood_1_5_s, ahead_moving));
   EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, ahead_moving));
-  // When the driving robot stops too, the team stands: another phase.
+  // When robot 2 stops, the team's mean falls to 133 mm/s (its sum, 400 mm/s, would not): the
+  // team stands, another phase.
   for (int i = 77; i <= 150; ++i) {
-    sf::Formation formation =
-        formation_at(i / 50.0, {{{-2000.0, 500.0}, true}, {{-480.0, -500.0}, true}});
+    const double t = i / 50.0;
+    sf::Formation formation = formation_at(t, {{{-2000.0, 500.0}, true},
+                                               {{-2000.0 + 400.0 * t, -500.0}, true},
+                                               {{-1392.0, 1500.0}, true}});
     formation.centroid = {2000.0, 0.0};
     history.add(formation);
   }
   const int ahead_standing = sf::MotionFeatures::team_phase({2000.0, 0.0}, {0.0, 0.0});
   EXPECT_NE(ahead_standing, ahead_moving);
   EXPECT_EQ(history.latest(0)->context,
+            sf::MotionFeatures::context(sf::MotionFeatures::standing_context(3.0), ahead_standing));
+  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, ahead_standing));
+  // A robot carried over (not observed) keeps the context of its last observation.
+  sf::Formation carried = formation_at(3.02, {{{-2000.0, 500.0}, true},
+                                              {{-2000.0 + 400.0 * 3.02, -500.0}, false},
+                                              {{-1392.0, 1500.0}, true}});
+  carried.centroid = {-2000.0, 0.0};
+  history.add(carried);
+  EXPECT_EQ(history.latest(1)->context, sf::MotionFeatures::context(0, ahead_standing));
+  EXPECT_NE(history.latest(0)->context,
             sf::MotionFeatures::context(sf::MotionFeatures::standing_context(3.0), ahead_standing));
 }

@@ -107,6 +107,11 @@ TEST(MotionFeatures, ZonesSplitTheLengthInQuartersAndTheWidthInACentreLaneAndTwo
 
 TEST(MotionFeatures, TheContextTellsTheStandingTimeAndTheTeamPhaseApart) {
   const sf::Point still{100.0, -100.0}, moving{0.0, 300.0};
+  // The edges: 1 m either side of the halfway line, and 250 mm/s (the first speed limit).
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-1000.0, 0.0}, {249.0, 0.0}), 2);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({-1000.1, 0.0}, {250.0, 0.0}), 1);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({1000.0, 0.0}, {0.0, -250.0}), 3);
+  EXPECT_EQ(sf::MotionFeatures::team_phase({1000.1, 0.0}, {0.0, 0.0}), 4);
   EXPECT_EQ(sf::MotionFeatures::team_phase({-1500.0, 0.0}, still), 0);  // back in its own half
   EXPECT_EQ(sf::MotionFeatures::team_phase({-1500.0, 0.0}, moving), 1);
   EXPECT_EQ(sf::MotionFeatures::team_phase({-900.0, 2000.0}, still), 2);  // about the halfway line
@@ -204,8 +209,8 @@ TEST(MotionModel, WorkedExampleOfAPositionAndItsRadii) {
 
 TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
   const sf::Point position{-2000.0, 1000.0}, velocity{1000.0, 0.0};
-  // Every robot in this cell and velocity class stopped dead (displacement 0), thousands of
-  // times; robot 7 was seen twice going 800 mm sideways.
+  // Robot 2 in this cell and velocity class stopped dead (displacement 0), thousands of times;
+  // robot 7 was seen twice going 800 mm sideways.
   sf::MotionTable table(one_second());
   table.add_row(key_of(2, position, velocity), row_of(5000, velocity, {0.0, 0.0}));
   const sf::MotionRow rare = row_of(2, velocity, {0.0, 800.0});
@@ -214,8 +219,8 @@ TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
 
   const sf::MotionForecast few = model.forecast(0, moving_robot(7, position, velocity));
   EXPECT_EQ(few.level, sf::MotionLevel::robot);
-  // Two instances against a shrinkage of 240: the robot's own row barely moves the forecast
-  // off the cell's (which says: it stops).
+  // Two instances against a shrinkage of 60: the robot's own row barely moves the forecast off
+  // the zone's (every robot's there, which says: it stops).
   EXPECT_LT(std::abs(few.position.y - position.y), 50.0);
   EXPECT_LT(std::abs(few.position.x - position.x), 50.0);
 
@@ -227,10 +232,21 @@ TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
   const sf::MotionForecast many = rich_model.forecast(0, moving_robot(7, position, velocity));
   EXPECT_NEAR(many.position.y - position.y, 800.0, 20.0);
 
-  // A robot never seen in that cell gets the cell's row (every robot): it stops.
+  // A robot never seen in that cell gets the zone's row (every robot's in the 3 m zone): it
+  // stops.
   const sf::MotionForecast stranger = model.forecast(0, moving_robot(9, position, velocity));
   EXPECT_EQ(stranger.level, sf::MotionLevel::zone);
   EXPECT_LT(std::hypot(stranger.position.x - position.x, stranger.position.y - position.y), 30.0);
+
+  // So does a robot in another cell of the same zone, 2.5 m away: it stops too.
+  const sf::Point same_zone{-500.0, -1000.0};
+  ASSERT_NE(sf::MotionFeatures::cell(same_zone), sf::MotionFeatures::cell(position));
+  ASSERT_EQ(sf::MotionFeatures::zone_of_cell(sf::MotionFeatures::cell(same_zone)),
+            sf::MotionFeatures::zone_of_cell(sf::MotionFeatures::cell(position)));
+  const sf::MotionForecast neighbour = model.forecast(0, moving_robot(2, same_zone, velocity));
+  EXPECT_EQ(neighbour.level, sf::MotionLevel::zone);
+  EXPECT_LT(std::hypot(neighbour.position.x - same_zone.x, neighbour.position.y - same_zone.y),
+            30.0);
 
   // Elsewhere on the field only the velocity class is known.
   const sf::MotionForecast far = model.forecast(0, moving_robot(9, {4000.0, -3000.0}, velocity));

@@ -1,4 +1,4 @@
-// The table file's version 2: the motion model's table after the paper's counts (the layout in
+// The table file's version 3: the motion model's table after the paper's counts (the layout in
 // table_file.hpp). Version 1 stays as it was; table_file_test.cpp holds that to its bytes.
 
 #include <gtest/gtest.h>
@@ -139,7 +139,7 @@ class MotionTableFile : public ::testing::Test {
     return result;
   }
 
-  // A saved version-2 file of a small trained table and where its motion section starts.
+  // A saved version-3 file of a small trained table and where its motion section starts.
   struct Saved {
     Bytes bytes;
     std::size_t motion_begin = 0;
@@ -258,7 +258,7 @@ TEST_F(MotionTableFile, EmptyMotionTableRoundTrips) {
   EXPECT_EQ(loaded->motion->instances(), 0u);
 }
 
-TEST_F(MotionTableFile, VersionTwoIsVersionOneWithTheMotionSectionAppended) {
+TEST_F(MotionTableFile, VersionThreeIsVersionOneWithTheMotionSectionAppended) {
   const Saved saved = save_trained();
   const Bytes v1 = read_bytes(dir_ / "v1.bin");
   EXPECT_EQ(get_u32(v1, version_offset), table_file_version);
@@ -296,7 +296,7 @@ TEST_F(MotionTableFile, VersionOneFilesLoadWithoutMotion) {
   EXPECT_FALSE(v1->motion.has_value());
   EXPECT_EQ(entries_of(v1->table), entries_of(saved.stored.table));
 
-  // A version-1 file written before version 2 existed.
+  // A version-1 file written before motion tables existed.
   const LoadResult golden = load_table(fs::path(SSLF_TEST_DATA_DIR) / "step-golden-6x4.bin");
   ASSERT_TRUE(golden) << message_of(golden);
   EXPECT_FALSE(golden->motion.has_value());
@@ -320,7 +320,7 @@ TEST_F(MotionTableFile, TruncatedMotionSectionIsTruncated) {
         << n << " of " << size << " bytes: " << message_of(result);
     EXPECT_NE(message_of(result).find("truncated"), std::string::npos) << message_of(result);
   }
-  // Cut inside the counts: the header's size is a lower bound for version 2.
+  // Cut inside the counts: the header's size is a lower bound for version 3.
   const Bytes in_counts(saved.bytes.begin(), saved.bytes.begin() + header_size + 10);
   const LoadResult result = load_bytes(in_counts);
   EXPECT_EQ(kind_of(result), TableFileError::truncated) << message_of(result);
@@ -376,13 +376,26 @@ TEST_F(MotionTableFile, TrailingBytesAreCorrupt) {
 TEST_F(MotionTableFile, WrongVersionWithAMotionSection) {
   Saved saved = save_trained();
   Bytes bytes = saved.bytes;
-  put_u32(bytes, version_offset, 3);
+  put_u32(bytes, version_offset, 4);
   const LoadResult result = load_bytes(bytes);
   EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 3"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 4"), std::string::npos) << message_of(result);
 }
 
-TEST_F(MotionTableFile, VersionOneBytesMarkedVersionTwoAreRejected) {
+// Version 2 had version 3's layout, but its rows were keyed by the earlier features: read as
+// version 3 they would load and mean something else.
+TEST_F(MotionTableFile, VersionTwoMotionTablesAreRefusedWithTheReason) {
+  Saved saved = save_trained();
+  Bytes bytes = saved.bytes;
+  put_u32(bytes, version_offset, table_file_retired_motion_version);
+  reseal(bytes);
+  const LoadResult result = load_bytes(bytes);
+  EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 2"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("train it again"), std::string::npos) << message_of(result);
+}
+
+TEST_F(MotionTableFile, VersionOneBytesMarkedVersionThreeAreRejected) {
   (void)save_trained();
   Bytes bytes = read_bytes(dir_ / "v1.bin");
   put_u32(bytes, version_offset, table_file_motion_version);
@@ -479,6 +492,13 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
     Bytes bytes = saved.bytes;  // more calibration instances than its capacity
     put_u32(bytes, m + 40, 1);
     expect_corrupt(bytes, "capacity");
+  }
+  {
+    Bytes bytes = saved.bytes;  // the first calibration instance's context beyond every context
+    const std::size_t context_at = calibration_begin + 4 + held_out_size - 4;
+    put_u32(bytes, context_at, MotionFeatures::context_count);
+    expect_corrupt(bytes, "instance 0: context " +
+                              std::to_string(MotionFeatures::context_count) + " out of range");
   }
   {
     Bytes bytes = saved.bytes;  // the first two calibration instances swapped

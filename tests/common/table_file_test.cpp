@@ -302,12 +302,13 @@ TEST_F(TableFile, WrongVersionNamesBothVersions) {
   ASSERT_EQ(get_u32(bytes, version_offset), table_file_version);
   // The checksums are left stale on purpose: load_table checks the version before any checksum,
   // since another version may lay out or checksum its header differently.
-  // Version 2 is the motion model's (motion_table_file_test.cpp); 3 is from a newer program.
-  put_u32(bytes, version_offset, 3);
+  // Version 3 is the motion model's and 2 its retired one (motion_table_file_test.cpp); 4 is
+  // from a newer program.
+  put_u32(bytes, version_offset, 4);
   const LoadResult result = load_bytes(bytes);
   EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 3"), std::string::npos) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 1 or 2"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 4"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 1 or 3"), std::string::npos) << message_of(result);
 }
 
 TEST_F(TableFile, InconsistentContentUnderValidChecksumsIsCorrupt) {

@@ -1,8 +1,8 @@
 // The default model, the motion model, through the real programs on a log of robots that really
-// move (moving_robots.hpp, 60 Hz frames): ssl-trainer --from-log writes a version-2 table equal
+// move (moving_robots.hpp, 60 Hz frames): ssl-trainer --from-log writes a version-3 table equal
 // to the library's training; ssl-predictor --from-log predicts a position and 0 < r50 < r90 for
 // every robot; the daemon fed the same log by ssl-producer --replay multicasts exactly that CSV;
-// and a daemon given the paper's version-1 table says so, keeps running and takes the version-2
+// and a daemon given the paper's version-1 table says so, keeps running and takes the version-3
 // table written later at the same path.
 
 #include <gtest/gtest.h>
@@ -108,7 +108,7 @@ class MotionDaemons : public ::testing::Test {
 };
 
 TEST_F(MotionDaemons, TrainerWritesAVersionTwoTableAndTheDaemonMulticastsTheCsvsPositionsAndRadii) {
-  // The trainer's table: version 2, the library's training with the motion model on the same log
+  // The trainer's table: version 3, the library's training with the motion model on the same log
   // (frame sampling, --step 0.5, 3 steps ahead: the defaults), count for count.
   EXPECT_EQ(table_version(table), table_file_motion_version);
   const auto loaded = load_table(table, Grid(3, 2));

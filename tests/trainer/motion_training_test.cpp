@@ -1,5 +1,5 @@
-// ssl-trainer with the motion model: --model motion (the default) trains and saves a version-2
-// table and resumes only one, --model paper stays on version 1, --horizon, merging version-2
+// ssl-trainer with the motion model: --model motion (the default) trains and saves a version-3
+// table and resumes only one, --model paper stays on version 1, --horizon, merging version-3
 // tables, and the refusals of a table of the other model. Run in-process through the trainer
 // library: the options as ssl-trainer parses them, then run_offline or merge_tables.
 
@@ -328,13 +328,13 @@ TEST_F(MotionTraining, MergeRefusesToMixTheModels) {
         std::vector<std::string>{at("v1.bin").string(), at("v2.bin").string()}}) {
     try {
       merge_tables(inputs, at("merged.bin"));
-      ADD_FAILURE() << "merged a version-1 and a version-2 table";
+      ADD_FAILURE() << "merged a version-1 and a version-3 table";
     } catch (const std::runtime_error& error) {
       const std::string message = error.what();
       EXPECT_NE(message.find(at("v1.bin").string()), std::string::npos) << message;
       EXPECT_NE(message.find(at("v2.bin").string()), std::string::npos) << message;
       EXPECT_NE(message.find("version-1"), std::string::npos) << message;
-      EXPECT_NE(message.find("version-2"), std::string::npos) << message;
+      EXPECT_NE(message.find("version-3"), std::string::npos) << message;
     }
     EXPECT_FALSE(fs::exists(at("merged.bin")));
   }

@@ -160,7 +160,7 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
 }
 
-// A version-2 table (the paper's counts and the motion model's) from the simulated feed, sampled
+// A version-3 table (the paper's counts and the motion model's) from the simulated feed, sampled
 // at every frame as the motion model needs.
 StoredTable motion_reference_table(std::uint64_t seed, int count) {
   sim::SimulationConfig config;

@@ -1,5 +1,5 @@
 // ssl-trainer merge: tables of the same grid, step and model added up, saved atomically. The
-// paper's counts add up entry by entry; version-2 files also add up their motion tables.
+// paper's counts add up entry by entry; version-3 files also add up their motion tables.
 
 #include <spdlog/spdlog.h>
 
@@ -12,7 +12,7 @@ namespace ssl_formation::trainer {
 
 namespace {
 std::string describe_version(const StoredTable& table) {
-  return table.motion ? "a version-2 table (the paper's counts and the motion model's)"
+  return table.motion ? "a version-3 table (the paper's counts and the motion model's)"
                       : "a version-1 table (the paper's counts only)";
 }
 }  // namespace

@@ -79,7 +79,7 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
   }
   if (!motion && stored.motion) {
     throw std::runtime_error(fmt::format(
-        "{} also holds the motion model's table (a version-2 table), which --model paper would "
+        "{} also holds the motion model's table (a version-3 table), which --model paper would "
         "drop: pass --model motion to go on training it, or give a new --table (or --reset to "
         "replace it) for --model paper",
         table_path.string()));

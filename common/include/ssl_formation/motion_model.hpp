@@ -4,13 +4,14 @@
 // learns, per state, how the robot's real displacement differs from damped constant velocity.
 //
 // A state is (robot id, 0.5 m feature cell, velocity class, context): 8 directions x 3 speeds
-// plus "standing"; the context is how long a standing robot has stood and where its team is
-// (MotionFeatures::context). Each row holds integer sums (count, displacement, extrapolated
-// velocity and their products), so training is counting, tables merge by adding, and merging two
-// tables equals training on both streams bit for bit. Prediction backs off from the robot's own
-// row to its 3 m zone's row (every robot), to the velocity class's row, to damped constant
-// velocity, each row shrunk towards the coarser one by its count: a young table predicts like
-// damped constant velocity and an old one like what the opponent really does.
+// plus "standing"; the context is how long a standing robot has stood, where its team is and
+// whether the team is on the move (MotionFeatures::context). Each row holds integer sums (count,
+// displacement, extrapolated velocity and their products), so training is counting, tables merge
+// by adding, and merging two tables equals training on both streams bit for bit. Prediction
+// backs off from the robot's own row to its 3 m zone's row (every robot), to the velocity
+// class's row, to damped constant velocity, each row shrunk towards the coarser one by its
+// count: a young table predicts like damped constant velocity and an old one like what the
+// opponent really does.
 //
 // Probabilities and radii are calibrated on held-out data kept inside the table: every
 // `calibration_block_s` of the data clock whose hash falls in one `calibration_one_in` is held
@@ -95,9 +96,9 @@ struct MotionFeatures {
   static constexpr std::uint32_t standing_contexts = 2 + standing_limits_s.size();
   // Where the team is and whether it is on the move: its centroid (normalised) more than
   // `team_place_edge_mm` into its own half, about the halfway line, or as far into the half it
-  // attacks; and its mean velocity above the first speed limit (the team leaving its set-play
-  // places together) or not. A robot standing in one spot leaves it for other places when its
-  // team attacks than when it falls back, and sooner when the others have set off.
+  // attacks; and its mean velocity at or above the first speed limit (the team leaving its
+  // set-play places together) or not. A robot standing in one spot leaves it for other places
+  // when its team attacks than when it falls back, and sooner when the others have set off.
   static constexpr double team_place_edge_mm = 1000.0;
   static constexpr int team_phases = 3 * 2;
   static int team_phase(Point normalised_centroid, Point team_velocity_mm_s);

@@ -3,15 +3,19 @@
 // size, step, totals), and optionally the motion model's table, saved atomically and loaded with
 // every field checked.
 //
-// Two format versions. Version 1 holds the paper's counts only; a table without a motion table
-// is still saved as version 1, byte for byte as before version 2 existed. Version 2 is version 1
-// with 2 in its version field and the motion section between the counts and the file checksum.
+// Two format versions are read. Version 1 holds the paper's counts only; a table without a
+// motion table is still saved as version 1, byte for byte as before motion tables existed.
+// Version 3 is version 1 with 3 in its version field and the motion section between the counts
+// and the file checksum. Version 2 had the same layout, but its motion rows are keyed by the
+// features before the zones and the team's phase (a context of the standing time alone): read
+// as version 3 they would mean something else, so a version-2 file is refused and must be
+// trained again (table_file_retired_motion_version).
 //
 // Layout, all integers little-endian, doubles as their IEEE-754 bits in a little-endian u64:
 //
 //   offset size  field
 //        0    8  magic "SSLFTABL"
-//        8    4  u32 format version: 1 (table_file_version) or 2 (table_file_motion_version)
+//        8    4  u32 format version: 1 (table_file_version) or 3 (table_file_motion_version)
 //       12    4  u32 grid length L (cells along x)
 //       16    4  u32 grid width W (cells along y)
 //       20    4  u32 encoding: 0 dense, 1 sparse
@@ -28,7 +32,7 @@
 //                  sparse: `rows` records in increasing FROM order, each
 //                          u32 from, u32 n (>= 1), then n pairs u32 to, u32 count (> 0)
 //                          in increasing TO order
-//        M       version 2 only, the motion section (M = 84 + the counts' size):
+//        M       version 3 only, the motion section (M = 84 + the counts' size):
 //                  MotionConfig: f64 step_s (equal to the header's step), u32 horizons,
 //                                f64 velocity_window_s, f64 tolerance_s,
 //                                f64 calibration_block_s, u32 calibration_one_in,
@@ -72,7 +76,9 @@ namespace ssl_formation {
 // The version of a file without a motion table (the paper's counts only).
 inline constexpr std::uint32_t table_file_version = 1;
 // The version of a file with a motion table.
-inline constexpr std::uint32_t table_file_motion_version = 2;
+inline constexpr std::uint32_t table_file_motion_version = 3;
+// The version of motion tables keyed by the earlier features, refused with a reason.
+inline constexpr std::uint32_t table_file_retired_motion_version = 2;
 
 // What the counts mean, saved next to them.
 struct TableMetadata {
@@ -85,7 +91,7 @@ struct TableMetadata {
 struct StoredTable {
   TransitionTable table;
   TableMetadata metadata;
-  // The motion model's counts (format version 2); none in a version-1 file, which serves only
+  // The motion model's counts (format version 3); none in a version-1 file, which serves only
   // the paper's model.
   std::optional<MotionTable> motion = std::nullopt;
 };
@@ -109,13 +115,14 @@ struct TableLoadError {
   std::string message;
 };
 
-// Reads a table file (version 1 or 2) without ever writing to it. The checks run in this order,
-// and the first that fails decides the error: open; magic (not_a_table, or truncated for a file
-// that is a strict prefix of the magic, including an empty file); version (wrong_version,
+// Reads a table file (version 1 or 3; a retired version 2 is refused) without ever writing to
+// it. The checks run in this order, and the first that fails decides the error: open; magic
+// (not_a_table, or truncated for a file that is a strict prefix of the magic, including an
+// empty file); version (wrong_version,
 // checked before any checksum because another version may lay out or checksum its header
 // differently); header length and header checksum (truncated, corrupt); header fields
 // (corrupt); expected_grid (wrong_grid, naming both grids); file length against the header and,
-// for version 2, the motion section's sizes (truncated if shorter, corrupt if longer); file
+// for version 3, the motion section's sizes (truncated if shorter, corrupt if longer); file
 // checksum (corrupt); then every count and the motion section (corrupt). A version-1 file
 // loads with `motion` empty.
 // `storage` chooses the in-memory layout of the loaded table; `automatic` keeps large grids
@@ -152,12 +159,12 @@ struct SaveHooks {
 // Without a motion table the file is version 1.
 Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
                               const TableMetadata& metadata, const SaveHooks& hooks = {});
-// The same with the motion model's table: a version-2 file. Fails (writing nothing) if the
+// The same with the motion model's table: a version-3 file. Fails (writing nothing) if the
 // motion table's step differs from metadata.step_s.
 Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
                               const TableMetadata& metadata, const MotionTable& motion,
                               const SaveHooks& hooks = {});
-// `stored` as it is: version 2 if it has a motion table, else version 1.
+// `stored` as it is: version 3 if it has a motion table, else version 1.
 Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
                               const SaveHooks& hooks = {});
 

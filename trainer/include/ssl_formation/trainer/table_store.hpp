@@ -14,7 +14,7 @@ namespace ssl_formation::trainer {
 
 // Opens the training for `table_path`: resumes its counts if the file exists, or starts empty.
 // With `motion` (--model motion) the training also counts the motion model's table of that
-// configuration, resumed from a version-2 file; without it (--model paper) only the paper's
+// configuration, resumed from a version-3 file; without it (--model paper) only the paper's
 // counts, resumed from a version-1 file. Throws std::runtime_error, with the file's own message
 // and what to do, when the file cannot be resumed (corrupt, another grid or step, the other
 // model's file, other motion settings) and `reset` is false. With `reset` the old file is left
@@ -23,7 +23,7 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset,
                                         const std::optional<MotionConfig>& motion = std::nullopt);
 
-// Saves the training's table atomically (version 2 with its motion table, else version 1); logs
+// Saves the training's table atomically (version 3 with its motion table, else version 1); logs
 // and returns false on failure. A save whose folder could not be synced after the rename is a
 // success, logged as a warning.
 bool save_training(const std::filesystem::path& table_path, Training& training);

@@ -46,9 +46,9 @@ int run_live(const TrainerOptions& options);     // live_trainer.cpp
 int run_offline(const TrainerOptions& options);  // offline_training.cpp
 
 // Adds up tables of the same grid and step into `output` (atomically): the paper's counts and,
-// when every input is a version-2 file, the motion tables (saved as version 2). Throws
+// when every input is a version-3 file, the motion tables (saved as version 3). Throws
 // std::runtime_error naming the file and the reason when one cannot be read or added, including
-// a mix of version-1 and version-2 files or motion tables of other settings.
+// a mix of version-1 and version-3 files or motion tables of other settings.
 void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output);
 
 }  // namespace ssl_formation::trainer
