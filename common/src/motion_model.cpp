@@ -682,7 +682,8 @@ void MotionHistory::add(const Formation& formation) {
   const int team_phase = MotionFeatures::team_phase(formation.centroid, team);
   for (const FormationRobot& robot : formation.robots) {
     if (!robot.observed) continue;
-    Entry& entry = tracks_[robot.robot_id].at(tracks_[robot.robot_id].end - 1);
+    Track& track = tracks_[robot.robot_id];
+    Entry& entry = track.at(track.end - 1);
     entry.kinematics.team_velocity = team;
     entry.context = MotionFeatures::context(entry.context, team_phase);
   }

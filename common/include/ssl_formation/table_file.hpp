@@ -118,13 +118,12 @@ struct TableLoadError {
 // Reads a table file (version 1 or 3; a retired version 2 is refused) without ever writing to
 // it. The checks run in this order, and the first that fails decides the error: open; magic
 // (not_a_table, or truncated for a file that is a strict prefix of the magic, including an
-// empty file); version (wrong_version,
-// checked before any checksum because another version may lay out or checksum its header
-// differently); header length and header checksum (truncated, corrupt); header fields
-// (corrupt); expected_grid (wrong_grid, naming both grids); file length against the header and,
-// for version 3, the motion section's sizes (truncated if shorter, corrupt if longer); file
-// checksum (corrupt); then every count and the motion section (corrupt). A version-1 file
-// loads with `motion` empty.
+// empty file); version (wrong_version, checked before any checksum because another version may
+// lay out or checksum its header differently); header length and header checksum (truncated,
+// corrupt); header fields (corrupt); expected_grid (wrong_grid, naming both grids); file length
+// against the header and, for version 3, the motion section's sizes (truncated if shorter,
+// corrupt if longer); file checksum (corrupt); then every count and the motion section
+// (corrupt). A version-1 file loads with `motion` empty.
 // `storage` chooses the in-memory layout of the loaded table; `automatic` keeps large grids
 // sparse, so loading a sparse 12x9 file never allocates S*S.
 Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path,
