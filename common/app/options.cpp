@@ -32,20 +32,11 @@ SamplerConfig ModelOptions::sampler_config() const {
   SamplerConfig config;
   config.grid = parsed_grid();
   config.step_s = step();
-  const auto color = parse_team_color(opponent_color);
-  if (!color)
-    throw UsageError("--opponent-color must be yellow or blue, not '" + opponent_color + "'");
-  config.opponent_color = *color;
-  if (opponent_attacks == "auto") {
-    config.infer_attacks = true;
-  } else {
-    const auto attacks = parse_attack_direction(opponent_attacks);
-    if (!attacks) {
-      throw UsageError("--opponent-attacks must be +x, -x or auto, not '" + opponent_attacks +
-                       "'");
-    }
-    config.opponent_attacks = *attacks;
-  }
+  const OpponentChoice choice = opponent_choice();
+  // Until the referee says otherwise: the defaults, which are the behaviour without one.
+  config.opponent_color = choice.color.value_or(TeamColor::yellow);
+  config.infer_attacks = choice.infer_attacks;
+  config.opponent_attacks = choice.attacks.value_or(AttackDirection::positive_x);
   const ModelKind kind = parsed_model();
   if (sampling == "auto") {
     config.sampling = kind == ModelKind::motion ? Sampling::frame : Sampling::step;
@@ -67,6 +58,51 @@ SamplerConfig ModelOptions::sampler_config() const {
   return config;
 }
 
+OpponentChoice ModelOptions::opponent_choice() const {
+  OpponentChoice choice;
+  if (opponent_color != "referee") {
+    const auto color = parse_team_color(opponent_color);
+    if (!color) {
+      throw UsageError("--opponent-color must be yellow, blue or referee, not '" + opponent_color +
+                       "'");
+    }
+    choice.color = *color;
+  }
+  if (opponent_attacks == "auto") {
+    choice.infer_attacks = true;
+  } else if (opponent_attacks != "referee") {
+    const auto attacks = parse_attack_direction(opponent_attacks);
+    if (!attacks) {
+      throw UsageError("--opponent-attacks must be +x, -x, auto or referee, not '" +
+                       opponent_attacks + "'");
+    }
+    choice.attacks = *attacks;
+  }
+  if (!our_team.empty() && !opponent_team.empty()) {
+    throw UsageError("give --our-team or --opponent-team, not both");
+  }
+  choice.our_team = our_team;
+  choice.opponent_team = opponent_team;
+  return choice;
+}
+
+void add_learn_during_option(po::options_description& options, std::string& learn_during) {
+  options.add_options()(
+      "learn-during", po::value(&learn_during)->default_value(learn_during),
+      "running: learn only from running play (after NORMAL_START or FORCE_START and in free kicks, "
+      "until the next HALT, STOP, timeout, ball placement or kick-off or penalty preparation), "
+      "nothing across a change of command; all: every game state. Without a referee feed "
+      "everything is learned either way");
+}
+
+LearnDuring parsed_learn_during(const std::string& learn_during) {
+  const auto parsed = parse_learn_during(learn_during);
+  if (!parsed) {
+    throw UsageError("--learn-during must be running or all, not '" + learn_during + "'");
+  }
+  return *parsed;
+}
+
 void add_model_options(po::options_description& options, ModelOptions& model) {
   options.add_options()("grid", po::value(&model.grid)->default_value(model.grid),
                         "grid LxW: L cells along the field length, W along its width")(
@@ -74,10 +110,17 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "seconds of data time (t_capture) between two formations, the unit of --horizon; auto: "
       "0.5 for --model motion, 2 (the paper's) for --model paper")(
       "opponent-color", po::value(&model.opponent_color)->default_value(model.opponent_color),
-      "the opponent's colour: yellow or blue")(
+      "the opponent's colour: yellow, blue, or referee (the team the referee's names make the "
+      "opponent by --our-team or --opponent-team; yellow until then)")(
       "opponent-attacks", po::value(&model.opponent_attacks)->default_value(model.opponent_attacks),
-      "the direction the opponent attacks in the feed's coordinates: +x, -x, or auto (from where "
-      "its goalkeeper stands; follows a change of ends)")(
+      "the direction the opponent attacks in the feed's coordinates: +x, -x, referee (the side "
+      "the referee gives it, following a change of ends; +x until it does) or auto (the referee's "
+      "side, else from where its goalkeeper stands)")(
+      "our-team", po::value(&model.our_team)->default_value(model.our_team, "none"),
+      "our team's name as the game controller spells it (case aside): the opponent is the other "
+      "team")(
+      "opponent-team", po::value(&model.opponent_team)->default_value(model.opponent_team, "none"),
+      "the opponent's name as the game controller spells it (case aside)")(
       "model", po::value(&model.model)->default_value(model.model),
       "motion: positions in mm with calibrated radii, learned from every frame (needs a "
       "version-3 table); paper: the paper's Markov model on cells")(

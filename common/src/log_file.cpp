@@ -353,22 +353,45 @@ bool LogReader::next_vision(SSL_WrapperPacket& packet, std::int64_t* receive_tim
   return false;
 }
 
+bool LogReader::decode_vision(const Header& header, std::string_view payload, VisionFrame& frame) {
+  // The fast path takes only what protobuf would accept and convert to the same frame; the 2010
+  // schema (type 2) always goes through protobuf and adopt_legacy.
+  if (header.type == static_cast<std::int32_t>(LogMessageType::vision) &&
+      decode_detection_datagram(std::as_bytes(std::span(payload)), frame)) {
+    return true;
+  }
+  if (!parse_vision(header, payload, packet_scratch_)) return false;
+  to_vision_frame(packet_scratch_, frame);
+  return true;
+}
+
 bool LogReader::next_vision(VisionFrame& frame, std::int64_t* receive_time_ns) {
   Header header{};
   std::string_view payload;
   while (next_view(header, payload)) {
-    // The fast path takes only what protobuf would accept and convert to the same frame; the
-    // 2010 schema (type 2) always goes through protobuf and adopt_legacy.
-    bool ok = header.type == static_cast<std::int32_t>(LogMessageType::vision) &&
-              decode_detection_datagram(std::as_bytes(std::span(payload)), frame);
-    if (!ok && parse_vision(header, payload, packet_scratch_)) {
-      to_vision_frame(packet_scratch_, frame);
-      ok = true;
-    }
-    if (ok) {
+    if (decode_vision(header, payload, frame)) {
       if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;
       return true;
     }
+  }
+  return false;
+}
+
+bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& referee,
+                                 std::int64_t* receive_time_ns) {
+  Header header{};
+  std::string_view payload;
+  while (next_view(header, payload)) {
+    if (header.type == static_cast<std::int32_t>(LogMessageType::referee)) {
+      kind = MatchInput::referee;
+      referee = payload;
+    } else if (decode_vision(header, payload, frame)) {
+      kind = MatchInput::vision;
+    } else {
+      continue;
+    }
+    if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;
+    return true;
   }
   return false;
 }

@@ -709,7 +709,8 @@ const MotionHistory::Entry* MotionHistory::steps_before_latest(std::uint32_t rob
   return nearest(track, cursor, time_s);
 }
 
-void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now) {
+void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now,
+                  double learn_from_s) {
   const MotionConfig& config = table.config();
   // A robot not seen since the last learning instant (its camera's packets missed it) was
   // learned from there already.
@@ -742,7 +743,9 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= horizons; ++k) {
       const MotionHistory::Entry* then = thens[next_then++];
-      if (!then || !then->has_velocity || then->time_s >= now.time_s) continue;
+      if (!then || !then->has_velocity || then->time_s >= now.time_s || then->time_s < learn_from_s) {
+        continue;
+      }
       MotionTable::Learned& learned = batch[pending++];
       learned.horizon_index = k - 1;
       learned.time_s = then->time_s;

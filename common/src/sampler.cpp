@@ -446,6 +446,33 @@ void FormationSampler::start_new_stream() {
   }
 }
 
+void FormationSampler::set_opponent(TeamColor color, std::optional<AttackDirection> attacks) {
+  if (color != config_.opponent_color) {
+    config_.opponent_color = color;
+    ++counters_.opponent_switches;
+    // The other team's robots share the ids: nothing seen of the old opponent may stay.
+    break_chain();
+    for (const std::uint32_t id : observed_ids_) observations_[id].seen = false;
+    observed_ids_.clear();
+  }
+  if (attacks) {
+    if (!config_.infer_attacks && attacks_ == attacks) return;
+    if (attacks_ && *attacks_ != *attacks) {
+      ++counters_.attack_switches;
+      break_chain();
+    }
+    config_.infer_attacks = false;
+    config_.opponent_attacks = *attacks;
+    attacks_ = attacks;
+  } else if (!config_.infer_attacks) {
+    // From a side that was known to one inferred: no sample until the inference decides.
+    config_.infer_attacks = true;
+    attack_inference_.reset();
+    attacks_.reset();
+    break_chain();
+  }
+}
+
 void FormationSampler::forget_stream() {
   ++restarts_;
   break_chain();

@@ -2,15 +2,32 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace ssl_formation {
 
+namespace {
+// The sampler's own opponent, as options that win over the referee.
+OpponentChoice fixed_opponent(const SamplerConfig& config) {
+  OpponentChoice choice;
+  choice.color = config.opponent_color;
+  if (config.infer_attacks) {
+    choice.infer_attacks = true;
+  } else {
+    choice.attacks = config.opponent_attacks;
+  }
+  return choice;
+}
+}  // namespace
+
 Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before,
-                   std::optional<MotionTable> motion)
+                   std::optional<MotionTable> motion, std::optional<MatchRules> rules)
     : table_(std::move(table)),
       motion_(std::move(motion)),
       motion_history_(motion_ ? motion_->config() : MotionConfig{}),
       sampler_(config, [this](const FormationSample& sample) { on_sample(sample); }),
+      match_(rules ? rules->opponent : fixed_opponent(config)),
+      learn_during_(rules ? rules->learn_during : LearnDuring::running),
       samples_before_(samples_before),
       saved_transitions_(table_.transitions()),
       saved_samples_(samples_before),
@@ -26,13 +43,48 @@ Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t sa
     throw std::invalid_argument("the table's grid " + table_.grid().to_string() +
                                 " differs from the sampler's " + config.grid.to_string());
   }
+  follow_opponent();
+}
+
+void Training::add_referee(std::string_view payload, double receive_s) {
+  const RefereeChange change = match_.add_referee(payload, receive_s);
+  if (!change.any()) return;
+  follow_opponent();
+  if (change.command && learn_during_ == LearnDuring::running) {
+    sampler_.start_new_segment();
+    segment_start_s_ = std::numeric_limits<double>::infinity();
+  }
+}
+
+void Training::start_new_stream() {
+  sampler_.start_new_stream();
+  motion_history_.clear();
+  match_.reset();
+  follow_opponent();
+  segment_start_s_ = -std::numeric_limits<double>::infinity();
+}
+
+void Training::follow_opponent() {
+  const Opponent& opponent = match_.opponent();
+  // The motion history keys robots by id, which the other team's robots share.
+  if (opponent.color != sampler_.config().opponent_color) motion_history_.clear();
+  sampler_.set_opponent(opponent.color, opponent.attacks);
 }
 
 void Training::on_sample(const FormationSample& sample) {
-  for (const Transition& t : sample.transitions) table_.add(t.from, t.to);
+  if (segment_start_s_ == std::numeric_limits<double>::infinity()) {
+    segment_start_s_ = sample.formation.time_s;
+  }
+  const bool learning = match_.learning(learn_during_);
+  if (learning) {
+    for (const Transition& t : sample.transitions) table_.add(t.from, t.to);
+  } else {
+    ++samples_outside_play_;
+  }
   if (motion_) {
+    // Followed in every state, so that velocities are known when play starts again.
     motion_history_.add(sample.formation);
-    learn_motion(*motion_, motion_history_, sample.formation);
+    if (learning) learn_motion(*motion_, motion_history_, sample.formation, segment_start_s_);
   }
 }
 

@@ -379,7 +379,7 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
     const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
     EXPECT_EQ(help.exit_code, 0) << program;
     for (const std::string option : {"--vision-address", "--interface arg (=127.0.0.1)", "--step",
-                                     "--opponent-color arg (=yellow)", "--opponent-attacks",
+                                     "--opponent-color arg (=", "--opponent-attacks arg (=",
                                      "--field-length arg (=9000)", "--field-width arg (=6000)"}) {
       EXPECT_NE(help.out.find(option), std::string::npos) << program << " lacks " << option;
     }
@@ -394,6 +394,11 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
     const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
     EXPECT_NE(help.out.find("--table arg (=formation-table.bin)"), std::string::npos);
     EXPECT_NE(help.out.find("--grid arg (=3x2)"), std::string::npos);
+    // The opponent from the referee's names and sides unless given.
+    EXPECT_NE(help.out.find("--opponent-color arg (=referee)"), std::string::npos) << program;
+    EXPECT_NE(help.out.find("--opponent-attacks arg (=referee)"), std::string::npos) << program;
+    EXPECT_NE(help.out.find("--our-team"), std::string::npos) << program;
+    EXPECT_NE(help.out.find("--opponent-team"), std::string::npos) << program;
     // The motion model by default, on the sampling it needs.
     EXPECT_NE(help.out.find("--model arg (=motion)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--sampling arg (=auto)"), std::string::npos) << program;

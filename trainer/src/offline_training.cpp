@@ -22,7 +22,7 @@ int run_offline(const TrainerOptions& options) {
   const SamplerConfig config = options.model.sampler_config();
   const std::filesystem::path table_path = options.table;
   std::unique_ptr<Training> training =
-      open_training(table_path, config, options.reset, motion_config(options));
+      open_training(table_path, config, options.reset, motion_config(options), match_rules(options));
   bool every_file_whole = true;
   VisionFrame frame;  // detection packets decoded straight from the log's bytes
   for (const std::string& file : options.from_logs) {
@@ -39,17 +39,32 @@ int run_offline(const TrainerOptions& options) {
     if (reader->compressed_size() > progress_bar_bytes)
       bar.emplace("training from " + file, reader->compressed_size());
     std::uint64_t frames = 0;
-    while (reader->next_vision(frame)) {
+    std::uint64_t outside_play_before = training->samples_outside_play();
+    LogReader::MatchInput kind{};
+    std::string_view referee;
+    std::int64_t receive_ns = 0;
+    while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
+      if (kind == LogReader::MatchInput::referee) {
+        training->add_referee(referee, static_cast<double>(receive_ns) * 1e-9);
+        continue;
+      }
       training->add(frame);
       if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);
     }
     if (bar) bar->finish(frames);
     const LogReadCounters& c = reader->counters();
     spdlog::info(
-        "{}: {} vision packets ({} parse errors), skipped {} referee, {} tracker, {} other; "
+        "{}: {} vision packets ({} parse errors), {} referee, skipped {} tracker, {} other; "
         "{} formations, {} transitions",
         file, frames, c.parse_errors, c.referee, c.tracker, c.unknown + c.blank + c.legacy_unusable,
         training->samples() - samples_before, training->table().transitions() - transitions_before);
+    if (training->match().referee().heard()) {
+      spdlog::info("{}: opponent {}; {} formations outside running play not learned (--learn-during "
+                   "{}); last {}",
+                   file, describe(training->match().opponent(), training->sampler().attacks()),
+                   training->samples_outside_play() - outside_play_before,
+                   to_string(training->learn_during()), describe(training->match().referee()));
+    }
     switch (reader->ending()) {
       case LogReader::Ending::none:
         break;

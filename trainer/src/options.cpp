@@ -36,6 +36,7 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
   // clang-format on
   app::add_vision_options(general, o.network);
   app::add_model_options(general, o.model);
+  app::add_learn_during_option(general, o.learn_during);
   app::add_daemon_options(general, o.daemon);
   return app::parse_command_line(
       argc, argv, general,
@@ -56,6 +57,10 @@ std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
   config.horizons = options.horizon;
   if (!config.valid()) throw app::UsageError("invalid --step for the motion model");
   return config;
+}
+
+MatchRules match_rules(const TrainerOptions& options) {
+  return MatchRules{options.model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
 }
 
 }  // namespace ssl_formation::trainer

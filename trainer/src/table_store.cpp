@@ -47,7 +47,8 @@ std::string describe_motion(const MotionConfig& config) {
 
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset,
-                                        const std::optional<MotionConfig>& motion) {
+                                        const std::optional<MotionConfig>& motion,
+                                        const std::optional<MatchRules>& rules) {
   remove_stale_temporaries(table_path);
   std::optional<MotionTable> empty_motion;
   if (motion) empty_motion.emplace(*motion);
@@ -61,7 +62,7 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
     else
       spdlog::info("no table at {} yet: starting an empty {}", table_path.string(), what);
     return std::make_unique<Training>(config, TransitionTable(config.grid), 0,
-                                      std::move(empty_motion));
+                                      std::move(empty_motion), rules);
   }
   auto loaded = load_table(table_path, config.grid);
   if (!loaded) {
@@ -115,7 +116,7 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                  stored.metadata.samples, stored.table.rows_seen());
   }
   return std::make_unique<Training>(config, std::move(stored.table), stored.metadata.samples,
-                                    std::move(stored.motion));
+                                    std::move(stored.motion), rules);
 }
 
 bool save_training(const std::filesystem::path& table_path, Training& training) {

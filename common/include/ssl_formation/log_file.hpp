@@ -90,6 +90,12 @@ class LogReader {
   // payload is decoded straight from the bytes (decode_detection_datagram), anything else is
   // parsed by protobuf as above; offline training's protobuf parse was most of its reading time.
   bool next_vision(VisionFrame& frame, std::int64_t* receive_time_ns = nullptr);
+  // What the match is followed by, in the file's order: the vision frames next_vision() returns
+  // (kind vision, into `frame`) and the referee messages (type 3; kind referee, their payload
+  // viewed in `referee`, valid until the next call). Everything else is skipped and counted.
+  enum class MatchInput { vision, referee };
+  bool next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& referee,
+                        std::int64_t* receive_time_ns = nullptr);
 
   const std::string& error() const { return error_; }
   // How reading ended so far: the file ending inside its last message (what a recorder killed
@@ -114,6 +120,8 @@ class LogReader {
   explicit LogReader(std::filesystem::path path, detail::GzFilePtr file);
   // Parses a vision payload (type 4, or a usable type 2) into `packet`, counting what fails.
   bool parse_vision(const Header& header, std::string_view payload, SSL_WrapperPacket& packet);
+  // The same into a frame, decoding a detection-only type-4 payload straight from its bytes.
+  bool decode_vision(const Header& header, std::string_view payload, VisionFrame& frame);
   // The next message's header and payload; the payload view stays valid until the next call.
   bool next_view(Header& header, std::string_view& payload);
   void count(std::int32_t type);

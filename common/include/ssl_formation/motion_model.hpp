@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string_view>
@@ -459,7 +460,10 @@ class MotionHistory {
 
 // Training's part: after `history.add(now)`, counts every robot of `now` against where it was
 // k steps earlier, for each horizon, at most once per learn_interval_s of the data clock (the
-// history remembers when it last learned; a clear or a clock going back starts over).
-void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now);
+// history remembers when it last learned; a clear or a clock going back starts over). Nothing is
+// learned from where a robot was before `learn_from_s` (the start of the referee's current
+// command, for learning in running play: no instance spans a change of command).
+void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now,
+                  double learn_from_s = -std::numeric_limits<double>::infinity());
 
 }  // namespace ssl_formation

@@ -112,7 +112,8 @@ struct SamplerCounters {
   std::uint64_t samples_forced = 0;      // handed on without every live camera (a dropped frame)
   std::uint64_t chain_breaks = 0;        // gaps, field changes and clock resets
   std::uint64_t samples_undirected = 0;  // not handed on: the attack direction is not known yet
-  std::uint64_t attack_switches = 0;     // the inferred attack direction changed (ends changed)
+  std::uint64_t attack_switches = 0;     // the attack direction changed (ends changed)
+  std::uint64_t opponent_switches = 0;   // the opponent's colour changed (set_opponent)
   std::uint64_t transitions = 0;
 };
 
@@ -168,6 +169,16 @@ class FormationSampler : private DataClockListener {
   // Forgets the stream so far (cameras, clock, previous formation) but keeps the field size and
   // the counters: the next packet starts a new stream, and no transition spans the two.
   void start_new_stream();
+
+  // The opponent changed while the stream goes on (the referee names another team, or the
+  // teams changed ends). Another colour forgets the robots seen so far; another side breaks the
+  // chain, as an inferred change of ends does (cells on either side do not compare). `attacks`
+  // none: inferred from where the goalkeeper stands from here on. Nothing happens when both are
+  // as they were.
+  void set_opponent(TeamColor color, std::optional<AttackDirection> attacks);
+  // No transition spans this point (the referee issued a new command, and learning in running
+  // play keeps the states apart). Counted as a chain break.
+  void start_new_segment() { break_chain(); }
 
   const SamplerConfig& config() const { return config_; }
   const StateCodec& codec() const { return codec_; }

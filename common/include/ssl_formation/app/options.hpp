@@ -10,6 +10,7 @@
 
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/match.hpp"
 #include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/online_calibration.hpp"
 #include "ssl_formation/sampler.hpp"
@@ -36,8 +37,12 @@ struct ModelOptions {
   static constexpr double motion_step_s = 0.5;
   static constexpr double paper_step_s = 2.0;
   double step() const;  // the effective step; throws UsageError
-  std::string opponent_color = "yellow";
-  std::string opponent_attacks = "+x";
+  // "referee": from the referee feed (the colour by the team names and --our-team or
+  // --opponent-team, the side by blue_team_on_positive_half); yellow attacking +x until it says.
+  std::string opponent_color = "referee";
+  std::string opponent_attacks = "referee";
+  std::string our_team;
+  std::string opponent_team;
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   bool ignore_geometry = false;
@@ -48,6 +53,8 @@ struct ModelOptions {
   Grid parsed_grid() const;              // throws UsageError
   ModelKind parsed_model() const;        // throws UsageError
   SamplerConfig sampler_config() const;  // validates everything; throws UsageError
+  // Who the opponent is by these options (the referee fills in what they leave open).
+  OpponentChoice opponent_choice() const;  // throws UsageError
 };
 void add_model_options(po::options_description& options, ModelOptions& model);
 
@@ -58,6 +65,10 @@ void add_recalibration_option(po::options_description& options, double& half_lif
 // The settings a --recalibration-half-life asks for; none for 0. Throws UsageError for a
 // negative or non-finite one.
 std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s);
+
+// --learn-during, for the programs that train (ssl-trainer, ssl-evaluate).
+void add_learn_during_option(po::options_description& options, std::string& learn_during);
+LearnDuring parsed_learn_during(const std::string& learn_during);  // throws UsageError
 
 struct NetworkOptions {
   std::string vision_address = default_vision_address;

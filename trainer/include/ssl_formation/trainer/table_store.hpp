@@ -18,10 +18,12 @@ namespace ssl_formation::trainer {
 // counts, resumed from a version-1 file. Throws std::runtime_error, with the file's own message
 // and what to do, when the file cannot be resumed (corrupt, another grid or step, the other
 // model's file, other motion settings) and `reset` is false. With `reset` the old file is left
-// alone until the first save replaces it.
+// alone until the first save replaces it. `rules`: how the training follows the referee (see
+// Training).
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset,
-                                        const std::optional<MotionConfig>& motion = std::nullopt);
+                                        const std::optional<MotionConfig>& motion = std::nullopt,
+                                        const std::optional<MatchRules>& rules = std::nullopt);
 
 // Saves the training's table atomically (version 3 with its motion table, else version 1); logs
 // and returns false on failure. A save whose folder could not be synced after the rename is a

@@ -11,6 +11,7 @@
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/training.hpp"
 
 namespace ssl_formation::trainer {
 
@@ -20,6 +21,7 @@ struct TrainerOptions {
   app::DaemonOptions daemon;
   // --model motion: the steps ahead the motion model learns (--horizon, as the predictor's).
   int horizon = 3;
+  std::string learn_during = "running";
   std::string table = app::default_table;
   double flush_interval_s = 10.0;
   double status_interval_s = 5.0;
@@ -39,6 +41,9 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
 // The motion model's configuration the options ask for: none with --model paper. Throws
 // app::UsageError for a bad --model or --horizon.
 std::optional<MotionConfig> motion_config(const TrainerOptions& options);
+// How the training follows the referee, by --opponent-color, --opponent-attacks, --our-team,
+// --opponent-team and --learn-during. Throws app::UsageError.
+MatchRules match_rules(const TrainerOptions& options);
 
 // Each returns the exit status. Throws app::UsageError for bad options and std::runtime_error
 // when the table cannot be resumed.

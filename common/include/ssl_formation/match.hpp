@@ -1,0 +1,91 @@
+#pragma once
+// The match as the options and the referee feed describe it: who the opponent is (its name and
+// colour), which way it attacks, the game state, and why each is what it is. Training and
+// prediction each follow one, and hand the opponent to their sampler.
+//
+// What wins: an explicit --opponent-color / --opponent-attacks, then the referee (the colour
+// from the team names and --our-team or --opponent-team, the side from
+// blue_team_on_positive_half), then inference of the side (--opponent-attacks auto), then the
+// defaults (yellow, attacking +x), which are the behaviour without a referee feed.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "ssl_formation/formation.hpp"
+#include "ssl_formation/grid.hpp"
+#include "ssl_formation/referee.hpp"
+
+namespace ssl_formation {
+
+// Why the opponent's colour or side is what it is.
+enum class Because : std::uint8_t { default_setting, option, referee, inferred };
+std::string_view to_string(Because because);  // "default", "option", "referee", "inferred"
+
+// What the options ask for.
+struct OpponentChoice {
+  std::optional<TeamColor> color;          // --opponent-color yellow|blue
+  std::optional<AttackDirection> attacks;  // --opponent-attacks +x|-x
+  bool infer_attacks = false;              // --opponent-attacks auto
+  std::string our_team;                    // --our-team: the opponent is the other team
+  std::string opponent_team;               // --opponent-team
+};
+
+struct Opponent {
+  TeamColor color = TeamColor::yellow;
+  Because color_because = Because::default_setting;
+  // None: the sampler infers it from where the goalkeeper stands.
+  std::optional<AttackDirection> attacks = AttackDirection::positive_x;
+  Because attacks_because = Because::default_setting;
+  std::string name;  // the referee's name for the opponent; empty when unnamed or unknown
+  // Set when a team was named in the options but the referee names no such team, saying so.
+  std::string unresolved;
+  friend bool operator==(const Opponent&, const Opponent&) = default;
+};
+
+// Team names as the game controller spells them and as a user types them: equal ignoring case
+// and the spaces around them.
+bool same_team_name(std::string_view a, std::string_view b);
+
+// The opponent the options and what the referee said (none: no referee heard) make.
+Opponent resolve_opponent(const OpponentChoice& choice, const RefereeView* referee);
+
+// "'ER-Force' blue (referee), attacks -x (referee)"; `attacks_now` is the side the sampler uses
+// (the inferred one, for Because::inferred; none while unknown).
+std::string describe(const Opponent& opponent, std::optional<AttackDirection> attacks_now);
+
+// What training counts: --learn-during running (the default: only running play, and nothing
+// across a change of command) or all (every state, as without a referee).
+enum class LearnDuring : std::uint8_t { running, all };
+std::optional<LearnDuring> parse_learn_during(std::string_view text);
+std::string_view to_string(LearnDuring learn_during);
+
+// The referee follower and the opponent it implies, kept in step.
+class MatchFollower {
+ public:
+  explicit MatchFollower(OpponentChoice choice = {});
+
+  // A referee message (a datagram or a log's type-3 payload) received at `receive_s`.
+  RefereeChange add_referee(std::string_view payload, double receive_s);
+  // A new stream (another log file): the referee is heard anew.
+  void reset();
+
+  const Opponent& opponent() const { return opponent_; }
+  GameState game_state() const { return referee_.view().state; }
+  const RefereeFollower& referee() const { return referee_; }
+  const OpponentChoice& choice() const { return choice_; }
+  // Whether learning may count now: always without a referee heard (the game state is not
+  // known) or with LearnDuring::all, else only in running play.
+  bool learning(LearnDuring learn_during) const {
+    return learn_during == LearnDuring::all || !referee_.heard() ||
+           is_running_play(referee_.view().state);
+  }
+
+ private:
+  OpponentChoice choice_;
+  RefereeFollower referee_;
+  Opponent opponent_;
+};
+
+}  // namespace ssl_formation

@@ -1,0 +1,119 @@
+#pragma once
+// The referee feed (the game controller's Referee messages, DESIGN.md §6): the game state the
+// last command left the match in, the teams' names and which half each defends, followed from
+// one game controller. Pure: the daemons feed it from the referee multicast group, the offline
+// tools from a log's type-3 messages, each with its own receive clock (time is an input).
+//
+//   RefereeFollower referee;
+//   const RefereeChange change = referee.add(payload, receive_s);
+//   if (change.command) ... referee.view().state ...
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+class Referee;
+
+namespace ssl_formation {
+
+// The match's state as the followed game controller's last command left it.
+enum class GameState : std::uint8_t {
+  unknown,  // no referee message yet (or none that could be read)
+  halt,
+  stop,                 // also the deprecated GOAL_YELLOW / GOAL_BLUE, which a STOP follows
+  running,              // after NORMAL_START or FORCE_START
+  free_kick,            // DIRECT_FREE_* (and the deprecated INDIRECT_FREE_*)
+  kickoff_preparation,  // PREPARE_KICKOFF_*
+  penalty_preparation,  // PREPARE_PENALTY_*
+  ball_placement,       // BALL_PLACEMENT_*
+  timeout,              // TIMEOUT_*
+};
+inline constexpr int game_state_count = 9;
+std::string_view to_string(GameState state);  // "running", "ball_placement", ...
+std::optional<GameState> parse_game_state(std::string_view text);
+// The game state a command (Referee::Command's number) leaves the match in; none for a number
+// the wire format does not define.
+std::optional<GameState> game_state_of_command(int command);
+
+// Whether the robots play freely, which is what learning in running play counts: after
+// NORMAL_START or FORCE_START, and in a free kick. The game controller issues no NORMAL_START
+// after a free kick (play goes on under DIRECT_FREE until the next STOP or HALT), so a free
+// kick's command covers the play that follows it too.
+bool is_running_play(GameState state);
+
+// What the followed game controller said last.
+struct RefereeView {
+  GameState state = GameState::unknown;
+  int command = -1;  // Referee::Command's number; -1 before the first message
+  std::uint32_t command_counter = 0;
+  int stage = -1;  // Referee::Stage's number; -1 before the first message
+  std::string yellow_name;  // empty: the game controller was not told the name
+  std::string blue_name;
+  // True when blue's goal is on the +x side of the vision frame; none while the game controller
+  // has not said (older ones never do).
+  std::optional<bool> blue_on_positive_half;
+  std::string source;  // the source_identifier followed ("" from a game controller without one)
+};
+
+// What one message changed in the view.
+struct RefereeChange {
+  bool command = false;  // a new command (or a new game controller's first)
+  bool teams = false;    // a team name changed
+  bool sides = false;    // blue_team_on_positive_half changed (the teams changed ends)
+  bool source = false;   // another game controller is followed from now on
+  bool conflict = false;  // this message came from a second game controller, and was not used
+  bool any() const { return command || teams || sides || source; }
+};
+
+// Every referee message by what became of it.
+struct RefereeCounters {
+  std::uint64_t messages = 0;
+  std::uint64_t used = 0;           // from the followed game controller
+  std::uint64_t undecodable = 0;    // not a Referee message at all: not used
+  std::uint64_t unknown_command = 0;  // a command number the wire format does not define: not used
+  std::uint64_t other_source = 0;   // from a second game controller while one is followed
+  std::uint64_t source_switches = 0;  // the followed one fell silent and another took over
+  std::uint64_t unnamed_teams = 0;  // messages that name neither team (used all the same)
+  std::uint64_t commands = 0;       // new commands followed
+};
+
+class RefereeFollower {
+ public:
+  // A followed game controller silent for this long gives way to the next one heard.
+  static constexpr double default_source_timeout_s = 2.0;
+
+  explicit RefereeFollower(double source_timeout_s = default_source_timeout_s);
+
+  // A referee datagram or a log's type-3 payload, received at `receive_s` (any clock that
+  // increases; the daemons' steady clock, a log's receive time). Bad input is counted, never
+  // thrown.
+  RefereeChange add(std::string_view payload, double receive_s);
+  RefereeChange add(const Referee& message, double receive_s);
+
+  // Forgets the game controller and what it said (a new log file), keeping the counters.
+  void reset() {
+    heard_ = false;
+    view_ = RefereeView{};
+    conflicting_source_.clear();
+  }
+
+  // Whether a message has been followed yet.
+  bool heard() const { return heard_; }
+  const RefereeView& view() const { return view_; }
+  const RefereeCounters& counters() const { return counters_; }
+
+ private:
+  double source_timeout_s_;
+  bool heard_ = false;
+  double last_used_s_ = 0.0;
+  RefereeView view_;
+  RefereeCounters counters_;
+  std::string conflicting_source_;  // the last second game controller reported
+};
+
+// "game running, stage NORMAL_FIRST_HALF, yellow 'TIGERs Mannheim', blue 'ER-Force', blue's goal
+// on +x", or "no referee heard", for status lines.
+std::string describe(const RefereeFollower& referee);
+
+}  // namespace ssl_formation

@@ -1,0 +1,225 @@
+// ssl-trainer --from-log on logs with the game controller's referee messages, as real match logs
+// hold them: the opponent found by name and side through a change of colours, and learning only
+// in running play. The trainer runs as a process on real files; the reference is the same
+// trainer on the same robots given explicitly, or the same log learned in every state.
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "child_process.hpp"
+#include "match_logs.hpp"
+#include "moving_robots.hpp"
+#include "pipeline_support.hpp"
+#include "ssl_formation/motion_model.hpp"
+#include "ssl_formation/table_file.hpp"
+
+namespace ssl_formation {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::TempDir;
+
+const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+
+testing::RunResult train(const TempDir& dir, const std::filesystem::path& log,
+                         const std::filesystem::path& table, std::vector<std::string> options,
+                         const std::string& name) {
+  std::vector<std::string> args{"--from-log", log.string(), "--table", table.string()};
+  args.insert(args.end(), options.begin(), options.end());
+  return testing::run_to_end(trainer_program, std::move(args), dir.path(), name, 60s);
+}
+
+std::vector<RobotDetection> team(double t, int first_index, bool mirrored) {
+  std::vector<RobotDetection> robots;
+  for (int i = 0; i < 6; ++i) {
+    Point p = testing::moving_robot_position(3, first_index + i, t);
+    if (mirrored) p = Point{-p.x, -p.y};
+    robots.push_back({static_cast<std::uint32_t>(i), p});
+  }
+  return robots;
+}
+
+TEST(MatchTraining, RefereeNamesAndSidesTrainWhatTheSameRobotsGivenExplicitlyTrain) {
+  TempDir dir;
+  // 40 s a half, 10 s of half time without vision between. The scouted team plays blue
+  // attacking +x in the first half, yellow attacking -x in the second (its robots' feed
+  // positions turned about the centre); the other team is a decoy moving elsewhere.
+  const auto half = [](double t) { return t < 40.0 ? 1 : t < 50.0 ? 0 : 2; };
+  testing::MatchScript with_referee;
+  with_referee.seconds = 90.0;
+  with_referee.frame = [&](double t) -> std::optional<DetectionFrameSpec> {
+    if (half(t) == 0) return std::nullopt;
+    DetectionFrameSpec frame;
+    const bool first = half(t) == 1;
+    (first ? frame.blue : frame.yellow) = team(t, 0, !first);
+    (first ? frame.yellow : frame.blue) = team(t, 6, false);
+    return frame;
+  };
+  with_referee.referee = [&](double t) -> std::optional<testing::RefereeSpec> {
+    testing::RefereeSpec spec;
+    // blue's goal on -x all match: blue attacks +x, yellow -x.
+    spec.blue_on_positive_half = false;
+    if (half(t) == 1) {
+      spec.yellow = "Decoy FC";
+      spec.blue = "Scouted Team";
+    } else {
+      // The game controller's spelling may differ from the option's in case and spaces.
+      spec.yellow = " scouted TEAM";
+      spec.blue = "Decoy FC";
+      spec.command = half(t) == 0 ? Referee::HALT : Referee::NORMAL_START;
+      spec.command_counter = half(t) == 0 ? 2 : 3;
+      spec.stage = half(t) == 0 ? Referee::NORMAL_HALF_TIME : Referee::NORMAL_SECOND_HALF;
+    }
+    return spec;
+  };
+  // The same robots pre-normalised: the scouted team yellow attacking +x all match, no referee.
+  testing::MatchScript explicit_script;
+  explicit_script.seconds = 90.0;
+  explicit_script.frame = [&](double t) -> std::optional<DetectionFrameSpec> {
+    if (half(t) == 0) return std::nullopt;
+    DetectionFrameSpec frame;
+    frame.yellow = team(t, 0, false);
+    frame.blue = team(t, 6, false);
+    return frame;
+  };
+  ASSERT_EQ(testing::write_match_log(dir / "referee.log", with_referee), "");
+  ASSERT_EQ(testing::write_match_log(dir / "explicit.log", explicit_script), "");
+
+  const auto by_name = train(dir, dir / "referee.log", dir / "by-name.table",
+                             {"--opponent-team", "Scouted Team"}, "by-name");
+  ASSERT_EQ(by_name.exit_code, 0) << by_name.err;
+  const auto given = train(dir, dir / "explicit.log", dir / "given.table",
+                           {"--opponent-color", "yellow", "--opponent-attacks", "+x"}, "given");
+  ASSERT_EQ(given.exit_code, 0) << given.err;
+  // The log line says who the opponent ended up as, and why.
+  EXPECT_NE(by_name.err.find("opponent ' scouted TEAM' yellow (referee), attacks -x (referee)"),
+            std::string::npos)
+      << by_name.err;
+
+  const auto a = load_table(dir / "by-name.table", Grid(3, 2));
+  const auto b = load_table(dir / "given.table", Grid(3, 2));
+  ASSERT_TRUE(a) << a.error().message;
+  ASSERT_TRUE(b) << b.error().message;
+  ASSERT_TRUE(a->motion && b->motion);
+  EXPECT_GT(b->motion->instances(), 3000u);
+  EXPECT_GT(b->table.transitions(), 10000u);
+  EXPECT_EQ(testing::table_entries(a->table), testing::table_entries(b->table));
+  EXPECT_EQ(a->metadata.samples, b->metadata.samples);
+  EXPECT_TRUE(*a->motion == *b->motion);
+
+  // Without the name, the referee's sides still apply but the colour stays the default yellow:
+  // the decoy is learned in the first half, and the table differs.
+  const auto unnamed =
+      train(dir, dir / "referee.log", dir / "unnamed.table", {}, "unnamed");
+  ASSERT_EQ(unnamed.exit_code, 0) << unnamed.err;
+  const auto c = load_table(dir / "unnamed.table", Grid(3, 2));
+  ASSERT_TRUE(c && c->motion);
+  EXPECT_NE(testing::table_entries(c->table), testing::table_entries(b->table));
+}
+
+// Robot i's position: circling in its own half in running play, about a spot near the other
+// goal while the game is stopped (somewhere running play never goes).
+Point robot_position(int i, double t, bool running) {
+  const double angle = 0.9 * t + 1.1 * i;
+  const Point centre = running ? Point{-2600.0 + 250.0 * (i % 3), -2000.0 + 800.0 * i}
+                               : Point{3750.0, -2000.0 + 800.0 * i};
+  const double radius = running ? 500.0 : 150.0;
+  return {centre.x + radius * std::cos(angle), centre.y + radius * std::sin(angle)};
+}
+
+TEST(MatchTraining, NothingIsLearnedDuringStopHaltOrBallPlacement) {
+  TempDir dir;
+  // The commands of 80 s of a match, with the game controller's command counter.
+  struct Stretch {
+    double until_s;
+    Referee::Command command;
+  };
+  const std::vector<Stretch> stretches{
+      {20.0, Referee::NORMAL_START}, {30.0, Referee::STOP},  {35.0, Referee::BALL_PLACEMENT_BLUE},
+      {55.0, Referee::NORMAL_START}, {60.0, Referee::HALT},  {80.0, Referee::FORCE_START}};
+  const auto stretch_at = [&](double t) {
+    std::size_t i = 0;
+    while (i + 1 < stretches.size() && t >= stretches[i].until_s) ++i;
+    return i;
+  };
+  const auto running = [&](double t) {
+    const Referee::Command c = stretches[stretch_at(t)].command;
+    return c == Referee::NORMAL_START || c == Referee::FORCE_START;
+  };
+  testing::MatchScript script;
+  script.seconds = 80.0;
+  script.frame = [&](double t) -> std::optional<DetectionFrameSpec> {
+    DetectionFrameSpec frame;
+    for (int i = 0; i < 6; ++i) {
+      frame.yellow.push_back({static_cast<std::uint32_t>(i), robot_position(i, t, running(t))});
+    }
+    return frame;
+  };
+  script.referee = [&](double t) -> std::optional<testing::RefereeSpec> {
+    testing::RefereeSpec spec;
+    spec.command = stretches[stretch_at(t)].command;
+    spec.command_counter = static_cast<std::uint32_t>(stretch_at(t) + 1);
+    spec.yellow = "Them";
+    spec.blue = "Us";
+    return spec;
+  };
+  ASSERT_EQ(testing::write_match_log(dir / "match.log", script), "");
+
+  const auto in_play = train(dir, dir / "match.log", dir / "running.table", {"--our-team", "us"},
+                             "running");
+  ASSERT_EQ(in_play.exit_code, 0) << in_play.err;
+  const auto everything = train(dir, dir / "match.log", dir / "all.table",
+                                {"--our-team", "us", "--learn-during", "all"}, "all");
+  ASSERT_EQ(everything.exit_code, 0) << everything.err;
+
+  // The stopped robots' cells: the 3x2 grid's third column, and the motion model's 0.5 m cells
+  // about the spot they circle; running play never reaches either.
+  std::set<int> stopped_cells;
+  for (double t = 0.0; t < 80.0; t += 0.05) {
+    for (int i = 0; i < 6; ++i) {
+      stopped_cells.insert(MotionFeatures::cell(robot_position(i, t, false)));
+      ASSERT_EQ(stopped_cells.count(MotionFeatures::cell(robot_position(i, t, true))), 0u);
+    }
+  }
+  const StateCodec codec(Grid(3, 2));
+  struct Counted {
+    std::uint64_t transitions = 0;
+    std::uint64_t stopped_transitions = 0;
+    std::uint64_t stopped_rows = 0;
+  };
+  const auto count = [&](const std::filesystem::path& path) {
+    const auto loaded = load_table(path, Grid(3, 2));
+    EXPECT_TRUE(loaded && loaded->motion) << path;
+    Counted counted;
+    if (!loaded || !loaded->motion) return counted;
+    loaded->table.for_each_nonzero([&](StateIndex from, StateIndex to, TransitionTable::Count n) {
+      counted.transitions += n;
+      if (codec.decode(from).position.x == 2 || codec.decode(to).position.x == 2) {
+        counted.stopped_transitions += n;
+      }
+    });
+    for (const auto& [key, row] : loaded->motion->sorted_rows()) {
+      const MotionKeyParts parts = decode_motion_key(key);
+      if (parts.level == MotionLevel::robot && stopped_cells.count(parts.cell)) {
+        ++counted.stopped_rows;
+      }
+    }
+    return counted;
+  };
+  const Counted running_only = count(dir / "running.table");
+  const Counted all_states = count(dir / "all.table");
+  // Learned in every state, the stops are in the tables; in running play only, not at all, not
+  // even the transition from the last instant of play into a stop.
+  EXPECT_GT(all_states.stopped_transitions, 1000u);
+  EXPECT_GT(all_states.stopped_rows, 10u);
+  EXPECT_EQ(running_only.stopped_transitions, 0u);
+  EXPECT_EQ(running_only.stopped_rows, 0u);
+  // Running play itself is learned: 60 of the 80 s.
+  EXPECT_GT(running_only.transitions, all_states.transitions / 2);
+  EXPECT_NE(in_play.err.find("not learned (--learn-during running)"), std::string::npos)
+      << in_play.err;
+}
+
+}  // namespace
+}  // namespace ssl_formation
