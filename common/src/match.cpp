@@ -31,6 +31,14 @@ std::string_view trimmed(std::string_view text) {
 }
 }  // namespace
 
+OpponentChoice fixed_opponent(TeamColor color, std::optional<AttackDirection> attacks) {
+  OpponentChoice choice;
+  choice.color = color;
+  choice.attacks = attacks;
+  choice.infer_attacks = !attacks;
+  return choice;
+}
+
 bool same_team_name(std::string_view a, std::string_view b) {
   a = trimmed(a);
   b = trimmed(b);

@@ -134,7 +134,7 @@ PredictionContext prediction_context(const TransitionTable& table, const Sampler
 void encode_prediction(const Formation& current, const Prediction& prediction,
                        const PredictionContext& context, std::string& buffer) {
   // An upper bound of the encoded size: every varint at its longest.
-  std::size_t bound = 160 + 64 * current.robots.size();
+  std::size_t bound = 192 + 64 * current.robots.size();
   for (const PredictedStep& step : prediction.steps) bound += 80 + 112 * step.robots.size();
   if (buffer.size() < bound) buffer.resize(bound);
   wire::Writer out{buffer.data()};
@@ -190,6 +190,10 @@ void encode_prediction(const Formation& current, const Prediction& prediction,
   wire::length(out, 11, model.size());
   std::memcpy(out.p, model.data(), model.size());
   out.p += model.size();
+  const std::string_view game_state = to_string(context.game_state);
+  wire::length(out, 12, game_state.size());
+  std::memcpy(out.p, game_state.data(), game_state.size());
+  out.p += game_state.size();
   buffer.resize(static_cast<std::size_t>(out.p - buffer.data()));
 }
 
@@ -246,6 +250,7 @@ void fill_prediction_message(const Formation& current, const Prediction& predict
   out.set_step_seconds(context.step_s);
   out.set_opponent_color(std::string(to_string(context.opponent_color)));
   out.set_model(std::string(to_string(context.model)));
+  out.set_game_state(std::string(to_string(context.game_state)));
 }
 
 namespace {

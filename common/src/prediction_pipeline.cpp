@@ -24,7 +24,12 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
       on_prediction_(std::move(on_prediction)),
       motion_history_(motion_history_config(config)),
       online_calibration_(config.recalibration.value_or(OnlineCalibrationSettings{})),
-      sampler_(config.sampler, [this](const FormationSample& sample) { on_sample(sample); }) {
+      sampler_(config.sampler, [this](const FormationSample& sample) { on_sample(sample); }),
+      match_(config.opponent ? *config.opponent
+                             : fixed_opponent(config.sampler.opponent_color,
+                                              config.sampler.infer_attacks
+                                                  ? std::nullopt
+                                                  : std::optional(config.sampler.opponent_attacks))) {
   if (config_.model == ModelKind::motion && config_.sampler.sampling != Sampling::frame) {
     throw std::invalid_argument(
         "the motion model predicts from every frame's velocities: it needs --sampling frame");
@@ -45,6 +50,30 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
   motion_robots_.reserve(usual_robots);
   prediction_.steps.resize(static_cast<std::size_t>(config_.horizon));
   for (PredictedStep& step : prediction_.steps) step.robots.reserve(usual_robots);
+  follow_opponent();
+}
+
+void PredictionPipeline::add_referee(std::string_view payload, double receive_s) {
+  if (match_.add_referee(payload, receive_s).any()) follow_opponent();
+}
+
+void PredictionPipeline::start_new_stream() {
+  sampler_.start_new_stream();
+  motion_history_.clear();
+  online_calibration_.clear();
+  last_sample_ = nullptr;
+  match_.reset();
+  follow_opponent();
+}
+
+void PredictionPipeline::follow_opponent() {
+  const Opponent& opponent = match_.opponent();
+  if (opponent.color != sampler_.config().opponent_color) {
+    motion_history_.clear();
+    online_calibration_.clear();
+    last_sample_ = nullptr;
+  }
+  sampler_.set_opponent(opponent.color, opponent.attacks);
 }
 
 void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
@@ -110,10 +139,12 @@ bool PredictionPipeline::predict_sample(const FormationSample& sample) {
   const StoredTable& stored = *table_;
   const MotionModel* motion_model = motion_model_.get();
   PredictionContext& context = context_;
-  context = prediction_context(stored.table, config_.sampler, sampler_.field());
+  // The sampler's opponent now (the referee may have changed it since the start).
+  context = prediction_context(stored.table, sampler_.config(), sampler_.field());
   // The direction may be inferred (--opponent-attacks auto): the one this sample was taken with.
-  context.opponent_attacks = sampler_.attacks().value_or(config_.sampler.opponent_attacks);
+  context.opponent_attacks = sampler_.attacks().value_or(sampler_.config().opponent_attacks);
   context.model = config_.model;
+  context.game_state = match_.game_state();
   if (motion_model) {
     motion_robots_.clear();
     for (const FormationRobot& robot : sample.formation.robots) {

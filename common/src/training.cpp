@@ -6,27 +6,17 @@
 
 namespace ssl_formation {
 
-namespace {
-// The sampler's own opponent, as options that win over the referee.
-OpponentChoice fixed_opponent(const SamplerConfig& config) {
-  OpponentChoice choice;
-  choice.color = config.opponent_color;
-  if (config.infer_attacks) {
-    choice.infer_attacks = true;
-  } else {
-    choice.attacks = config.opponent_attacks;
-  }
-  return choice;
-}
-}  // namespace
-
 Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before,
                    std::optional<MotionTable> motion, std::optional<MatchRules> rules)
     : table_(std::move(table)),
       motion_(std::move(motion)),
       motion_history_(motion_ ? motion_->config() : MotionConfig{}),
       sampler_(config, [this](const FormationSample& sample) { on_sample(sample); }),
-      match_(rules ? rules->opponent : fixed_opponent(config)),
+      match_(rules ? rules->opponent
+                   : fixed_opponent(config.opponent_color,
+                                    config.infer_attacks
+                                        ? std::nullopt
+                                        : std::optional(config.opponent_attacks))),
       learn_during_(rules ? rules->learn_during : LearnDuring::running),
       samples_before_(samples_before),
       saved_transitions_(table_.transitions()),

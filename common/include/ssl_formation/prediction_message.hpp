@@ -7,6 +7,7 @@
 #include "formation_prediction.pb.h"
 #include "ssl_formation/motion_model.hpp"
 #include "ssl_formation/predictor.hpp"
+#include "ssl_formation/referee.hpp"
 #include "ssl_formation/sampler.hpp"
 
 namespace ssl_formation {
@@ -19,6 +20,7 @@ struct PredictionContext {
   double step_s = 2.0;
   std::uint64_t table_transitions = 0;
   ModelKind model = ModelKind::paper;
+  GameState game_state = GameState::unknown;  // the referee's, when the prediction was made
 };
 
 // The context a predictor running `config` on `table` writes its messages with, for the current

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 
+#include "ssl_formation/match.hpp"
 #include "ssl_formation/motion_predictor.hpp"
 #include "ssl_formation/online_calibration.hpp"
 #include "ssl_formation/prediction_message.hpp"
@@ -27,6 +28,9 @@ struct PredictionConfig {
   // How the motion model's stated probabilities follow what the play lately did
   // (OnlineCalibration); none: as the table's calibration states them.
   std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
+  // Who the opponent is, with the referee filling in what the options leave open; none: the
+  // sampler's colour and side, fixed as if given by option.
+  std::optional<OpponentChoice> opponent = std::nullopt;
   static constexpr int max_horizon = 100;
 };
 
@@ -58,13 +62,13 @@ class PredictionPipeline {
 
   void add(const VisionFrame& frame) { sampler_.add(frame); }
   void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
-  // A new log file: its first formation follows nothing (no chain across two files).
-  void start_new_stream() {
-    sampler_.start_new_stream();
-    motion_history_.clear();
-    online_calibration_.clear();
-    last_sample_ = nullptr;
-  }
+  // A referee message (a datagram, or a log's type-3 payload) in its place among the frames,
+  // received at `receive_s`: the opponent's colour and side follow it as the options allow, and
+  // every prediction says the game state it was made in.
+  void add_referee(std::string_view payload, double receive_s);
+  // A new log file: its first formation follows nothing (no chain across two files), and its
+  // referee is heard anew.
+  void start_new_stream();
 
   // Predicts the last sampled formation again, as it was, counting nothing, and hands it to
   // `on_rehearsal` (not to the pipeline's handler). A daemon that waits ~16 ms between frames
@@ -75,6 +79,7 @@ class PredictionPipeline {
 
   const PredictionConfig& config() const { return config_; }
   const FormationSampler& sampler() const { return sampler_; }
+  const MatchFollower& match() const { return match_; }
   std::uint64_t predictions() const { return predictions_; }
   std::uint64_t samples_without_table() const { return samples_without_table_; }
 
@@ -82,6 +87,9 @@ class PredictionPipeline {
   void on_sample(const FormationSample& sample);
   // Fills prediction_ and context_ for `sample` from the current table; false without one.
   bool predict_sample(const FormationSample& sample);
+  // Hands the match's opponent to the sampler; another colour also forgets what was followed of
+  // the old one (its robots share the ids).
+  void follow_opponent();
 
   PredictionConfig config_;
   Handler on_prediction_;
@@ -91,6 +99,7 @@ class PredictionPipeline {
   MotionHistory motion_history_;
   OnlineCalibration online_calibration_;
   FormationSampler sampler_;
+  MatchFollower match_;
   // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
   std::vector<RobotStateById> robot_states_;
   std::vector<MotionRobot> motion_robots_;
