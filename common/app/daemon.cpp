@@ -34,6 +34,56 @@ net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_
   return *choice;
 }
 
+std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& text) {
+  if (text == "none") return std::nullopt;
+  return parse_group_option("referee-address", text);
+}
+
+double steady_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+void MatchLog::update(const MatchFollower& match, std::optional<AttackDirection> attacks_now,
+                      const RefereeChange& change) {
+  const std::string opponent = describe(match.opponent(), attacks_now);
+  if (opponent != logged_opponent_) {
+    spdlog::info("opponent: {}", opponent);
+    logged_opponent_ = opponent;
+  }
+  const RefereeFollower& referee = match.referee();
+  if (referee.heard() && logged_state_ != match.game_state()) {
+    spdlog::info("referee: {}", describe(referee));
+    logged_state_ = match.game_state();
+  }
+  const RefereeCounters& c = referee.counters();
+  if (change.conflict) {
+    spdlog::warn(
+        "referee: a second game controller sends on the referee group; still following the "
+        "first ('{}'), {} messages of others ignored so far",
+        referee.view().source, c.other_source);
+  }
+  if (change.source) {
+    spdlog::warn("referee: the game controller followed fell silent; now following '{}'",
+                 referee.view().source);
+  }
+  if (c.undecodable > reported_.undecodable) {
+    spdlog::warn("referee: {} datagrams that are not referee messages ({} in all)",
+                 c.undecodable - reported_.undecodable, c.undecodable);
+  }
+  if (c.unknown_command > reported_.unknown_command) {
+    spdlog::warn("referee: {} messages with a command this program does not know ({} in all)",
+                 c.unknown_command - reported_.unknown_command, c.unknown_command);
+  }
+  reported_ = c;
+}
+
+std::string describe_referee_counts(const MatchFollower& match) {
+  const RefereeCounters& c = match.referee().counters();
+  return fmt::format("game={} referee_messages={} referee_unused={}",
+                     to_string(match.game_state()), c.messages, c.messages - c.used);
+}
+
 StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> on_stop)
     : signals_(io, SIGINT, SIGTERM) {
   signals_.async_wait(
@@ -122,17 +172,8 @@ void FieldSizeLog::update(const FieldSize& field) {
   logged_ = field;
 }
 
-void AttackDirectionLog::update(std::optional<AttackDirection> now) {
-  if (now == logged_) return;
-  if (now) {
-    spdlog::info("the opponent attacks {}: inferred from where its goalkeeper stands{}",
-                 to_string(*now), logged_ ? " (the teams changed ends)" : "");
-  }
-  logged_ = now;
-}
-
-std::string describe_attacks(std::optional<AttackDirection> now, bool inferred) {
-  const char* why = inferred ? " (inferred)" : " (option)";
+std::string describe_attacks(std::optional<AttackDirection> now, Because because) {
+  const std::string why = " (" + std::string(to_string(because)) + ")";
   return now ? std::string(to_string(*now)) + why : std::string("unknown-yet") + why;
 }
 

@@ -158,6 +158,10 @@ void add_vision_options(po::options_description& options, NetworkOptions& networ
   options.add_options()("vision-address",
                         po::value(&network.vision_address)->default_value(network.vision_address),
                         "SSL-Vision multicast group:port to listen on (grSim: 224.5.23.2:10020)")(
+      "referee-address",
+      po::value(&network.referee_address)->default_value(network.referee_address),
+      "the game controller's referee multicast group:port, joined on --interface too: the "
+      "opponent's name, colour and side and the game state follow it; none: no referee feed")(
       "interface", po::value(&network.interface)->default_value(network.interface),
       "IPv4 address of the interface to join on, or 'all' for every interface");
 }

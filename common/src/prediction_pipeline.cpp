@@ -53,8 +53,10 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
   follow_opponent();
 }
 
-void PredictionPipeline::add_referee(std::string_view payload, double receive_s) {
-  if (match_.add_referee(payload, receive_s).any()) follow_opponent();
+RefereeChange PredictionPipeline::add_referee(std::string_view payload, double receive_s) {
+  const RefereeChange change = match_.add_referee(payload, receive_s);
+  if (change.any()) follow_opponent();
+  return change;
 }
 
 void PredictionPipeline::start_new_stream() {

@@ -36,14 +36,15 @@ Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t sa
   follow_opponent();
 }
 
-void Training::add_referee(std::string_view payload, double receive_s) {
+RefereeChange Training::add_referee(std::string_view payload, double receive_s) {
   const RefereeChange change = match_.add_referee(payload, receive_s);
-  if (!change.any()) return;
+  if (!change.any()) return change;
   follow_opponent();
   if (change.command && learn_during_ == LearnDuring::running) {
     sampler_.start_new_segment();
     segment_start_s_ = std::numeric_limits<double>::infinity();
   }
+  return change;
 }
 
 void Training::start_new_stream() {

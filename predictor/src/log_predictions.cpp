@@ -58,7 +58,7 @@ int run_from_log(const PredictorOptions& options) {
   }
 
   bool every_file_whole = true;
-  SSL_WrapperPacket packet;
+  VisionFrame frame;
   for (const std::string& path : options.from_logs) {
     Result<LogReader> reader = LogReader::open(path);
     if (!reader) {
@@ -73,8 +73,15 @@ int run_from_log(const PredictorOptions& options) {
     if (reader->compressed_size() > progress_bar_bytes && !to_stdout)
       bar.emplace("predicting from " + path, reader->compressed_size());
     std::uint64_t frames = 0;
-    while (reader->next_vision(packet)) {
-      pipeline.add(packet);
+    LogReader::MatchInput kind{};
+    std::string_view referee;
+    std::int64_t receive_ns = 0;
+    while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
+      if (kind == LogReader::MatchInput::referee) {
+        pipeline.add_referee(referee, static_cast<double>(receive_ns) * 1e-9);
+        continue;
+      }
+      pipeline.add(frame);
       if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);
     }
     if (bar) bar->finish(frames);

@@ -52,7 +52,8 @@ class PredictorDaemon {
  public:
   PredictorDaemon(boost::asio::io_context& io, const PredictorOptions& options,
                   const PredictionConfig& config)
-      : options_(options),
+      : io_(io),
+        options_(options),
         config_(config.sampler),
         watcher_(options.table, config.sampler.grid),
         pipeline_(config,
@@ -60,6 +61,7 @@ class PredictorDaemon {
         receiver_(io, app::parse_group_option("vision-address", options.network.vision_address),
                   app::parse_interface_option(options.network.interface, true),
                   options.receive_buffer_bytes),
+        referee_group_(app::parse_referee_option(options.network.referee_address)),
         sender_(io, app::parse_group_option("prediction-address", options.prediction_address),
                 app::parse_interface_option(prediction_interface(options), false).address,
                 options.ttl),
@@ -96,12 +98,28 @@ class PredictorDaemon {
       }
       pipeline_.add(frame);
       if (frame.has_geometry) field_log_.update(pipeline_.sampler().field());
-      if (config_.infer_attacks) attack_log_.update(pipeline_.sampler().attacks());
+      if (pipeline_.sampler().config().infer_attacks) {
+        match_log_.update(pipeline_.match(), pipeline_.sampler().attacks());
+      }
     });
-    spdlog::info(
-        "predicting {} steps ahead; opponent {} attacking {}; grid {}, step {} s, {} sampling",
-        options_.horizon, to_string(config_.opponent_color), options_.model.opponent_attacks,
-        config_.grid.to_string(), config_.step_s, to_string(config_.sampling));
+    match_log_.update(pipeline_.match(), pipeline_.sampler().attacks());
+    // The referee on the same thread as the vision: each command applies from the next frame.
+    if (referee_group_) {
+      referee_.emplace(io_, *referee_group_,
+                       app::parse_interface_option(options_.network.interface, true),
+                       options_.receive_buffer_bytes);
+      referee_->start([this](std::span<const std::byte> datagram, const net::udp::endpoint&) {
+        const std::string_view payload(reinterpret_cast<const char*>(datagram.data()),
+                                       datagram.size());
+        const RefereeChange change = pipeline_.add_referee(payload, app::steady_seconds());
+        if (change.any()) ours_.set_color(other_team(pipeline_.sampler().config().opponent_color));
+        match_log_.update(pipeline_.match(), pipeline_.sampler().attacks(), change);
+      });
+    }
+    spdlog::info("predicting {} steps ahead; grid {}, step {} s, {} sampling; referee {}",
+                 options_.horizon, config_.grid.to_string(), config_.step_s,
+                 to_string(config_.sampling),
+                 referee_group_ ? referee_group_->to_string() : std::string("none"));
     check_table();
     if (!watcher_.table()) {
       spdlog::info("waiting for the table {}: start ssl-trainer with --table {} (or give --table)",
@@ -112,6 +130,7 @@ class PredictorDaemon {
   void stop() {
     warm_up_timer_.cancel();
     receiver_.stop();
+    if (referee_) referee_->stop();
     if (web_) web_->stop();
   }
 
@@ -122,6 +141,7 @@ class PredictorDaemon {
     std::vector<std::pair<std::string, std::string>> facts{
         {"vision", options_.network.vision_address},
         {"interface", options_.network.interface},
+        {"referee", referee_group_ ? referee_group_->to_string() : "none"},
         {"predictions", options_.prediction_address},
         {"table", options_.table},
         // The table predictions come from: a table the model refused is not loaded.
@@ -223,11 +243,12 @@ class PredictorDaemon {
     const auto& c = pipeline_.sampler().counters();
     spdlog::info(
         "status: {} formations={} predictions={} sent={} warm_ups={} table_reloads={} attacks={} "
-        "| {}",
+        "{} | {}",
         app::describe_reception(receiver_), c.samples, pipeline_.predictions(), sender_.sent(),
         warm_ups_, watcher_.reloads(),
-        app::describe_attacks(pipeline_.sampler().attacks(), config_.infer_attacks),
-        describe_rejections(c));
+        app::describe_attacks(pipeline_.sampler().attacks(),
+                              pipeline_.match().opponent().attacks_because),
+        app::describe_referee_counts(pipeline_.match()), describe_rejections(c));
     // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
     for (const std::string& line : new_rejections(reported_, c)) spdlog::warn("input: {}", line);
     reported_ = c;
@@ -298,17 +319,21 @@ class PredictorDaemon {
   }
 
   web::FieldViewSetup view_setup() const {
-    // The direction in use: inferred with --opponent-attacks auto (the configured one until then).
+    // The opponent in use: the referee's or inferred side (the configured one until then).
+    const SamplerConfig& now = pipeline_.sampler().config();
     return web::FieldViewSetup{pipeline_.sampler().field(), config_.grid,
-                               pipeline_.sampler().attacks().value_or(config_.opponent_attacks),
-                               config_.opponent_color};
+                               pipeline_.sampler().attacks().value_or(now.opponent_attacks),
+                               now.opponent_color};
   }
 
+  boost::asio::io_context& io_;
   const PredictorOptions& options_;
   SamplerConfig config_;
   TableWatcher watcher_;
   PredictionPipeline pipeline_;
   net::VisionReceiver receiver_;
+  std::optional<net::MulticastEndpoint> referee_group_;  // none: --referee-address none
+  std::optional<net::MulticastReceiver> referee_;
   net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction
   std::string datagram_;
   proto::FormationPrediction message_;  // for the field view only
@@ -316,7 +341,7 @@ class PredictorDaemon {
   // The field view (--http-port), and what only it needs.
   web::TeamRobots ours_;
   app::FieldSizeLog field_log_;
-  app::AttackDirectionLog attack_log_;
+  app::MatchLog match_log_;
   std::optional<web::FieldViewServer> web_;
   std::optional<std::chrono::steady_clock::time_point> last_packet_;
   std::optional<std::chrono::steady_clock::time_point> last_rate_time_;
@@ -342,6 +367,7 @@ PredictionConfig prediction_config(const PredictorOptions& options) {
   }
   config.horizon = options.horizon;
   config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
+  config.opponent = options.model.opponent_choice();
   return config;
 }
 

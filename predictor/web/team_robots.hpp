@@ -29,6 +29,12 @@ class TeamRobots {
   // The robots seen within the timeout, sorted by id.
   const std::vector<TeamRobot>& current();
   void clear();
+  // Follows the other team from now on (the referee named another opponent): forgets this one.
+  void set_color(TeamColor color) {
+    if (color == color_) return;
+    color_ = color;
+    clear();
+  }
 
  private:
   TeamColor color_;

@@ -21,7 +21,7 @@ void log_status(const Training& training, const net::VisionReceiver& receiver,
   const auto& motion = training.motion();
   spdlog::info(
       "status: {} formations={} transitions={} table_transitions={} states_seen={}{} "
-      "rejected_robots={} late_frames={} attacks={} | {}",
+      "rejected_robots={} late_frames={} attacks={} {} | {}",
       app::describe_reception(receiver), c.samples, c.transitions, training.table().transitions(),
       training.table().rows_seen(),
       motion ? fmt::format(" motion_instances={} motion_held_out={} motion_rows={}",
@@ -29,8 +29,8 @@ void log_status(const Training& training, const net::VisionReceiver& receiver,
              : std::string(),
       c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id,
       c.frames_late,
-      app::describe_attacks(training.sampler().attacks(), training.sampler().config().infer_attacks),
-      describe_rejections(c));
+      app::describe_attacks(training.sampler().attacks(), training.match().opponent().attacks_because),
+      app::describe_referee_counts(training.match()), describe_rejections(c));
   for (const std::string& line : new_rejections(reported, c)) spdlog::warn("input: {}", line);
   reported = c;
 }
@@ -46,24 +46,43 @@ int run_live(const TrainerOptions& options) {
 
   const std::filesystem::path table_path = options.table;
   const std::optional<MotionConfig> motion = motion_config(options);
-  std::unique_ptr<Training> training = open_training(table_path, config, options.reset, motion);
+  const std::optional<net::MulticastEndpoint> referee_group =
+      app::parse_referee_option(options.network.referee_address);
+  std::unique_ptr<Training> training =
+      open_training(table_path, config, options.reset, motion, match_rules(options));
 
   boost::asio::io_context io;
   app::ReadyFile ready(options.daemon.ready_file);
   net::VisionReceiver receiver(io, group, interface, options.receive_buffer_bytes);
   app::FieldSizeLog field_log(config.field, config.use_geometry);
-  app::AttackDirectionLog attack_log;
+  app::MatchLog match_log;
+  match_log.update(training->match(), training->sampler().attacks());
   receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
     training->add(frame);
     if (frame.has_geometry) field_log.update(training->sampler().field());
-    if (config.infer_attacks) attack_log.update(training->sampler().attacks());
+    if (training->sampler().config().infer_attacks) {
+      match_log.update(training->match(), training->sampler().attacks());
+    }
   });
+  // The referee on the same thread as the vision: each command applies from the next frame.
+  std::optional<net::MulticastReceiver> referee;
+  if (referee_group) {
+    referee.emplace(io, *referee_group, interface, options.receive_buffer_bytes);
+    referee->start([&](std::span<const std::byte> datagram, const net::udp::endpoint&) {
+      const std::string_view payload(reinterpret_cast<const char*>(datagram.data()),
+                                     datagram.size());
+      const RefereeChange change = training->add_referee(payload, app::steady_seconds());
+      match_log.update(training->match(), training->sampler().attacks(), change);
+    });
+  }
   spdlog::info(
-      "training: opponent {} attacking {}; model {}; grid {}, step {} s, {} sampling; table {} "
+      "training: model {}; grid {}, step {} s, {} sampling; learning {}; referee {}; table {} "
       "saved every {} s",
-      to_string(config.opponent_color), options.model.opponent_attacks,
       motion ? fmt::format("motion ({} steps ahead)", motion->horizons) : std::string("paper"),
-      config.grid.to_string(), config.step_s, to_string(config.sampling), table_path.string(),
+      config.grid.to_string(), config.step_s, to_string(config.sampling),
+      training->learn_during() == LearnDuring::all ? "in every game state"
+                                                   : "in running play once a referee is heard",
+      referee_group ? referee_group->to_string() : std::string("none"), table_path.string(),
       options.flush_interval_s);
 
   app::RepeatingTimer flush(io, flush_period, [&] {
@@ -76,12 +95,14 @@ int run_live(const TrainerOptions& options) {
     spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)",
                  signal);
     receiver.stop();
+    if (referee) referee->stop();
     flush.cancel();
     status.cancel();
     saved_on_exit = save_training(table_path, *training);
     io.stop();
   });
   ready.mark_ready("ssl-trainer", {{"vision", group.to_string()},
+                                   {"referee", referee_group ? referee_group->to_string() : "none"},
                                    {"interface", interface.to_string()},
                                    {"table", table_path.string()}});
   io.run();

@@ -65,7 +65,7 @@ class PredictionPipeline {
   // A referee message (a datagram, or a log's type-3 payload) in its place among the frames,
   // received at `receive_s`: the opponent's colour and side follow it as the options allow, and
   // every prediction says the game state it was made in.
-  void add_referee(std::string_view payload, double receive_s);
+  RefereeChange add_referee(std::string_view payload, double receive_s);
   // A new log file: its first formation follows nothing (no chain across two files), and its
   // referee is heard anew.
   void start_new_stream();

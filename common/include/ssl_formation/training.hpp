@@ -45,7 +45,7 @@ class Training {
   // LearnDuring::running only running play is counted, and no transition spans a new command.
   // (A command takes effect from the next instant the vision completes: a frame held for a
   // camera still to report when it came counts under the new one.)
-  void add_referee(std::string_view payload, double receive_s);
+  RefereeChange add_referee(std::string_view payload, double receive_s);
   // A new log file: its first formation follows nothing (no transition across two files), and
   // its referee is heard anew.
   void start_new_stream();

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/match.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/vision_receiver.hpp"
 
@@ -25,6 +26,31 @@ void init_logging(const std::string& program, bool verbose = false);
 // Both throw UsageError naming the option.
 net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text);
 net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_all);
+
+// --referee-address: the group to join, or none for "none". Throws UsageError.
+std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& text);
+
+// Seconds on the steady clock: the receive time the referee follower takes from a live feed.
+double steady_seconds();
+
+// Logs who the opponent is and the game state whenever either changes, and a warning when a
+// second game controller appears or referee messages arrive that cannot be used.
+class MatchLog {
+ public:
+  // Cheap when nothing changed; call it after every referee message (and after frames with
+  // --opponent-attacks auto, whose side the sampler infers). `attacks_now`: the side in use.
+  void update(const MatchFollower& match, std::optional<AttackDirection> attacks_now,
+              const RefereeChange& change = {});
+
+ private:
+  std::string logged_opponent_;
+  std::optional<GameState> logged_state_;
+  RefereeCounters reported_;
+};
+
+// "game=running referee_messages=N referee_unused=N", for status lines: the state, and the
+// messages not followed (another game controller, unknown commands, undecodable).
+std::string describe_referee_counts(const MatchFollower& match);
 
 // Calls `on_stop` once on the first SIGINT or SIGTERM, from the io_context's thread. From then on
 // the signals have their default action again, so a second Ctrl-C (or SIGTERM) ends the process
@@ -92,19 +118,8 @@ class FieldSizeLog {
   FieldSize logged_;
 };
 
-// Logs the direction the opponent attacks once it is inferred (--opponent-attacks auto) and at
-// every switch (the teams changed ends), with the reason.
-class AttackDirectionLog {
- public:
-  // Cheap when nothing changed; call it after every frame.
-  void update(std::optional<AttackDirection> now);
-
- private:
-  std::optional<AttackDirection> logged_;
-};
-
-// "+x (option)", "-x (inferred)", "unknown yet (inferred)": for status lines.
-std::string describe_attacks(std::optional<AttackDirection> now, bool inferred);
+// "+x (option)", "-x (referee)", "unknown-yet (inferred)": for status lines.
+std::string describe_attacks(std::optional<AttackDirection> now, Because because);
 
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds);
 

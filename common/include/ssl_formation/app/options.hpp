@@ -25,6 +25,7 @@ struct UsageError : std::runtime_error {
 };
 
 inline constexpr const char* default_vision_address = "224.5.23.2:10006";
+inline constexpr const char* default_referee_address = "224.5.23.1:10003";
 inline constexpr const char* default_prediction_address = "224.5.23.4:10040";
 inline constexpr const char* default_interface = "127.0.0.1";
 inline constexpr const char* default_table = "formation-table.bin";
@@ -72,6 +73,8 @@ LearnDuring parsed_learn_during(const std::string& learn_during);  // throws Usa
 
 struct NetworkOptions {
   std::string vision_address = default_vision_address;
+  // The game controller's group, joined on the same interface; "none": no referee feed.
+  std::string referee_address = default_referee_address;
   std::string interface = default_interface;
 };
 void add_vision_options(po::options_description& options, NetworkOptions& network);
