@@ -80,7 +80,9 @@ void MatchLog::update(const MatchFollower& match, std::optional<AttackDirection>
 
 std::string describe_referee_counts(const MatchFollower& match) {
   const RefereeCounters& c = match.referee().counters();
-  return fmt::format("game={} referee_messages={} referee_unused={}",
+  const Opponent& opponent = match.opponent();
+  return fmt::format("opponent={} ({}) game={} referee_messages={} referee_unused={}",
+                     to_string(opponent.color), to_string(opponent.color_because),
                      to_string(match.game_state()), c.messages, c.messages - c.used);
 }
 

@@ -198,6 +198,9 @@ class PredictorDaemon {
     status.clients = counters.live_clients;
     status.dropped_frames = counters.dropped_frames;
     status.ours = ours_.current();
+    status.opponent = describe(pipeline_.match().opponent(), pipeline_.sampler().attacks());
+    status.game_state = std::string(to_string(pipeline_.match().game_state()));
+    status.referee = describe(pipeline_.match().referee());
     web_->broadcast(web::MessageKind::status, web::status_json(status));
   }
 

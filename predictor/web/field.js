@@ -356,6 +356,11 @@
     document.body.dataset.vision = since !== null && since <= NO_VISION_AFTER_S ? 'live' : 'stale';
     $('connection').textContent = view.connected ? 'live' : 'disconnected';
     if (!s) return;
+    if (s.match) {
+      $('status-opponent').textContent = s.match.opponent;
+      $('status-game').textContent = s.match.referee === 'no referee heard'
+        ? 'no referee heard' : `${s.match.game_state.replace(/_/g, ' ')} · ${s.match.referee}`;
+    }
     $('status-packets').textContent = `${fmt(s.packets_per_s, 1)} packets/s (${s.packets} in all)`;
     $('status-last-packet').textContent = since === null ? 'never' : `${since.toFixed(1)} s ago`;
     $('status-parse-errors').textContent = `${s.parse_errors}` + (s.kernel_drops ? ` · ${s.kernel_drops} kernel drops` : '');

@@ -246,6 +246,8 @@ std::string status_json(const FieldViewStatus& status) {
   json.key("error").string(status.table_error).close('}');
   json.key("clients").integer(status.clients).key("dropped_frames").integer(status.dropped_frames);
   write_ours(json, status.ours);
+  json.key("match").open('{').key("opponent").string(status.opponent);
+  json.key("game_state").string(status.game_state).key("referee").string(status.referee).close('}');
   json.close('}');
   return json.take();
 }

@@ -65,12 +65,17 @@ struct FieldViewStatus {
   std::uint64_t clients = 0;
   std::uint64_t dropped_frames = 0;
   std::span<const TeamRobot> ours;
+  // Who the opponent is and why, and the game state (MatchFollower).
+  std::string opponent;  // describe(Opponent, side in use): "'Them' blue (referee), attacks ..."
+  std::string game_state = "unknown";
+  std::string referee = "no referee heard";  // describe(RefereeFollower)
 };
 
 // {"type":"status",<setup>,"packets","packets_per_s","since_packet_s","last_packet_unix_ms",
 //  "server_unix_ms","parse_errors","kernel_drops","formations","predictions",
 //  "table":{"loaded","transitions","formations","motion_instances","states_seen","reloads",
-//  "loaded_unix_ms","error"},"clients","dropped_frames","ours":[..]} (null for what is unknown)
+//  "loaded_unix_ms","error"},"clients","dropped_frames","ours":[..],
+//  "match":{"opponent","game_state","referee"}} (null for what is unknown)
 std::string status_json(const FieldViewStatus& status);
 
 }  // namespace ssl_formation::predictor::web

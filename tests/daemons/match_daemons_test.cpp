@@ -147,6 +147,9 @@ TEST(MatchDaemons, PredictorFollowsTheRefereesOpponentSideAndGameStateAndTheFirs
 
   daemon.signal(SIGTERM);
   EXPECT_EQ(daemon.wait(5s), 0) << daemon.stderr_text();
+  EXPECT_NE(daemon.stderr_text().find("attacks=-x (referee) opponent=blue (referee) game=running"),
+            std::string::npos)
+      << daemon.stderr_text();
   const testing::Status status = testing::last_status(daemon.stderr_text());
   // STOP, the other's FORCE_START, garbage, the unknown command, NORMAL_START: 2 used.
   EXPECT_EQ(status.at("referee_messages"), 5u) << daemon.stderr_text();

@@ -144,6 +144,23 @@ TEST(FieldViewJson, StatusCarriesTheStreamAndTheTable) {
   EXPECT_NE(status_json(status).find(R"("since_packet_s":3.25)"), std::string::npos);
 }
 
+TEST(FieldViewJson, StatusSaysWhoTheOpponentIsWhyAndTheGameState) {
+  FieldViewStatus status;
+  EXPECT_NE(status_json(status).find(
+                R"("match":{"opponent":"","game_state":"unknown","referee":"no referee heard"})"),
+            std::string::npos)
+      << status_json(status);
+  status.opponent = "'Them' blue (referee), attacks -x (referee)";
+  status.game_state = "ball_placement";
+  status.referee = "game ball_placement, yellow 'Us', blue 'Them'";
+  EXPECT_NE(status_json(status).find(
+                R"j("match":{"opponent":"'Them' blue (referee), attacks -x (referee)",)j"
+                R"j("game_state":"ball_placement","referee":"game ball_placement, yellow 'Us', )j"
+                R"j(blue 'Them'"})j"),
+            std::string::npos)
+      << status_json(status);
+}
+
 TEST(FieldViewJson, TheAgeOfTheLastPacketIsTheServersOwnAndNeverNegative) {
   FieldViewStatus status;
   status.since_packet_s = 0.25;

@@ -48,8 +48,9 @@ class MatchLog {
   RefereeCounters reported_;
 };
 
-// "game=running referee_messages=N referee_unused=N", for status lines: the state, and the
-// messages not followed (another game controller, unknown commands, undecodable).
+// "opponent=blue (referee) game=running referee_messages=N referee_unused=N", for status lines:
+// the opponent's colour and why, the game state, and the referee messages not followed (another
+// game controller, unknown commands, undecodable).
 std::string describe_referee_counts(const MatchFollower& match);
 
 // Calls `on_stop` once on the first SIGINT or SIGTERM, from the io_context's thread. From then on
