@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
     network.add_options()
         ("vision-address", po::value(&o.vision_address)->default_value(o.vision_address),
          "multicast group:port to send to")
+        ("referee-address", po::value(&o.referee_address)->default_value(o.referee_address),
+         "--replay: where the log's referee messages go (the game controller's group); none: "
+         "not sent")
         ("interface", po::value(&o.interface)->default_value(o.interface),
          "IPv4 address of the interface to send from")
         ("ttl", po::value(&o.ttl)->default_value(o.ttl), "multicast TTL (1 keeps packets on the link)");

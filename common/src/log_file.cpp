@@ -396,6 +396,25 @@ bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::stri
   return false;
 }
 
+bool LogReader::next_match_input(MatchInput& kind, SSL_WrapperPacket& packet,
+                                 std::string_view& referee, std::int64_t* receive_time_ns) {
+  Header header{};
+  std::string_view payload;
+  while (next_view(header, payload)) {
+    if (header.type == static_cast<std::int32_t>(LogMessageType::referee)) {
+      kind = MatchInput::referee;
+      referee = payload;
+    } else if (parse_vision(header, payload, packet)) {
+      kind = MatchInput::vision;
+    } else {
+      continue;
+    }
+    if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;
+    return true;
+  }
+  return false;
+}
+
 std::uint64_t LogReader::compressed_offset() const {
   if (!file_) return 0;
   const auto at = gzoffset(file_.get());

@@ -45,22 +45,24 @@ void add_counters(LogReadCounters& total, const LogReadCounters& more) {
 
 class LogReplay {
  public:
+  // `referee`: where the log's referee messages go; none: they are skipped.
   LogReplay(boost::asio::io_context& io, const ProducerOptions& options,
-            net::ProtoMulticastSender<SSL_WrapperPacket>& sender)
-      : io_(io), timer_(io), options_(options), sender_(sender) {}
+            net::ProtoMulticastSender<SSL_WrapperPacket>& sender, net::MulticastSender* referee)
+      : io_(io), timer_(io), options_(options), sender_(sender), referee_(referee) {}
 
   // Opens the file and chooses the clock; throws std::runtime_error if it cannot be read.
   void open() {
     if (const auto opened = open_pass(); !opened) throw std::runtime_error(opened.error().message);
     std::vector<ClockSample> samples;
-    SSL_WrapperPacket packet;
-    std::int64_t receive_time = 0;
-    while (lookahead_.size() < kClockSamplePackets && reader_->next_vision(packet, &receive_time)) {
-      ClockSample sample{receive_time, std::nullopt};
-      if (packet.has_detection()) sample.t_capture = packet.detection().t_capture();
-      samples.push_back(sample);
-      lookahead_.push_back({std::move(packet), receive_time});
-      packet.Clear();
+    Pending pending;
+    while (samples.size() < kClockSamplePackets && read(pending)) {
+      if (!pending.is_referee) {
+        ClockSample sample{pending.receive_time, std::nullopt};
+        if (pending.packet.has_detection()) sample.t_capture = pending.packet.detection().t_capture();
+        samples.push_back(sample);
+      }
+      lookahead_.push_back(std::move(pending));
+      pending = Pending{};
     }
     const ClockChoice choice = choose_replay_clock(samples);
     timeline_ = ReplayTimeline(choice.clock);
@@ -92,8 +94,8 @@ class LogReplay {
   bool finished() const { return finished_; }
 
   void log_status() const {
-    spdlog::info("status: sent={} pass={} log_time={:.2f}s send_errors={}", sender_.sent(), passes_,
-                 last_t_, sender_.send_errors());
+    spdlog::info("status: sent={} referee_sent={} pass={} log_time={:.2f}s send_errors={}",
+                 sender_.sent(), referee_sent_, passes_, last_t_, sender_.send_errors());
   }
 
   void log_summary(const char* what) const {
@@ -102,20 +104,35 @@ class LogReplay {
     const double seconds = std::chrono::duration<double>(Clock::now() - started_).count();
     spdlog::info(
         "{}: {} packets sent in {:.2f} s ({} pass{} over {}, timing from {}, speed {}); "
-        "skipped non-vision messages: referee={} tracker={} blank={} unknown={} "
-        "legacy_vision_unusable={} undecodable={}; {} packets before --start, "
+        "{} referee messages sent ({} of {} in the log {}); skipped: tracker={} blank={} "
+        "unknown={} legacy_vision_unusable={} undecodable={}; {} packets before --start, "
         "{} send errors",
         what, sender_.sent(), seconds, passes_, passes_ == 1 ? "" : "es", options_.replay,
-        to_string(timeline_.clock()), options_.speed, counters.referee, counters.tracker,
+        to_string(timeline_.clock()), options_.speed, referee_sent_, referee_sent_,
+        counters.referee, referee_ ? "sent" : "sent: --referee-address none", counters.tracker,
         counters.blank, counters.unknown, counters.legacy_unusable, counters.parse_errors,
-        before_start_, sender_.send_errors());
+        before_start_, sender_.send_errors() + (referee_ ? referee_->send_errors() : 0));
   }
 
  private:
+  // A vision packet, or a referee message (its bytes in `referee`).
   struct Pending {
     SSL_WrapperPacket packet;
     std::int64_t receive_time = 0;
+    bool is_referee = false;
+    std::string referee;
   };
+
+  // The log's next vision packet or referee message into `out` (cleared first).
+  bool read(Pending& out) {
+    out.packet.Clear();
+    LogReader::MatchInput kind{};
+    std::string_view referee;
+    if (!reader_->next_match_input(kind, out.packet, referee, &out.receive_time)) return false;
+    out.is_referee = kind == LogReader::MatchInput::referee;
+    out.referee.assign(out.is_referee ? referee : std::string_view());
+    return true;
+  }
   enum class Fetch { packet, end, error };
 
   Result<void> open_pass() {
@@ -138,8 +155,7 @@ class LogReplay {
       lookahead_.pop_front();
       return Fetch::packet;
     }
-    current_.packet.Clear();
-    if (reader_->next_vision(current_.packet, &current_.receive_time)) return Fetch::packet;
+    if (read(current_)) return Fetch::packet;
     return reader_->error().empty() ? Fetch::end : Fetch::error;
   }
 
@@ -178,6 +194,14 @@ class LogReplay {
           if (const auto opened = open_pass(); !opened) {
             spdlog::error("{}", opened.error().message);
             return finish(1);
+          }
+          continue;
+        }
+        if (current_.is_referee) {
+          // Sent in its place among the vision packets, except before --start (the game
+          // controller repeats its state every 100 ms: the replay's first second brings it).
+          if (referee_ && (anchored_ || options_.replay_start_s <= 0.0)) {
+            if (referee_->send(std::as_bytes(std::span(current_.referee)))) ++referee_sent_;
           }
           continue;
         }
@@ -225,6 +249,8 @@ class LogReplay {
   boost::asio::steady_timer timer_;
   const ProducerOptions& options_;
   net::ProtoMulticastSender<SSL_WrapperPacket>& sender_;
+  net::MulticastSender* referee_;
+  std::uint64_t referee_sent_ = 0;
   std::optional<LogReader> reader_;
   std::deque<Pending> lookahead_;  // read ahead to choose the clock, sent first
   ReplayTimeline timeline_{ReplayClock::receive_ns};
@@ -268,10 +294,15 @@ int run_replay(const ProducerOptions& options) {
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
 
   boost::asio::io_context io;
+  const std::optional<net::MulticastEndpoint> referee_group =
+      app::parse_referee_option(options.referee_address);
   net::ProtoMulticastSender<SSL_WrapperPacket> sender(io, group, interface.address, options.ttl);
-  LogReplay replay(io, options, sender);
+  std::optional<net::MulticastSender> referee;
+  if (referee_group) referee.emplace(io, *referee_group, interface.address, options.ttl);
+  LogReplay replay(io, options, sender, referee ? &*referee : nullptr);
   replay.open();
   sender.open();
+  if (referee) referee->open();
   std::string window;
   if (options.replay_start_s > 0.0) window += fmt::format(", from {} s", options.replay_start_s);
   if (options.replay_end_s > 0.0) window += fmt::format(", to {} s", options.replay_end_s);
@@ -291,6 +322,7 @@ int run_replay(const ProducerOptions& options) {
   app::ReadyFile ready(options.daemon.ready_file);
   ready.mark_ready("ssl-producer", {{"mode", "replay"},
                                     {"vision", group.to_string()},
+                                    {"referee", referee_group ? referee_group->to_string() : "none"},
                                     {"interface", interface.to_string()},
                                     {"log", options.replay}});
   replay.start();

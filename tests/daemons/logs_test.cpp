@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "child_process.hpp"
+#include "match_logs.hpp"
 #include "pipeline_support.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
@@ -297,14 +298,20 @@ TEST(Logs, ReplaySendsLegacyVisionAndCountsWhatItSkips) {
     ASSERT_TRUE(writer->close(/*indexed=*/true)) << writer->error();
   }
   const std::string group = new_group();
+  const std::string referee_group = new_group();
   Listener listener(group);
-  const auto result = replay(dir, path, group, {"--speed", "0"});
+  Listener referee_listener(referee_group);
+  const auto result =
+      replay(dir, path, group, {"--speed", "0", "--referee-address", referee_group});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const auto received = listener.wait_for(3, 5s);
   EXPECT_EQ(frame_numbers(received), (std::vector<std::uint32_t>{0, 1, 3}));
   EXPECT_NE(result.err.find("done: 3 packets sent"), std::string::npos) << result.err;
-  EXPECT_NE(result.err.find(
-                "referee=2 tracker=1 blank=0 unknown=0 legacy_vision_unusable=1 undecodable=1"),
+  // The referee messages go to their own group as they are, the first one (before any vision)
+  // too; the rest is skipped and counted.
+  EXPECT_EQ(referee_listener.wait_for(2, 5s).size(), 2u);
+  EXPECT_NE(result.err.find("2 referee messages sent (2 of 2 in the log sent); skipped: tracker=1 "
+                            "blank=0 unknown=0 legacy_vision_unusable=1 undecodable=1"),
             std::string::npos)
       << result.err;
 }
@@ -598,6 +605,69 @@ TEST(Logs, RecordCountsButSkipsDatagramsThatAreNotVisionAndStopsAtItsCount) {
   ASSERT_EQ(recorded.packets.size(), 5u);
   for (std::uint32_t i = 0; i < 5; ++i)
     EXPECT_EQ(recorded.packets[i].detection().frame_number(), i);
+}
+
+TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
+  TempDir dir;
+  const std::string vision = new_group();
+  const std::string referee = new_group();
+  const auto path = dir / "match.log";
+  ChildProcess recorder(record_program,
+                        {"--vision-address", vision, "--referee-address", referee, "--output",
+                         path.string(), "--count", "4", "--status-interval", "0.05"},
+                        dir.path(), "record", Readiness::ready_file);
+  ASSERT_TRUE(recorder.wait_until_ready(10s)) << recorder.stderr_text();
+  EXPECT_EQ(recorder.ready_fact("referee"), referee);
+  testing::RefereeSpec spec;
+  spec.command = Referee::STOP;
+  const std::string stop = testing::referee_payload(spec);
+  spec.command = Referee::NORMAL_START;
+  spec.command_counter = 2;
+  const std::string start = testing::referee_payload(spec);
+  // Two sockets: a pause after each datagram keeps the order they reach the recorder in.
+  const auto send = [](const std::string& group, const std::string& bytes) {
+    ASSERT_TRUE(testing::send_to_group(group, bytes));
+    std::this_thread::sleep_for(50ms);
+  };
+  send(vision, detection_packet(0, 10.0).SerializeAsString());
+  send(referee, stop);
+  send(referee, "not a referee message");
+  send(vision, detection_packet(1, 10.1).SerializeAsString());
+  send(referee, start);
+  send(vision, detection_packet(2, 10.2).SerializeAsString());
+  send(vision, detection_packet(3, 10.3).SerializeAsString());
+  ASSERT_EQ(recorder.wait(5s), 0) << recorder.stderr_text();
+  const testing::Status done = testing::last_status(recorder.stderr_text(), "done:");
+  EXPECT_EQ(done.at("recorded"), 4u) << recorder.stderr_text();
+  EXPECT_EQ(done.at("referee_recorded"), 2u) << recorder.stderr_text();
+  EXPECT_EQ(done.at("referee_skipped"), 1u) << recorder.stderr_text();
+
+  // In the file as they came: types 4 3 4 3 4 4, the referee's bytes unchanged.
+  auto reader = LogReader::open(path);
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::vector<std::int32_t> types;
+  std::vector<std::string> referee_payloads;
+  LogMessage message;
+  while (reader->next(message)) {
+    types.push_back(message.type);
+    if (message.type == 3) referee_payloads.push_back(message.payload);
+  }
+  EXPECT_EQ(types, (std::vector<std::int32_t>{4, 3, 4, 3, 4, 4}));
+  EXPECT_EQ(referee_payloads, (std::vector<std::string>{stop, start}));
+
+  // The replay sends them to the referee group, the vision to the vision group.
+  const std::string vision_out = new_group();
+  const std::string referee_out = new_group();
+  Listener vision_listener(vision_out);
+  Listener referee_listener(referee_out);
+  const auto result =
+      replay(dir, path, vision_out, {"--speed", "0", "--referee-address", referee_out});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(vision_listener.wait_for(4, 5s).size(), 4u);
+  const auto sent = referee_listener.wait_for(2, 5s);
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].bytes, stop);
+  EXPECT_EQ(sent[1].bytes, start);
 }
 
 TEST(Logs, RecordStopsAfterItsDurationWithAValidFile) {

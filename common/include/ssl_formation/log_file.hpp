@@ -96,6 +96,10 @@ class LogReader {
   enum class MatchInput { vision, referee };
   bool next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& referee,
                         std::int64_t* receive_time_ns = nullptr);
+  // The same with the vision packets as next_vision(SSL_WrapperPacket&) returns them (a replay
+  // sends them on as they are).
+  bool next_match_input(MatchInput& kind, SSL_WrapperPacket& packet, std::string_view& referee,
+                        std::int64_t* receive_time_ns = nullptr);
 
   const std::string& error() const { return error_; }
   // How reading ended so far: the file ending inside its last message (what a recorder killed

@@ -14,6 +14,8 @@ namespace ssl_formation::producer {
 struct ProducerOptions {
   // Network (live simulation and --replay).
   std::string vision_address = app::default_vision_address;
+  // --replay sends a log's referee messages here; "none": not at all.
+  std::string referee_address = app::default_referee_address;
   std::string interface = app::default_interface;
   int ttl = net::kDefaultMulticastTtl;
   // Simulation (live and --write-log).
