@@ -15,6 +15,10 @@ int main(int argc, char** argv) {
     po::options_description general("Options");
     general.add_options()("list-states", po::bool_switch(&o.list_states),
                           "print every state of --grid, one per line, and exit")(
+        "table-dir", po::value(&o.table_dir)->value_name("DIR"),
+        "instead of --table: the table of the current opponent in DIR, as ssl-trainer --table-dir "
+        "keeps them (named after the team as the referee names it); a new opponent's is loaded "
+        "when the referee names it")(
         "table", po::value(&o.table)->default_value(o.table),
         "table file written by ssl-trainer; reloaded whenever it is replaced")(
         "prediction-address", po::value(&o.prediction_address)->default_value(o.prediction_address),

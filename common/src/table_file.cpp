@@ -9,6 +9,7 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -1049,6 +1050,25 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTab
                               const SaveHooks& hooks) {
   return save_any_table(path, stored.table, stored.metadata,
                         stored.motion ? &*stored.motion : nullptr, hooks);
+}
+
+std::string team_table_file_name(std::string_view team) {
+  while (!team.empty() && std::isspace(static_cast<unsigned char>(team.front()))) {
+    team.remove_prefix(1);
+  }
+  while (!team.empty() && std::isspace(static_cast<unsigned char>(team.back()))) {
+    team.remove_suffix(1);
+  }
+  constexpr std::size_t longest = 100;
+  std::string name;
+  for (const char raw : team.substr(0, longest)) {
+    const char c = static_cast<char>(std::tolower(static_cast<unsigned char>(raw)));
+    const bool kept = (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_' ||
+                      (c == '.' && !name.empty());
+    name += kept ? c : '_';
+  }
+  if (name.empty()) name = "unknown";
+  return name + ".bin";
 }
 
 }  // namespace ssl_formation

@@ -55,7 +55,8 @@ class PredictorDaemon {
       : io_(io),
         options_(options),
         config_(config.sampler),
-        watcher_(options.table, config.sampler.grid),
+        watcher_(table_path(options, config.opponent ? config.opponent->opponent_team : ""),
+                 config.sampler.grid),
         pipeline_(config,
                   [this](const PredictedFormation& predicted) { on_prediction(predicted); }),
         receiver_(io, app::parse_group_option("vision-address", options.network.vision_address),
@@ -113,6 +114,7 @@ class PredictorDaemon {
                                        datagram.size());
         const RefereeChange change = pipeline_.add_referee(payload, app::steady_seconds());
         if (change.any()) ours_.set_color(other_team(pipeline_.sampler().config().opponent_color));
+        if (change.teams) follow_opponent_table();
         match_log_.update(pipeline_.match(), pipeline_.sampler().attacks(), change);
       });
     }
@@ -121,9 +123,12 @@ class PredictorDaemon {
                  to_string(config_.sampling),
                  referee_group_ ? referee_group_->to_string() : std::string("none"));
     check_table();
-    if (!watcher_.table()) {
+    if (!watcher_.table() && options_.table_dir.empty()) {
       spdlog::info("waiting for the table {}: start ssl-trainer with --table {} (or give --table)",
                    options_.table, options_.table);
+    } else if (!watcher_.table()) {
+      spdlog::info("waiting for the table {}: start ssl-trainer with --table-dir {}",
+                   watcher_.path().string(), options_.table_dir);
     }
   }
 
@@ -143,7 +148,7 @@ class PredictorDaemon {
         {"interface", options_.network.interface},
         {"referee", referee_group_ ? referee_group_->to_string() : "none"},
         {"predictions", options_.prediction_address},
-        {"table", options_.table},
+        {"table", watcher_.path().string()},
         // The table predictions come from: a table the model refused is not loaded.
         {"table_loaded", pipeline_.table() ? "1" : "0"}};
     if (web_) facts.emplace_back("http", web_->url());
@@ -213,13 +218,14 @@ class PredictorDaemon {
         } catch (const std::invalid_argument& error) {
           // A table this model cannot use (a version-1 table for --model motion): keep
           // predicting with the one we have, and say why.
-          table_error_ = options_.table + ": " + error.what();
+          table_error_ = watcher_.path().string() + ": " + error.what();
           spdlog::error("{}", table_error_);
           break;
         }
         spdlog::info(
             "loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
-            options_.table, watcher_.reloads(), stored.table.transitions(), stored.metadata.samples,
+            watcher_.path().string(), watcher_.reloads(), stored.table.transitions(),
+            stored.metadata.samples,
             stored.table.rows_seen());
         table_loaded_unix_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
                                     std::chrono::system_clock::now().time_since_epoch())
@@ -240,6 +246,25 @@ class PredictorDaemon {
       case TableWatcher::Change::none:
         break;
     }
+  }
+
+  // --table-dir: the current opponent's table, loaded as soon as the referee names another.
+  void follow_opponent_table() {
+    const std::filesystem::path wanted = table_path(options_, pipeline_.match().opponent().name);
+    if (wanted == watcher_.path()) return;
+    spdlog::info("opponent '{}': predicting from {}", pipeline_.match().opponent().name,
+                 wanted.string());
+    watcher_ = TableWatcher(wanted, config_.grid);
+    pipeline_.set_table(nullptr);
+    table_error_.clear();
+    check_table();
+    if (!watcher_.table()) spdlog::info("no table for this opponent yet: waiting for {}", wanted.string());
+  }
+
+  static std::filesystem::path table_path(const PredictorOptions& options,
+                                          const std::string& opponent) {
+    if (options.table_dir.empty()) return options.table;
+    return std::filesystem::path(options.table_dir) / team_table_file_name(opponent);
   }
 
   void log_status() {

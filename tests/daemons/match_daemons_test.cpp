@@ -12,6 +12,7 @@
 #include "match_logs.hpp"
 #include "moving_robots.hpp"
 #include "pipeline_support.hpp"
+#include "ssl_formation/table_file.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation {
@@ -158,6 +159,76 @@ TEST(MatchDaemons, PredictorFollowsTheRefereesOpponentSideAndGameStateAndTheFirs
   // geometry (protobuf skips fields of the wrong wire type): counted as such, nothing more.
   EXPECT_EQ(status.at("empty_packets"), 1u) << daemon.stderr_text();
   EXPECT_EQ(status.at("formations"), 300u) << daemon.stderr_text();
+}
+
+// The referee names the opponent "Alpha" for 2 s of play, then "Beta" (the next match).
+testing::RefereeSpec match_against(const std::string& them) {
+  testing::RefereeSpec spec = referee_says(Referee::NORMAL_START, 1);
+  spec.blue = them;
+  return spec;
+}
+
+bool wait_for_file(const std::filesystem::path& path, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (std::filesystem::exists(path)) return true;
+    std::this_thread::sleep_for(10ms);
+  }
+  return false;
+}
+
+TEST(MatchDaemons, ATablePerOpponentTheTrainerSwitchesAndThePredictorFollows) {
+  TempDir dir;
+  const auto tables = dir / "tables";
+  const std::string vision = new_group();
+  const std::string referee = new_group();
+  ChildProcess trainer(trainer_program,
+                       {"--vision-address", vision, "--referee-address", referee, "--table-dir",
+                        tables.string(), "--our-team", "Us", "--flush-interval", "1000",
+                        "--status-interval", "0.2"},
+                       dir.path(), "trainer", Readiness::ready_file);
+  ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
+  send_referee(referee, testing::referee_payload(match_against("Alpha")));
+  send_frames(vision, 0, 150);
+  // Alpha's table is written as Beta comes, while the trainer runs on.
+  send_referee(referee, testing::referee_payload(match_against("Beta")));
+  ASSERT_TRUE(wait_for_file(tables / "alpha.bin", 5s)) << trainer.stderr_text();
+  send_frames(vision, 1000, 1150);  // later on the data clock: a new stream
+  ASSERT_TRUE(testing::wait_for_status_where(
+      trainer, [](const testing::Status& s) { return s.contains("packets") && s.at("packets") >= 300; },
+      10s))
+      << trainer.stderr_text();
+  trainer.signal(SIGTERM);
+  ASSERT_EQ(trainer.wait(5s), 0) << trainer.stderr_text();
+  const auto alpha = load_table(tables / "alpha.bin", Grid(3, 2));
+  const auto beta = load_table(tables / "beta.bin", Grid(3, 2));
+  ASSERT_TRUE(alpha) << alpha.error().message;
+  ASSERT_TRUE(beta) << beta.error().message;
+  EXPECT_GT(alpha->table.transitions(), 100u);
+  EXPECT_GT(beta->table.transitions(), 100u);
+  // About as many frames each: neither table took the other's.
+  EXPECT_LT(alpha->metadata.samples, 160u);
+  EXPECT_LT(beta->metadata.samples, 160u);
+  // Nothing was learned before the referee named anyone: no table for an unnamed team.
+  EXPECT_FALSE(std::filesystem::exists(tables / "unknown.bin"));
+
+  // The predictor loads the table of the opponent the referee names, and switches with it.
+  const std::string predictions = new_group();
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--referee-address", referee,
+                          "--prediction-address", predictions, "--table-dir", tables.string(),
+                          "--our-team", "Us", "--quiet"},
+                         dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  EXPECT_EQ(predictor.ready_fact("table_loaded"), "0");  // no opponent named yet
+  send_referee(referee, testing::referee_payload(match_against("BETA")));
+  EXPECT_TRUE(predictor.wait_for_stderr("loaded table " + (tables / "beta.bin").string(), 5s))
+      << predictor.stderr_text();
+  send_referee(referee, testing::referee_payload(match_against("Alpha")));
+  EXPECT_TRUE(predictor.wait_for_stderr("loaded table " + (tables / "alpha.bin").string(), 5s))
+      << predictor.stderr_text();
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
 }
 
 }  // namespace

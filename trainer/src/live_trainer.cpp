@@ -7,6 +7,7 @@
 
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/net/vision_receiver.hpp"
+#include "ssl_formation/trainer/opponent_tables.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
@@ -44,24 +45,23 @@ int run_live(const TrainerOptions& options) {
   const auto flush_period = app::seconds_option("flush-interval", options.flush_interval_s);
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
 
-  const std::filesystem::path table_path = options.table;
   const std::optional<MotionConfig> motion = motion_config(options);
   const std::optional<net::MulticastEndpoint> referee_group =
       app::parse_referee_option(options.network.referee_address);
-  std::unique_ptr<Training> training =
-      open_training(table_path, config, options.reset, motion, match_rules(options));
+  OpponentTables tables(options);
 
   boost::asio::io_context io;
   app::ReadyFile ready(options.daemon.ready_file);
   net::VisionReceiver receiver(io, group, interface, options.receive_buffer_bytes);
   app::FieldSizeLog field_log(config.field, config.use_geometry);
   app::MatchLog match_log;
-  match_log.update(training->match(), training->sampler().attacks());
+  match_log.update(tables.training().match(), tables.training().sampler().attacks());
   receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
-    training->add(frame);
-    if (frame.has_geometry) field_log.update(training->sampler().field());
-    if (training->sampler().config().infer_attacks) {
-      match_log.update(training->match(), training->sampler().attacks());
+    Training& training = tables.training();
+    training.add(frame);
+    if (frame.has_geometry) field_log.update(training.sampler().field());
+    if (training.sampler().config().infer_attacks) {
+      match_log.update(training.match(), training.sampler().attacks());
     }
   });
   // The referee on the same thread as the vision: each command applies from the next frame.
@@ -71,25 +71,29 @@ int run_live(const TrainerOptions& options) {
     referee->start([&](std::span<const std::byte> datagram, const net::udp::endpoint&) {
       const std::string_view payload(reinterpret_cast<const char*>(datagram.data()),
                                      datagram.size());
-      const RefereeChange change = training->add_referee(payload, app::steady_seconds());
-      match_log.update(training->match(), training->sampler().attacks(), change);
+      const RefereeChange change = tables.add_referee(payload, app::steady_seconds());
+      match_log.update(tables.training().match(), tables.training().sampler().attacks(), change);
     });
   }
   spdlog::info(
-      "training: model {}; grid {}, step {} s, {} sampling; learning {}; referee {}; table {} "
+      "training: model {}; grid {}, step {} s, {} sampling; learning {}; referee {}; {} {} "
       "saved every {} s",
       motion ? fmt::format("motion ({} steps ahead)", motion->horizons) : std::string("paper"),
       config.grid.to_string(), config.step_s, to_string(config.sampling),
-      training->learn_during() == LearnDuring::all ? "in every game state"
-                                                   : "in running play once a referee is heard",
-      referee_group ? referee_group->to_string() : std::string("none"), table_path.string(),
+      tables.training().learn_during() == LearnDuring::all
+          ? "in every game state"
+          : "in running play once a referee is heard",
+      referee_group ? referee_group->to_string() : std::string("none"),
+      tables.per_opponent() ? "a table per opponent in" : "table",
+      tables.per_opponent() ? options.table_dir : tables.path().string(),
       options.flush_interval_s);
 
   app::RepeatingTimer flush(io, flush_period, [&] {
-    if (training->changed_since_save()) save_training(table_path, *training);
+    tables.save_if_changed();
   });
   SamplerCounters reported;
-  app::RepeatingTimer status(io, status_period, [&] { log_status(*training, receiver, reported); });
+  app::RepeatingTimer status(io, status_period,
+                             [&] { log_status(tables.training(), receiver, reported); });
   bool saved_on_exit = true;
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)",
@@ -98,15 +102,15 @@ int run_live(const TrainerOptions& options) {
     if (referee) referee->stop();
     flush.cancel();
     status.cancel();
-    saved_on_exit = save_training(table_path, *training);
+    saved_on_exit = tables.save_at_exit();
     io.stop();
   });
   ready.mark_ready("ssl-trainer", {{"vision", group.to_string()},
                                    {"referee", referee_group ? referee_group->to_string() : "none"},
                                    {"interface", interface.to_string()},
-                                   {"table", table_path.string()}});
+                                   {"table", tables.path().string()}});
   io.run();
-  log_status(*training, receiver, reported);
+  log_status(tables.training(), receiver, reported);
   return saved_on_exit ? 0 : 1;
 }
 

@@ -14,6 +14,10 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
   general.add_options()
       ("table", po::value(&o.table)->default_value(o.table),
        "table file to resume and save (written atomically)")
+      ("table-dir", po::value(&o.table_dir)->value_name("DIR"),
+       "instead of --table: one table file per opponent team in DIR, named after the team as the "
+       "referee names it (unknown.bin for an unnamed one); the trainer switches tables when the "
+       "referee names another opponent, saving the old one first")
       ("reset", po::bool_switch(&o.reset),
        "start an empty table even if --table holds one of another grid, step, model or motion-model "
        "settings (an older version's)")

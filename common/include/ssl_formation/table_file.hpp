@@ -167,4 +167,10 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const Transitio
 Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
                               const SaveHooks& hooks = {});
 
+// The file a team's table is kept in under --table-dir: the name as the game controller spells
+// it, trimmed and lower-cased (team names compare without case), every character outside
+// [a-z0-9._-] made '_' and a leading '.' too (no hidden files, no ".."), at most 100 characters,
+// then ".bin"; "unknown.bin" for an unnamed team.
+std::string team_table_file_name(std::string_view team);
+
 }  // namespace ssl_formation

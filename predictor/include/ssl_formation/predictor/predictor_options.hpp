@@ -17,6 +17,8 @@ struct PredictorOptions {
   app::NetworkOptions network;
   app::DaemonOptions daemon;
   std::string table = app::default_table;
+  // One table file per opponent team in this folder instead of --table: the current opponent's.
+  std::string table_dir;
   std::string prediction_address = app::default_prediction_address;
   std::string prediction_interface;  // empty: as --interface (127.0.0.1 when that is 'all')
   int ttl = net::kDefaultMulticastTtl;

@@ -23,6 +23,8 @@ struct TrainerOptions {
   int horizon = 3;
   std::string learn_during = "running";
   std::string table = app::default_table;
+  // One table file per opponent team in this folder instead of --table (live training).
+  std::string table_dir;
   double flush_interval_s = 10.0;
   double status_interval_s = 5.0;
   int receive_buffer_bytes = net::kDefaultReceiveBufferBytes;

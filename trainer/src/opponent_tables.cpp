@@ -1,0 +1,77 @@
+#include "ssl_formation/trainer/opponent_tables.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <stdexcept>
+
+#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/trainer/table_store.hpp"
+
+namespace ssl_formation::trainer {
+
+namespace {
+// The opponent's name the options give, for the first table under --table-dir.
+std::string named_opponent(const MatchRules& rules) { return rules.opponent.opponent_team; }
+}  // namespace
+
+OpponentTables::OpponentTables(const TrainerOptions& options)
+    : options_(options),
+      config_(options.model.sampler_config()),
+      motion_(motion_config(options)),
+      rules_(match_rules(options)) {
+  if (per_opponent()) {
+    std::error_code error;
+    std::filesystem::create_directories(options_.table_dir, error);
+    if (error) {
+      throw std::runtime_error("--table-dir " + options_.table_dir + ": cannot create it: " +
+                               error.message());
+    }
+    path_ = std::filesystem::path(options_.table_dir) / team_table_file_name(named_opponent(rules_));
+  } else {
+    path_ = options_.table;
+  }
+  training_ = open(path_);
+}
+
+std::unique_ptr<Training> OpponentTables::open(const std::filesystem::path& path) {
+  return open_training(path, config_, options_.reset, motion_, rules_);
+}
+
+RefereeChange OpponentTables::add_referee(std::string_view payload, double receive_s) {
+  const RefereeChange change = training_->add_referee(payload, receive_s);
+  if (!per_opponent() || !change.teams) return change;
+  const std::filesystem::path wanted = std::filesystem::path(options_.table_dir) /
+                                       team_table_file_name(training_->match().opponent().name);
+  if (wanted == path_) return change;
+  save_if_changed();
+  spdlog::info("opponent '{}': training {} (the table of the last one saved in {})",
+               training_->match().opponent().name, wanted.string(), path_.string());
+  std::unique_ptr<Training> next;
+  try {
+    next = open(wanted);
+    saving_ = true;
+  } catch (const std::runtime_error& error) {
+    spdlog::error("{}; this opponent is trained into a table that is not saved", error.what());
+    next = std::make_unique<Training>(config_, TransitionTable(config_.grid), 0,
+                                      motion_ ? std::optional<MotionTable>(*motion_) : std::nullopt,
+                                      rules_);
+    saving_ = false;
+  }
+  // The new table's training hears what the old one heard last.
+  next->add_referee(payload, receive_s);
+  training_ = std::move(next);
+  path_ = wanted;
+  return change;
+}
+
+bool OpponentTables::save_if_changed() {
+  if (!saving_ || !training_->changed_since_save()) return true;
+  return save_training(path_, *training_);
+}
+
+bool OpponentTables::save_at_exit() {
+  if (per_opponent() || !saving_) return save_if_changed();
+  return save_training(path_, *training_);
+}
+
+}  // namespace ssl_formation::trainer
