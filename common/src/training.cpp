@@ -55,6 +55,18 @@ void Training::start_new_stream() {
   segment_start_s_ = -std::numeric_limits<double>::infinity();
 }
 
+void Training::absorb(const Training& other) {
+  if (motion_.has_value() != other.motion_.has_value()) {
+    throw std::invalid_argument("a training of the other model cannot be added");
+  }
+  if (motion_ && !(motion_->config() == other.motion_->config())) {
+    throw std::invalid_argument("a training with other motion model settings cannot be added");
+  }
+  table_.merge(other.table_);  // checks the grid
+  if (motion_) motion_->merge(*other.motion_);
+  samples_before_ += other.samples();
+}
+
 void Training::follow_opponent() {
   const Opponent& opponent = match_.opponent();
   // The motion history keys robots by id, which the other team's robots share.

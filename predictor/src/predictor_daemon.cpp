@@ -396,6 +396,9 @@ PredictionConfig prediction_config(const PredictorOptions& options) {
   config.horizon = options.horizon;
   config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
   config.opponent = options.model.opponent_choice();
+  if (options.model.opponent_team == "all") {
+    throw app::UsageError("--opponent-team all is for ssl-trainer --from-log: name the opponent");
+  }
   return config;
 }
 

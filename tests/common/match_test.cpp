@@ -260,7 +260,9 @@ TEST(MatchFollower, ResetReturnsToTheOpponentOfTheOptionsAlone) {
   EXPECT_EQ(match.opponent(), before);
   EXPECT_EQ(match.game_state(), sf::GameState::unknown);
   EXPECT_FALSE(match.referee().heard());
-  EXPECT_TRUE(match.learning(sf::LearnDuring::running));
+  // The named opponent is not found again yet: nothing is learned of whoever plays meanwhile.
+  EXPECT_FALSE(match.opponent_known());
+  EXPECT_FALSE(match.learning(sf::LearnDuring::all));
   EXPECT_EQ(match.referee().counters().messages, 1u);
 }
 

@@ -39,6 +39,9 @@ void log_status(const Training& training, const net::VisionReceiver& receiver,
 }  // namespace
 
 int run_live(const TrainerOptions& options) {
+  if (options.model.opponent_team == "all") {
+    throw app::UsageError("--opponent-team all is for --from-log: live, name the opponent");
+  }
   const SamplerConfig config = options.model.sampler_config();
   const auto group = app::parse_group_option("vision-address", options.network.vision_address);
   const auto interface = app::parse_interface_option(options.network.interface, true);

@@ -1,100 +1,298 @@
 // ssl-trainer --from-log: official log files through the same Training the live mode runs, then
-// one atomic save. Everything read before a damaged part of a file is kept.
+// one atomic save per table. Each log is trained apart, on every core at once (a log is its own
+// stream: nothing spans two files), and the logs' tables are added up in the order the files
+// were given, so the result is the same as training them one after the other. Everything read
+// before a damaged part of a file is kept.
+//
+// Scouting: with --opponent-team NAME (or --our-team) only that team's robots are learned, found
+// by the referee's names in each log, through changes of colour and of ends; a log where the team
+// does not play is skipped and said so. --opponent-team all learns every named team of every log,
+// each into its own table under --table-dir.
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include "ssl_formation/app/progress.hpp"
 #include "ssl_formation/log_file.hpp"
+#include "ssl_formation/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
-#include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::trainer {
 
 namespace {
-// Logs above this size get a progress bar.
+
+// Sets of logs above this size get a progress bar.
 constexpr std::uint64_t progress_bar_bytes = 4 << 20;
+
+// What the logs are trained into.
+struct Destination {
+  bool all_teams = false;  // --opponent-team all
+  bool per_team = false;   // --table-dir
+  SamplerConfig config;
+  std::optional<MotionConfig> motion;
+  MatchRules rules;
+};
+
+// One team a log was trained for: its training (fresh tables: the log's counts alone).
+struct TeamOfLog {
+  std::unique_ptr<Training> training;
+  bool found = true;  // false: a named team the referee never named in this log
+};
+
+struct LogOutcome {
+  std::string file;
+  std::string open_error;  // the log could not be opened: nothing else is set
+  LogReader::Ending ending = LogReader::Ending::none;
+  std::string read_error;
+  LogReadCounters counters;
+  std::uint64_t frames = 0;
+  std::vector<TeamOfLog> teams;
+};
+
+// Work shared by the threads: which log is next, and how far they are all, for the bar.
+struct Progress {
+  std::atomic<std::size_t> next_file{0};
+  std::atomic<std::uint64_t> bytes{0};
+  std::atomic<std::uint64_t> frames{0};
+};
+
+std::unique_ptr<Training> new_training(const Destination& to, const OpponentChoice& opponent) {
+  return std::make_unique<Training>(
+      to.config, TransitionTable(to.config.grid), 0,
+      to.motion ? std::optional<MotionTable>(*to.motion) : std::nullopt,
+      MatchRules{opponent, to.rules.learn_during});
+}
+
+LogOutcome train_log(const std::string& file, const Destination& to, Progress& progress) {
+  LogOutcome outcome;
+  outcome.file = file;
+  Result<LogReader> reader = LogReader::open(file);
+  if (!reader) {
+    outcome.open_error = reader.error().message;
+    return outcome;
+  }
+  // --opponent-team all: a training per team, made as the referee first names it.
+  if (!to.all_teams) outcome.teams.push_back({new_training(to, to.rules.opponent)});
+  VisionFrame frame;  // detection packets decoded straight from the log's bytes
+  LogReader::MatchInput kind{};
+  std::string_view referee;
+  std::int64_t receive_ns = 0;
+  std::uint64_t reported_offset = 0;
+  while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
+    if (kind == LogReader::MatchInput::referee) {
+      const double receive_s = static_cast<double>(receive_ns) * 1e-9;
+      for (TeamOfLog& team : outcome.teams) team.training->add_referee(referee, receive_s);
+      if (to.all_teams) {
+        const RefereeView* view = nullptr;
+        RefereeFollower names;
+        names.add(referee, receive_s);
+        if (names.heard()) view = &names.view();
+        for (const std::string* name : {view ? &view->yellow_name : nullptr,
+                                        view ? &view->blue_name : nullptr}) {
+          if (!name || name->empty()) continue;  // an unnamed team could be anyone
+          const bool known = std::any_of(
+              outcome.teams.begin(), outcome.teams.end(), [&](const TeamOfLog& team) {
+                return same_team_name(team.training->match().choice().opponent_team, *name);
+              });
+          if (known) continue;
+          OpponentChoice choice = to.rules.opponent;
+          choice.our_team.clear();
+          choice.opponent_team = *name;
+          TeamOfLog& team = outcome.teams.emplace_back(TeamOfLog{new_training(to, choice)});
+          team.training->add_referee(referee, receive_s);
+        }
+      }
+      continue;
+    }
+    for (TeamOfLog& team : outcome.teams) team.training->add(frame);
+    if ((++outcome.frames & 4095) == 0) {
+      const std::uint64_t offset = reader->compressed_offset();
+      progress.bytes += offset - std::min(offset, reported_offset);
+      progress.frames += 4096;
+      reported_offset = offset;
+    }
+  }
+  progress.bytes += reader->compressed_size() - std::min(reader->compressed_size(), reported_offset);
+  progress.frames += outcome.frames & 4095;
+  outcome.ending = reader->ending();
+  outcome.read_error = reader->error();
+  outcome.counters = reader->counters();
+  for (TeamOfLog& team : outcome.teams) {
+    const MatchFollower& match = team.training->match();
+    // A team named in the options that the referee never named: nothing was learned of it.
+    team.found = match.opponent_known() ||
+                 (match.choice().our_team.empty() && match.choice().opponent_team.empty());
+  }
+  return outcome;
+}
+
+// "'ER-Force' blue (referee), attacks -x (referee); 1 change of colour, 1 change of ends; 9000
+// formations (2000 outside running play), 52000 transitions, 30000 motion instances".
+std::string describe_team(const TeamOfLog& team) {
+  const Training& t = *team.training;
+  const SamplerCounters& c = t.sampler().counters();
+  std::string out = describe(t.match().opponent(), t.sampler().attacks());
+  out += fmt::format("; {} changes of colour, {} changes of ends; {} formations ({} outside "
+                     "running play), {} transitions",
+                     c.opponent_switches, c.attack_switches, t.samples(),
+                     t.samples_outside_play(), t.table().transitions());
+  if (t.motion()) out += fmt::format(", {} motion instances", t.motion()->instances());
+  return out;
+}
+
 }  // namespace
 
 int run_offline(const TrainerOptions& options) {
-  const SamplerConfig config = options.model.sampler_config();
-  const std::filesystem::path table_path = options.table;
-  std::unique_ptr<Training> training =
-      open_training(table_path, config, options.reset, motion_config(options), match_rules(options));
-  bool every_file_whole = true;
-  VisionFrame frame;  // detection packets decoded straight from the log's bytes
+  Destination to;
+  to.config = options.model.sampler_config();
+  to.motion = motion_config(options);
+  to.rules = match_rules(options);
+  to.all_teams = options.model.opponent_team == "all";
+  to.per_team = !options.table_dir.empty();
+  if (to.all_teams && !to.per_team) {
+    throw app::UsageError("--opponent-team all trains a table per team: give --table-dir");
+  }
+  if (options.jobs < 0) throw app::UsageError("--jobs must be 0 (every core) or more");
+  if (to.per_team) {
+    std::error_code error;
+    std::filesystem::create_directories(options.table_dir, error);
+    if (error) {
+      throw std::runtime_error("--table-dir " + options.table_dir + ": cannot create it: " +
+                               error.message());
+    }
+  }
+  // The tables the logs add to, by file: --table's opened first, so that a table that cannot be
+  // resumed stops the run before any log is read; --table-dir's as their teams turn up.
+  std::map<std::filesystem::path, std::unique_ptr<Training>> tables;
+  if (!to.per_team) {
+    tables[options.table] =
+        open_training(options.table, to.config, options.reset, to.motion, to.rules);
+  }
+
+  std::vector<LogOutcome> outcomes(options.from_logs.size());
+  Progress progress;
+  std::uint64_t total_bytes = 0;
   for (const std::string& file : options.from_logs) {
-    Result<LogReader> reader = LogReader::open(file);
-    if (!reader) {
-      spdlog::error("{}", reader.error().message);
+    std::error_code error;  // a file that cannot be read is reported by its reader
+    const std::uintmax_t size = std::filesystem::file_size(file, error);
+    if (!error) total_bytes += size;
+  }
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t workers = std::min<std::size_t>(
+      options.from_logs.size(), options.jobs > 0 ? static_cast<std::size_t>(options.jobs) : cores);
+  std::vector<std::thread> threads;
+  std::mutex failure_mutex;
+  std::string failure;  // an exception a worker met (a bug, or memory): reported after
+  for (std::size_t w = 0; w < workers; ++w) {
+    threads.emplace_back([&] {
+      for (std::size_t i = progress.next_file++; i < outcomes.size(); i = progress.next_file++) {
+        try {
+          outcomes[i] = train_log(options.from_logs[i], to, progress);
+        } catch (const std::exception& error) {
+          std::lock_guard lock(failure_mutex);
+          failure = options.from_logs[i] + ": " + error.what();
+        }
+      }
+    });
+  }
+  {
+    std::optional<app::ProgressBar> bar;
+    if (total_bytes > progress_bar_bytes) {
+      bar.emplace(fmt::format("training from {} log{} on {} thread{}", outcomes.size(),
+                              outcomes.size() == 1 ? "" : "s", workers, workers == 1 ? "" : "s"),
+                  total_bytes);
+    }
+    while (progress.next_file < outcomes.size() + workers) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      if (bar) bar->update(progress.bytes, progress.frames);
+    }
+    for (std::thread& thread : threads) thread.join();
+    if (bar) bar->finish(progress.frames);
+  }
+  if (!failure.empty()) throw std::runtime_error(failure);
+
+  // The logs' counts added up in the order of the files, and a line per log.
+  bool every_file_whole = true;
+  for (LogOutcome& log : outcomes) {
+    if (!log.open_error.empty()) {
+      spdlog::error("{}", log.open_error);
       every_file_whole = false;
       continue;
     }
-    training->start_new_stream();
-    const std::uint64_t transitions_before = training->table().transitions();
-    const std::uint64_t samples_before = training->samples();
-    std::optional<app::ProgressBar> bar;
-    if (reader->compressed_size() > progress_bar_bytes)
-      bar.emplace("training from " + file, reader->compressed_size());
-    std::uint64_t frames = 0;
-    std::uint64_t outside_play_before = training->samples_outside_play();
-    LogReader::MatchInput kind{};
-    std::string_view referee;
-    std::int64_t receive_ns = 0;
-    while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
-      if (kind == LogReader::MatchInput::referee) {
-        training->add_referee(referee, static_cast<double>(receive_ns) * 1e-9);
+    const LogReadCounters& c = log.counters;
+    spdlog::info("{}: {} vision packets ({} parse errors), {} referee, skipped {} tracker, {} other",
+                 log.file, log.frames, c.parse_errors, c.referee, c.tracker,
+                 c.unknown + c.blank + c.legacy_unusable);
+    if (to.all_teams && log.teams.empty()) {
+      spdlog::warn("{}: no team named by a referee: nothing learned (--opponent-team all)",
+                   log.file);
+    }
+    for (TeamOfLog& team : log.teams) {
+      const Training& training = *team.training;
+      if (!team.found) {
+        spdlog::warn("{}: skipped, {}", log.file, training.match().opponent().unresolved);
         continue;
       }
-      training->add(frame);
-      if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);
+      spdlog::info("{}: opponent {}", log.file, describe_team(team));
+      const std::filesystem::path path =
+          to.per_team ? std::filesystem::path(options.table_dir) /
+                            team_table_file_name(training.match().opponent().name)
+                      : std::filesystem::path(options.table);
+      std::unique_ptr<Training>& table = tables[path];
+      if (!table) {
+        try {
+          table = open_training(path, to.config, options.reset, to.motion, to.rules);
+        } catch (const std::runtime_error& error) {
+          spdlog::error("{}; what {} taught of '{}' is not saved", error.what(), log.file,
+                        training.match().opponent().name);
+          tables.erase(path);
+          every_file_whole = false;
+          continue;
+        }
+      }
+      table->absorb(training);
     }
-    if (bar) bar->finish(frames);
-    const LogReadCounters& c = reader->counters();
-    spdlog::info(
-        "{}: {} vision packets ({} parse errors), {} referee, skipped {} tracker, {} other; "
-        "{} formations, {} transitions",
-        file, frames, c.parse_errors, c.referee, c.tracker, c.unknown + c.blank + c.legacy_unusable,
-        training->samples() - samples_before, training->table().transitions() - transitions_before);
-    if (training->match().referee().heard()) {
-      spdlog::info("{}: opponent {}; {} formations outside running play not learned (--learn-during "
-                   "{}); last {}",
-                   file, describe(training->match().opponent(), training->sampler().attacks()),
-                   training->samples_outside_play() - outside_play_before,
-                   to_string(training->learn_during()), describe(training->match().referee()));
-    }
-    switch (reader->ending()) {
+    switch (log.ending) {
       case LogReader::Ending::none:
         break;
       case LogReader::Ending::cut_off:
         // What a recorder killed mid-write leaves: only the last message is lost.
         if (options.strict) {
-          spdlog::error("{}; the {} vision packets before it were used (--strict)", reader->error(),
-                        frames);
+          spdlog::error("{}; the {} vision packets before it were used (--strict)", log.read_error,
+                        log.frames);
           every_file_whole = false;
         } else {
           spdlog::warn(
               "{}: the file ends inside its last message; the {} vision packets before "
               "it were used",
-              reader->error(), frames);
+              log.read_error, log.frames);
         }
         break;
       case LogReader::Ending::damaged:
-        spdlog::error("{}; the {} vision packets before it were used", reader->error(), frames);
+        spdlog::error("{}; the {} vision packets before it were used", log.read_error, log.frames);
         every_file_whole = false;
         break;
     }
   }
-  if (!save_training(table_path, *training)) return 1;
-  spdlog::info("saved {}: {} transitions from {} formations, {} states seen", table_path.string(),
-               training->table().transitions(), training->samples(), training->table().rows_seen());
-  if (const auto& motion = training->motion()) {
-    spdlog::info("saved {}: motion model, {} horizons: motion_instances={} motion_held_out={} "
-                 "motion_rows={}",
-                 table_path.string(), motion->config().horizons, motion->instances(),
-                 motion->held_out(), motion->rows());
+  for (auto& [path, training] : tables) {
+    if (!save_training(path, *training)) return 1;
+    spdlog::info("saved {}: {} transitions from {} formations, {} states seen", path.string(),
+                 training->table().transitions(), training->samples(),
+                 training->table().rows_seen());
+    if (const auto& motion = training->motion()) {
+      spdlog::info("saved {}: motion model, {} horizons: motion_instances={} motion_held_out={} "
+                   "motion_rows={}",
+                   path.string(), motion->config().horizons, motion->instances(),
+                   motion->held_out(), motion->rows());
+    }
   }
   return every_file_whole ? 0 : 1;
 }

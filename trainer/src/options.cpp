@@ -33,7 +33,12 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
       ("verbose", po::bool_switch(&o.verbose), "log every save")
       ("from-log", po::value(&o.from_logs)->multitoken(),
        "train from these official SSL log files (.log or .log.gz) instead of the network, "
-       "save the table and exit")
+       "save the table and exit. With --opponent-team NAME only that team is learned, found by "
+       "the referee's names in each log (logs where it does not play are skipped); with "
+       "--opponent-team all and --table-dir, every named team into its own table")
+      ("jobs", po::value(&o.jobs)->default_value(o.jobs, "0 (every core)"),
+       "--from-log: logs trained at once, each in its own thread; their tables are added up in "
+       "the order the files are given, the same as training them one after the other")
       ("strict", po::bool_switch(&o.strict),
        "--from-log: exit 1 also when a log only ends inside its last message (by default that "
        "is a warning: a recorder killed mid-write leaves such files)");

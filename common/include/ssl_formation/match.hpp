@@ -79,9 +79,14 @@ class MatchFollower {
   GameState game_state() const { return referee_.view().state; }
   const RefereeFollower& referee() const { return referee_; }
   const OpponentChoice& choice() const { return choice_; }
-  // Whether learning may count now: always without a referee heard (the game state is not
-  // known) or with LearnDuring::all, else only in running play.
+  // Whether the opponent is known: always unless the options name a team (--our-team,
+  // --opponent-team) that the referee has not (yet) found.
+  bool opponent_known() const { return opponent_.unresolved.empty(); }
+  // Whether learning may count now: never while a named opponent is not found (its colour is
+  // not known: a log of other teams teaches nothing about it); else always without a referee
+  // heard (the game state is not known) or with LearnDuring::all, else only in running play.
   bool learning(LearnDuring learn_during) const {
+    if (!opponent_known()) return false;
     return learn_during == LearnDuring::all || !referee_.heard() ||
            is_running_play(referee_.view().state);
   }

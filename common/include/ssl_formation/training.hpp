@@ -49,6 +49,10 @@ class Training {
   // A new log file: its first formation follows nothing (no transition across two files), and
   // its referee is heard anew.
   void start_new_stream();
+  // Adds what `other` counted (another log's training, run apart: in another thread), as if this
+  // training had counted it too: the tables merge, and its formations add to samples(). Throws
+  // std::invalid_argument for tables of another grid, model or motion settings.
+  void absorb(const Training& other);
 
   const TransitionTable& table() const { return table_; }
   const std::optional<MotionTable>& motion() const { return motion_; }

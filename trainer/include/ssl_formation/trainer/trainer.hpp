@@ -31,6 +31,8 @@ struct TrainerOptions {
   bool reset = false;
   bool verbose = false;
   std::vector<std::string> from_logs;
+  // --from-log: logs trained at once (0: one per core).
+  int jobs = 0;
   // --from-log: a log whose last record is cut off (a recorder killed mid-write) is used up to
   // it with a warning; with strict, that also makes the exit status 1.
   bool strict = false;
