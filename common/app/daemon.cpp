@@ -78,6 +78,14 @@ void MatchLog::update(const MatchFollower& match, std::optional<AttackDirection>
   reported_ = c;
 }
 
+std::string describe_tracked(const net::TrackedVisionReceiver* tracked) {
+  if (!tracked) return {};
+  const TrackerCounters& c = tracked->tracked().counters();
+  return fmt::format(" tracker_packets={} tracker_frames={} tracker_other_source={} "
+                     "tracker_undecodable={}",
+                     c.packets, c.frames, c.other_source, c.undecodable);
+}
+
 std::string describe_referee_counts(const MatchFollower& match) {
   const RefereeCounters& c = match.referee().counters();
   const Opponent& opponent = match.opponent();

@@ -162,8 +162,21 @@ void add_vision_options(po::options_description& options, NetworkOptions& networ
       po::value(&network.referee_address)->default_value(network.referee_address),
       "the game controller's referee multicast group:port, joined on --interface too: the "
       "opponent's name, colour and side and the game state follow it; none: no referee feed")(
+      "vision-source", po::value(&network.vision_source)->default_value(network.vision_source),
+      "raw: SSL-Vision's detections on --vision-address; tracked: a tracker's filtered frames "
+      "(TrackerWrapperPacket, positions in metres) on --tracker-address instead, one tracker "
+      "followed by its uuid")(
+      "tracker-address",
+      po::value(&network.tracker_address)->default_value(network.tracker_address),
+      "the trackers' multicast group:port (auto-referees such as TIGERs' publish there)")(
       "interface", po::value(&network.interface)->default_value(network.interface),
       "IPv4 address of the interface to join on, or 'all' for every interface");
+}
+
+bool NetworkOptions::tracked() const {
+  if (vision_source == "raw") return false;
+  if (vision_source == "tracked") return true;
+  throw UsageError("--vision-source must be raw or tracked, not '" + vision_source + "'");
 }
 
 void add_daemon_options(po::options_description& options, DaemonOptions& daemon) {

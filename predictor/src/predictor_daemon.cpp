@@ -90,19 +90,17 @@ class PredictorDaemon {
       web_->start();  // before the receiver, so a busy port fails before anything else runs
       spdlog::info("field view: open {}", web_->url());
     }
-    receiver_.start([this](const VisionFrame& frame, const net::udp::endpoint&) {
-      if (web_) {
-        // Only the field view shows these; a clock read is not free in a cold process either.
-        last_packet_ = std::chrono::steady_clock::now();
-        // Ours first, so that a prediction this packet completes shows them as of this packet.
-        if (frame.has_detection) ours_.add(frame.detection);
-      }
-      pipeline_.add(frame);
-      if (frame.has_geometry) field_log_.update(pipeline_.sampler().field());
-      if (pipeline_.sampler().config().infer_attacks) {
-        match_log_.update(pipeline_.match(), pipeline_.sampler().attacks());
-      }
-    });
+    // Raw vision, or a tracker's frames instead (never both: they would be two clocks).
+    if (options_.network.tracked()) {
+      tracked_.emplace(io_,
+                       app::parse_group_option("tracker-address", options_.network.tracker_address),
+                       app::parse_interface_option(options_.network.interface, true),
+                       options_.receive_buffer_bytes);
+      tracked_->start([this](const VisionFrame& frame) { on_frame(frame); });
+    } else {
+      receiver_.start(
+          [this](const VisionFrame& frame, const net::udp::endpoint&) { on_frame(frame); });
+    }
     match_log_.update(pipeline_.match(), pipeline_.sampler().attacks());
     // The referee on the same thread as the vision: each command applies from the next frame.
     if (referee_group_) {
@@ -135,6 +133,7 @@ class PredictorDaemon {
   void stop() {
     warm_up_timer_.cancel();
     receiver_.stop();
+    if (tracked_) tracked_->stop();
     if (referee_) referee_->stop();
     if (web_) web_->stop();
   }
@@ -144,7 +143,8 @@ class PredictorDaemon {
   // What the ready file says once the sockets are joined and the table there at start loaded.
   std::vector<std::pair<std::string, std::string>> ready_facts() const {
     std::vector<std::pair<std::string, std::string>> facts{
-        {"vision", options_.network.vision_address},
+        {"vision", options_.network.tracked() ? "tracked " + options_.network.tracker_address
+                                              : options_.network.vision_address},
         {"interface", options_.network.interface},
         {"referee", referee_group_ ? referee_group_->to_string() : "none"},
         {"predictions", options_.prediction_address},
@@ -159,7 +159,9 @@ class PredictorDaemon {
   void publish_status() {
     if (!web_) return;
     const auto now = std::chrono::steady_clock::now();
-    const auto& net = receiver_.counters();
+    // The socket the vision comes in on: raw, or the tracker's.
+    const auto& net =
+        tracked_ ? tracked_->bytes_receiver().counters() : receiver_.counters();
     const std::uint64_t packets = net.datagrams.load();
     web::FieldViewStatus status;
     status.setup = view_setup();
@@ -270,9 +272,10 @@ class PredictorDaemon {
   void log_status() {
     const auto& c = pipeline_.sampler().counters();
     spdlog::info(
-        "status: {} formations={} predictions={} sent={} warm_ups={} table_reloads={} attacks={} "
+        "status: {}{} formations={} predictions={} sent={} warm_ups={} table_reloads={} attacks={} "
         "{} | {}",
-        app::describe_reception(receiver_), c.samples, pipeline_.predictions(), sender_.sent(),
+        app::describe_reception(receiver_), app::describe_tracked(tracked_ ? &*tracked_ : nullptr),
+        c.samples, pipeline_.predictions(), sender_.sent(),
         warm_ups_, watcher_.reloads(),
         app::describe_attacks(pipeline_.sampler().attacks(),
                               pipeline_.match().opponent().attacks_because),
@@ -291,6 +294,20 @@ class PredictorDaemon {
   }
 
  private:
+  void on_frame(const VisionFrame& frame) {
+    if (web_) {
+      // Only the field view shows these; a clock read is not free in a cold process either.
+      last_packet_ = std::chrono::steady_clock::now();
+      // Ours first, so that a prediction this packet completes shows them as of this packet.
+      if (frame.has_detection) ours_.add(frame.detection);
+    }
+    pipeline_.add(frame);
+    if (frame.has_geometry) field_log_.update(pipeline_.sampler().field());
+    if (pipeline_.sampler().config().infer_attacks) {
+      match_log_.update(pipeline_.match(), pipeline_.sampler().attacks());
+    }
+  }
+
   // The hot path, from the prediction to the datagram: no allocation once warmed up, and the
   // wire format written directly (see encode_prediction).
   void on_prediction(const PredictedFormation& predicted) {
@@ -360,6 +377,7 @@ class PredictorDaemon {
   TableWatcher watcher_;
   PredictionPipeline pipeline_;
   net::VisionReceiver receiver_;
+  std::optional<net::TrackedVisionReceiver> tracked_;  // --vision-source tracked
   std::optional<net::MulticastEndpoint> referee_group_;  // none: --referee-address none
   std::optional<net::MulticastReceiver> referee_;
   net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction

@@ -17,13 +17,13 @@ namespace {
 
 // One status line, then a warning for each kind of bad input that arrived since the last one.
 void log_status(const Training& training, const net::VisionReceiver& receiver,
-                SamplerCounters& reported) {
+                const net::TrackedVisionReceiver* tracked, SamplerCounters& reported) {
   const SamplerCounters& c = training.sampler().counters();
   const auto& motion = training.motion();
   spdlog::info(
-      "status: {} formations={} transitions={} table_transitions={} states_seen={}{} "
+      "status: {}{} formations={} transitions={} table_transitions={} states_seen={}{} "
       "rejected_robots={} late_frames={} attacks={} {} | {}",
-      app::describe_reception(receiver), c.samples, c.transitions, training.table().transitions(),
+      app::describe_reception(receiver), app::describe_tracked(tracked), c.samples, c.transitions, training.table().transitions(),
       training.table().rows_seen(),
       motion ? fmt::format(" motion_instances={} motion_held_out={} motion_rows={}",
                            motion->instances(), motion->held_out(), motion->rows())
@@ -59,14 +59,23 @@ int run_live(const TrainerOptions& options) {
   app::FieldSizeLog field_log(config.field, config.use_geometry);
   app::MatchLog match_log;
   match_log.update(tables.training().match(), tables.training().sampler().attacks());
-  receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
+  const auto on_frame = [&](const VisionFrame& frame) {
     Training& training = tables.training();
     training.add(frame);
     if (frame.has_geometry) field_log.update(training.sampler().field());
     if (training.sampler().config().infer_attacks) {
       match_log.update(training.match(), training.sampler().attacks());
     }
-  });
+  };
+  // Raw vision, or a tracker's frames instead (never both: they would be two clocks).
+  std::optional<net::TrackedVisionReceiver> tracked;
+  if (options.network.tracked()) {
+    tracked.emplace(io, app::parse_group_option("tracker-address", options.network.tracker_address),
+                    interface, options.receive_buffer_bytes);
+    tracked->start(on_frame);
+  } else {
+    receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) { on_frame(frame); });
+  }
   // The referee on the same thread as the vision: each command applies from the next frame.
   std::optional<net::MulticastReceiver> referee;
   if (referee_group) {
@@ -96,24 +105,26 @@ int run_live(const TrainerOptions& options) {
   });
   SamplerCounters reported;
   app::RepeatingTimer status(io, status_period,
-                             [&] { log_status(tables.training(), receiver, reported); });
+                             [&] { log_status(tables.training(), receiver, tracked ? &*tracked : nullptr, reported); });
   bool saved_on_exit = true;
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)",
                  signal);
     receiver.stop();
+    if (tracked) tracked->stop();
     if (referee) referee->stop();
     flush.cancel();
     status.cancel();
     saved_on_exit = tables.save_at_exit();
     io.stop();
   });
-  ready.mark_ready("ssl-trainer", {{"vision", group.to_string()},
+  ready.mark_ready("ssl-trainer", {{"vision", tracked ? "tracked " + options.network.tracker_address
+                                                    : group.to_string()},
                                    {"referee", referee_group ? referee_group->to_string() : "none"},
                                    {"interface", interface.to_string()},
                                    {"table", tables.path().string()}});
   io.run();
-  log_status(tables.training(), receiver, reported);
+  log_status(tables.training(), receiver, tracked ? &*tracked : nullptr, reported);
   return saved_on_exit ? 0 : 1;
 }
 

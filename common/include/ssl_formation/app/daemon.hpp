@@ -16,6 +16,7 @@
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/match.hpp"
 #include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/net/tracked_vision_receiver.hpp"
 #include "ssl_formation/net/vision_receiver.hpp"
 
 namespace ssl_formation::app {
@@ -105,6 +106,9 @@ class ReadyFile {
 // line, the same in every daemon. fast_path is the share of datagrams decoded without protobuf,
 // so a change in SSL-Vision's packets that moves everything to the slow path is visible.
 std::string describe_reception(const net::VisionReceiver& receiver);
+// " tracker_packets=N tracker_frames=N tracker_other_source=N tracker_undecodable=N" with
+// --vision-source tracked (none: empty), for status lines.
+std::string describe_tracked(const net::TrackedVisionReceiver* tracked);
 
 // Logs the field size sampling uses, once at start and once per change (geometry packets), with
 // the division it implies: a wrong field size silently moves every robot to other cells.

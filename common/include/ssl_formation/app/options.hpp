@@ -26,6 +26,7 @@ struct UsageError : std::runtime_error {
 
 inline constexpr const char* default_vision_address = "224.5.23.2:10006";
 inline constexpr const char* default_referee_address = "224.5.23.1:10003";
+inline constexpr const char* default_tracker_address = "224.5.23.2:10010";
 inline constexpr const char* default_prediction_address = "224.5.23.4:10040";
 inline constexpr const char* default_interface = "127.0.0.1";
 inline constexpr const char* default_table = "formation-table.bin";
@@ -75,7 +76,12 @@ struct NetworkOptions {
   std::string vision_address = default_vision_address;
   // The game controller's group, joined on the same interface; "none": no referee feed.
   std::string referee_address = default_referee_address;
+  // "raw": SSL-Vision's detections on vision_address; "tracked": a tracker's frames
+  // (TrackerWrapperPacket) on tracker_address instead.
+  std::string vision_source = "raw";
+  std::string tracker_address = default_tracker_address;
   std::string interface = default_interface;
+  bool tracked() const;  // throws UsageError for a --vision-source other than raw or tracked
 };
 void add_vision_options(po::options_description& options, NetworkOptions& network);
 
