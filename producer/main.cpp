@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
         ("referee-address", po::value(&o.referee_address)->default_value(o.referee_address),
          "--replay: where the log's referee messages go (the game controller's group); none: "
          "not sent")
+        ("tracker-address", po::value(&o.tracker_address)->default_value(o.tracker_address),
+         "--replay: where the log's tracked vision (TrackerWrapperPacket) goes; none: not sent")
         ("interface", po::value(&o.interface)->default_value(o.interface),
          "IPv4 address of the interface to send from")
         ("ttl", po::value(&o.ttl)->default_value(o.ttl), "multicast TTL (1 keeps packets on the link)");

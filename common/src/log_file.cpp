@@ -377,15 +377,17 @@ bool LogReader::next_vision(VisionFrame& frame, std::int64_t* receive_time_ns) {
   return false;
 }
 
-bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& referee,
+bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& payload,
                                  std::int64_t* receive_time_ns) {
   Header header{};
-  std::string_view payload;
-  while (next_view(header, payload)) {
-    if (header.type == static_cast<std::int32_t>(LogMessageType::referee)) {
-      kind = MatchInput::referee;
-      referee = payload;
-    } else if (decode_vision(header, payload, frame)) {
+  std::string_view bytes;
+  while (next_view(header, bytes)) {
+    if (header.type == static_cast<std::int32_t>(LogMessageType::referee) ||
+        header.type == static_cast<std::int32_t>(LogMessageType::tracker)) {
+      kind = header.type == static_cast<std::int32_t>(LogMessageType::referee) ? MatchInput::referee
+                                                                              : MatchInput::tracker;
+      payload = bytes;
+    } else if (decode_vision(header, bytes, frame)) {
       kind = MatchInput::vision;
     } else {
       continue;
@@ -397,14 +399,16 @@ bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::stri
 }
 
 bool LogReader::next_match_input(MatchInput& kind, SSL_WrapperPacket& packet,
-                                 std::string_view& referee, std::int64_t* receive_time_ns) {
+                                 std::string_view& payload, std::int64_t* receive_time_ns) {
   Header header{};
-  std::string_view payload;
-  while (next_view(header, payload)) {
-    if (header.type == static_cast<std::int32_t>(LogMessageType::referee)) {
-      kind = MatchInput::referee;
-      referee = payload;
-    } else if (parse_vision(header, payload, packet)) {
+  std::string_view bytes;
+  while (next_view(header, bytes)) {
+    if (header.type == static_cast<std::int32_t>(LogMessageType::referee) ||
+        header.type == static_cast<std::int32_t>(LogMessageType::tracker)) {
+      kind = header.type == static_cast<std::int32_t>(LogMessageType::referee) ? MatchInput::referee
+                                                                              : MatchInput::tracker;
+      payload = bytes;
+    } else if (parse_vision(header, bytes, packet)) {
       kind = MatchInput::vision;
     } else {
       continue;

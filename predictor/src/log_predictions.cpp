@@ -15,6 +15,7 @@
 #include "ssl_formation/prediction_csv.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
 #include "ssl_formation/table_file.hpp"
+#include "ssl_formation/tracked_vision.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::predictor {
@@ -58,6 +59,7 @@ int run_from_log(const PredictorOptions& options) {
   }
 
   bool every_file_whole = true;
+  const bool tracked = options.network.tracked();
   VisionFrame frame;
   for (const std::string& path : options.from_logs) {
     Result<LogReader> reader = LogReader::open(path);
@@ -74,11 +76,18 @@ int run_from_log(const PredictorOptions& options) {
       bar.emplace("predicting from " + path, reader->compressed_size());
     std::uint64_t frames = 0;
     LogReader::MatchInput kind{};
-    std::string_view referee;
+    std::string_view payload;
     std::int64_t receive_ns = 0;
-    while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
+    TrackedVision tracked_vision;  // --vision-source tracked: the log's type-5 frames instead
+    while (reader->next_match_input(kind, frame, payload, &receive_ns)) {
+      const double receive_s = static_cast<double>(receive_ns) * 1e-9;
       if (kind == LogReader::MatchInput::referee) {
-        pipeline.add_referee(referee, static_cast<double>(receive_ns) * 1e-9);
+        pipeline.add_referee(payload, receive_s);
+        continue;
+      }
+      if (kind == LogReader::MatchInput::tracker) {
+        if (!tracked || !tracked_vision.add(payload, receive_s, frame)) continue;
+      } else if (tracked) {
         continue;
       }
       pipeline.add(frame);

@@ -12,6 +12,7 @@
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_gc_referee_message.pb.h"
+#include "ssl_vision_wrapper_tracked.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::producer {
@@ -50,44 +51,58 @@ class Recorder {
     return options_.count == 0 || recorded_ < options_.count;
   }
 
-  // A datagram from the referee group: recorded as a referee message (type 3) if it is one. Does
-  // not count towards --count, which counts vision packets. False when the file cannot be
+  // A datagram from the referee group: recorded as a referee message (type 3) if it is one.
+  // Does not count towards --count, which counts vision packets. False when the file cannot be
   // written.
   bool add_referee(std::span<const std::byte> data) {
-    if (!referee_.ParsePartialFromArray(data.data(), static_cast<int>(data.size()))) {
-      if (referee_skipped_++ == 0) {
-        spdlog::warn(
-            "a datagram of {} bytes on the referee group is not a referee message: not recorded "
-            "(the status lines count them)",
-            data.size());
-      }
-      return true;
-    }
-    const std::string_view payload(reinterpret_cast<const char*>(data.data()), data.size());
-    if (!writer_.write(static_cast<std::int32_t>(LogMessageType::referee), unix_time_ns(),
-                       payload)) {
-      failed_ = true;
-      return false;
-    }
-    ++referee_recorded_;
-    return true;
+    return add_other(data, referee_message_, LogMessageType::referee, "the referee group",
+                     "referee message", referee_);
+  }
+  // A datagram from the trackers' group: recorded as tracked vision (type 5) if it is some.
+  bool add_tracked(std::span<const std::byte> data) {
+    return add_other(data, tracked_packet_, LogMessageType::tracker, "the trackers' group",
+                     "TrackerWrapperPacket", tracked_);
   }
 
   std::uint64_t recorded() const { return recorded_; }
   std::uint64_t skipped() const { return skipped_; }
-  std::uint64_t referee_recorded() const { return referee_recorded_; }
-  std::uint64_t referee_skipped() const { return referee_skipped_; }
+  struct OtherCounts {
+    std::uint64_t recorded = 0;
+    std::uint64_t skipped = 0;
+  };
+  const OtherCounts& referee() const { return referee_; }
+  const OtherCounts& tracked() const { return tracked_; }
   bool failed() const { return failed_; }
 
  private:
+  bool add_other(std::span<const std::byte> data, google::protobuf::MessageLite& scratch,
+                 LogMessageType type, const char* where, const char* what, OtherCounts& counts) {
+    if (!scratch.ParsePartialFromArray(data.data(), static_cast<int>(data.size()))) {
+      if (counts.skipped++ == 0) {
+        spdlog::warn("a datagram of {} bytes on {} is not a {}: not recorded (the status lines "
+                     "count them)",
+                     data.size(), where, what);
+      }
+      return true;
+    }
+    const std::string_view payload(reinterpret_cast<const char*>(data.data()), data.size());
+    if (!writer_.write(static_cast<std::int32_t>(type), unix_time_ns(), payload)) {
+      failed_ = true;
+      return false;
+    }
+    ++counts.recorded;
+    return true;
+  }
+
   LogWriter& writer_;
   const RecordOptions& options_;
   SSL_WrapperPacket packet_;  // reused
-  Referee referee_;            // reused
+  Referee referee_message_;               // reused
+  TrackerWrapperPacket tracked_packet_;   // reused
   std::uint64_t recorded_ = 0;
   std::uint64_t skipped_ = 0;
-  std::uint64_t referee_recorded_ = 0;
-  std::uint64_t referee_skipped_ = 0;
+  OtherCounts referee_;
+  OtherCounts tracked_;
   bool failed_ = false;
 };
 
@@ -98,6 +113,10 @@ int run_record(const RecordOptions& options) {
   const auto interface = app::parse_interface_option(options.network.interface, true);
   const std::optional<net::MulticastEndpoint> referee_group =
       app::parse_referee_option(options.network.referee_address);
+  const std::optional<net::MulticastEndpoint> tracker_group =
+      options.network.tracker_address == "none"
+          ? std::nullopt
+          : std::optional(app::parse_group_option("tracker-address", options.network.tracker_address));
   if (options.output.empty()) throw app::UsageError("--output FILE is required (.log or .log.gz)");
   if (!(options.duration_s >= 0.0) || options.duration_s > 1e9) {
     throw app::UsageError("--duration must be >= 0 seconds (0 = until a signal)");
@@ -121,18 +140,21 @@ int run_record(const RecordOptions& options) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     spdlog::info(
-        "{}: recorded={} referee_recorded={} bytes={} skipped={} referee_skipped={} "
-        "kernel_drops={} receive_errors={} seconds={:.1f}",
-        what, recorder.recorded(), recorder.referee_recorded(), writer->offset(),
-        recorder.skipped(), recorder.referee_skipped(), net.kernel_drops.load(),
-        net.receive_errors.load(), seconds);
+        "{}: recorded={} referee_recorded={} tracked_recorded={} bytes={} skipped={} "
+        "referee_skipped={} tracked_skipped={} kernel_drops={} receive_errors={} seconds={:.1f}",
+        what, recorder.recorded(), recorder.referee().recorded, recorder.tracked().recorded,
+        writer->offset(), recorder.skipped(), recorder.referee().skipped,
+        recorder.tracked().skipped, net.kernel_drops.load(), net.receive_errors.load(), seconds);
   };
   bool by_signal = false;
   std::optional<net::MulticastReceiver> referee;
   if (referee_group) referee.emplace(io, *referee_group, interface, options.receive_buffer_bytes);
+  std::optional<net::MulticastReceiver> tracker;
+  if (tracker_group) tracker.emplace(io, *tracker_group, interface, options.receive_buffer_bytes);
   const auto stop = [&] {
     receiver.stop();
     if (referee) referee->stop();
+    if (tracker) tracker->stop();
     io.stop();
   };
   receiver.start([&](std::span<const std::byte> data, const net::udp::endpoint&) {
@@ -144,8 +166,15 @@ int run_record(const RecordOptions& options) {
       if (!recorder.add_referee(data)) stop();
     });
   }
-  spdlog::info("recording {} and the referee on {} (interface {}, receive buffer {} bytes) to {}{}{}",
+  if (tracker) {
+    tracker->start([&](std::span<const std::byte> data, const net::udp::endpoint&) {
+      if (!recorder.add_tracked(data)) stop();
+    });
+  }
+  spdlog::info("recording {}, the referee on {} and trackers on {} (interface {}, receive buffer {} "
+               "bytes) to {}{}{}",
                group.to_string(), referee_group ? referee_group->to_string() : "none",
+               tracker_group ? tracker_group->to_string() : "none",
                interface.to_string(), receiver.granted_receive_buffer(), options.output,
                options.duration_s > 0.0 ? fmt::format(" for {} s", options.duration_s) : "",
                options.count ? fmt::format(", at most {} packets", options.count) : "");
@@ -167,11 +196,13 @@ int run_record(const RecordOptions& options) {
   app::ReadyFile ready(options.daemon.ready_file);
   ready.mark_ready("ssl-record", {{"vision", group.to_string()},
                                   {"referee", referee_group ? referee_group->to_string() : "none"},
+                                  {"tracker", tracker_group ? tracker_group->to_string() : "none"},
                                   {"interface", interface.to_string()},
                                   {"output", options.output}});
   io.run();
   receiver.stop();
   if (referee) referee->stop();
+  if (tracker) tracker->stop();
 
   if (recorder.failed()) {
     spdlog::error("{}; the {} packets before it are in the file", writer->error(),

@@ -45,10 +45,17 @@ void add_counters(LogReadCounters& total, const LogReadCounters& more) {
 
 class LogReplay {
  public:
-  // `referee`: where the log's referee messages go; none: they are skipped.
+  // `referee`, `tracker`: where the log's referee messages and tracked vision go; none: they
+  // are skipped.
   LogReplay(boost::asio::io_context& io, const ProducerOptions& options,
-            net::ProtoMulticastSender<SSL_WrapperPacket>& sender, net::MulticastSender* referee)
-      : io_(io), timer_(io), options_(options), sender_(sender), referee_(referee) {}
+            net::ProtoMulticastSender<SSL_WrapperPacket>& sender, net::MulticastSender* referee,
+            net::MulticastSender* tracker)
+      : io_(io),
+        timer_(io),
+        options_(options),
+        sender_(sender),
+        referee_(referee),
+        tracker_(tracker) {}
 
   // Opens the file and chooses the clock; throws std::runtime_error if it cannot be read.
   void open() {
@@ -56,7 +63,7 @@ class LogReplay {
     std::vector<ClockSample> samples;
     Pending pending;
     while (samples.size() < kClockSamplePackets && read(pending)) {
-      if (!pending.is_referee) {
+      if (pending.kind == LogReader::MatchInput::vision) {
         ClockSample sample{pending.receive_time, std::nullopt};
         if (pending.packet.has_detection()) sample.t_capture = pending.packet.detection().t_capture();
         samples.push_back(sample);
@@ -104,33 +111,33 @@ class LogReplay {
     const double seconds = std::chrono::duration<double>(Clock::now() - started_).count();
     spdlog::info(
         "{}: {} packets sent in {:.2f} s ({} pass{} over {}, timing from {}, speed {}); "
-        "{} referee messages sent ({} of {} in the log {}); skipped: tracker={} blank={} "
-        "unknown={} legacy_vision_unusable={} undecodable={}; {} packets before --start, "
-        "{} send errors",
+        "{} referee messages sent ({} of {} in the log {}), {} tracked vision packets sent ({} "
+        "in the log{}); skipped: blank={} unknown={} legacy_vision_unusable={} undecodable={}; "
+        "{} packets before --start, {} send errors",
         what, sender_.sent(), seconds, passes_, passes_ == 1 ? "" : "es", options_.replay,
         to_string(timeline_.clock()), options_.speed, referee_sent_, referee_sent_,
-        counters.referee, referee_ ? "sent" : "sent: --referee-address none", counters.tracker,
-        counters.blank, counters.unknown, counters.legacy_unusable, counters.parse_errors,
-        before_start_, sender_.send_errors() + (referee_ ? referee_->send_errors() : 0));
+        counters.referee, referee_ ? "sent" : "sent: --referee-address none", tracker_sent_,
+        counters.tracker, tracker_ ? "" : ", --tracker-address none", counters.blank,
+        counters.unknown, counters.legacy_unusable, counters.parse_errors, before_start_,
+        sender_.send_errors() + (referee_ ? referee_->send_errors() : 0) +
+            (tracker_ ? tracker_->send_errors() : 0));
   }
 
  private:
-  // A vision packet, or a referee message (its bytes in `referee`).
+  // A vision packet, or a referee message or tracked vision (its bytes in `payload`).
   struct Pending {
     SSL_WrapperPacket packet;
     std::int64_t receive_time = 0;
-    bool is_referee = false;
-    std::string referee;
+    LogReader::MatchInput kind = LogReader::MatchInput::vision;
+    std::string payload;
   };
 
   // The log's next vision packet or referee message into `out` (cleared first).
   bool read(Pending& out) {
     out.packet.Clear();
-    LogReader::MatchInput kind{};
-    std::string_view referee;
-    if (!reader_->next_match_input(kind, out.packet, referee, &out.receive_time)) return false;
-    out.is_referee = kind == LogReader::MatchInput::referee;
-    out.referee.assign(out.is_referee ? referee : std::string_view());
+    std::string_view payload;
+    if (!reader_->next_match_input(out.kind, out.packet, payload, &out.receive_time)) return false;
+    out.payload.assign(out.kind == LogReader::MatchInput::vision ? std::string_view() : payload);
     return true;
   }
   enum class Fetch { packet, end, error };
@@ -197,11 +204,15 @@ class LogReplay {
           }
           continue;
         }
-        if (current_.is_referee) {
+        if (current_.kind != LogReader::MatchInput::vision) {
           // Sent in its place among the vision packets, except before --start (the game
-          // controller repeats its state every 100 ms: the replay's first second brings it).
-          if (referee_ && (anchored_ || options_.replay_start_s <= 0.0)) {
-            if (referee_->send(std::as_bytes(std::span(current_.referee)))) ++referee_sent_;
+          // controller repeats its state every 100 ms, a tracker sends 60 frames a second: the
+          // replay's first second brings them).
+          const bool referee = current_.kind == LogReader::MatchInput::referee;
+          net::MulticastSender* to = referee ? referee_ : tracker_;
+          if (to && (anchored_ || options_.replay_start_s <= 0.0) &&
+              to->send(std::as_bytes(std::span(current_.payload)))) {
+            ++(referee ? referee_sent_ : tracker_sent_);
           }
           continue;
         }
@@ -250,7 +261,9 @@ class LogReplay {
   const ProducerOptions& options_;
   net::ProtoMulticastSender<SSL_WrapperPacket>& sender_;
   net::MulticastSender* referee_;
+  net::MulticastSender* tracker_;
   std::uint64_t referee_sent_ = 0;
+  std::uint64_t tracker_sent_ = 0;
   std::optional<LogReader> reader_;
   std::deque<Pending> lookahead_;  // read ahead to choose the clock, sent first
   ReplayTimeline timeline_{ReplayClock::receive_ns};
@@ -299,10 +312,18 @@ int run_replay(const ProducerOptions& options) {
   net::ProtoMulticastSender<SSL_WrapperPacket> sender(io, group, interface.address, options.ttl);
   std::optional<net::MulticastSender> referee;
   if (referee_group) referee.emplace(io, *referee_group, interface.address, options.ttl);
-  LogReplay replay(io, options, sender, referee ? &*referee : nullptr);
+  const std::optional<net::MulticastEndpoint> tracker_group =
+      options.tracker_address == "none"
+          ? std::nullopt
+          : std::optional(app::parse_group_option("tracker-address", options.tracker_address));
+  std::optional<net::MulticastSender> tracker;
+  if (tracker_group) tracker.emplace(io, *tracker_group, interface.address, options.ttl);
+  LogReplay replay(io, options, sender, referee ? &*referee : nullptr,
+                   tracker ? &*tracker : nullptr);
   replay.open();
   sender.open();
   if (referee) referee->open();
+  if (tracker) tracker->open();
   std::string window;
   if (options.replay_start_s > 0.0) window += fmt::format(", from {} s", options.replay_start_s);
   if (options.replay_end_s > 0.0) window += fmt::format(", to {} s", options.replay_end_s);
@@ -323,6 +344,7 @@ int run_replay(const ProducerOptions& options) {
   ready.mark_ready("ssl-producer", {{"mode", "replay"},
                                     {"vision", group.to_string()},
                                     {"referee", referee_group ? referee_group->to_string() : "none"},
+                                    {"tracker", tracker_group ? tracker_group->to_string() : "none"},
                                     {"interface", interface.to_string()},
                                     {"log", options.replay}});
   replay.start();

@@ -19,6 +19,7 @@
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/sampler.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
+#include "ssl_vision_wrapper_tracked.pb.h"
 #include "status_lines.hpp"
 
 namespace ssl_formation {
@@ -299,19 +300,24 @@ TEST(Logs, ReplaySendsLegacyVisionAndCountsWhatItSkips) {
   }
   const std::string group = new_group();
   const std::string referee_group = new_group();
+  const std::string tracker_group = new_group();
   Listener listener(group);
   Listener referee_listener(referee_group);
-  const auto result =
-      replay(dir, path, group, {"--speed", "0", "--referee-address", referee_group});
+  Listener tracker_listener(tracker_group);
+  const auto result = replay(dir, path, group,
+                             {"--speed", "0", "--referee-address", referee_group,
+                              "--tracker-address", tracker_group});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const auto received = listener.wait_for(3, 5s);
   EXPECT_EQ(frame_numbers(received), (std::vector<std::uint32_t>{0, 1, 3}));
   EXPECT_NE(result.err.find("done: 3 packets sent"), std::string::npos) << result.err;
-  // The referee messages go to their own group as they are, the first one (before any vision)
-  // too; the rest is skipped and counted.
+  // The referee messages and tracked vision go to their own groups as they are, the first
+  // referee message (before any vision) too; the rest is skipped and counted.
   EXPECT_EQ(referee_listener.wait_for(2, 5s).size(), 2u);
-  EXPECT_NE(result.err.find("2 referee messages sent (2 of 2 in the log sent); skipped: tracker=1 "
-                            "blank=0 unknown=0 legacy_vision_unusable=1 undecodable=1"),
+  EXPECT_EQ(tracker_listener.wait_for(1, 5s).size(), 1u);
+  EXPECT_NE(result.err.find("2 referee messages sent (2 of 2 in the log sent), 1 tracked vision "
+                            "packets sent (1 in the log); skipped: blank=0 unknown=0 "
+                            "legacy_vision_unusable=1 undecodable=1"),
             std::string::npos)
       << result.err;
 }
@@ -611,10 +617,12 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
   TempDir dir;
   const std::string vision = new_group();
   const std::string referee = new_group();
+  const std::string tracker = new_group();
   const auto path = dir / "match.log";
   ChildProcess recorder(record_program,
-                        {"--vision-address", vision, "--referee-address", referee, "--output",
-                         path.string(), "--count", "4", "--status-interval", "0.05"},
+                        {"--vision-address", vision, "--referee-address", referee,
+                         "--tracker-address", tracker, "--output", path.string(), "--count", "4",
+                         "--status-interval", "0.05"},
                         dir.path(), "record", Readiness::ready_file);
   ASSERT_TRUE(recorder.wait_until_ready(10s)) << recorder.stderr_text();
   EXPECT_EQ(recorder.ready_fact("referee"), referee);
@@ -634,6 +642,12 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
   send(referee, "not a referee message");
   send(vision, detection_packet(1, 10.1).SerializeAsString());
   send(referee, start);
+  TrackerWrapperPacket tracked;
+  tracked.set_uuid("tracker-1");
+  tracked.mutable_tracked_frame()->set_frame_number(1);
+  tracked.mutable_tracked_frame()->set_timestamp(10.15);
+  send(tracker, tracked.SerializeAsString());
+  send(tracker, "not tracked vision");
   send(vision, detection_packet(2, 10.2).SerializeAsString());
   send(vision, detection_packet(3, 10.3).SerializeAsString());
   ASSERT_EQ(recorder.wait(5s), 0) << recorder.stderr_text();
@@ -641,8 +655,10 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
   EXPECT_EQ(done.at("recorded"), 4u) << recorder.stderr_text();
   EXPECT_EQ(done.at("referee_recorded"), 2u) << recorder.stderr_text();
   EXPECT_EQ(done.at("referee_skipped"), 1u) << recorder.stderr_text();
+  EXPECT_EQ(done.at("tracked_recorded"), 1u) << recorder.stderr_text();
+  EXPECT_EQ(done.at("tracked_skipped"), 1u) << recorder.stderr_text();
 
-  // In the file as they came: types 4 3 4 3 4 4, the referee's bytes unchanged.
+  // In the file as they came: types 4 3 4 3 5 4 4, the referee's bytes unchanged.
   auto reader = LogReader::open(path);
   ASSERT_TRUE(reader) << reader.error().message;
   std::vector<std::int32_t> types;
@@ -652,18 +668,24 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
     types.push_back(message.type);
     if (message.type == 3) referee_payloads.push_back(message.payload);
   }
-  EXPECT_EQ(types, (std::vector<std::int32_t>{4, 3, 4, 3, 4, 4}));
+  EXPECT_EQ(types, (std::vector<std::int32_t>{4, 3, 4, 3, 5, 4, 4}));
   EXPECT_EQ(referee_payloads, (std::vector<std::string>{stop, start}));
 
   // The replay sends them to the referee group, the vision to the vision group.
   const std::string vision_out = new_group();
   const std::string referee_out = new_group();
+  const std::string tracker_out = new_group();
   Listener vision_listener(vision_out);
   Listener referee_listener(referee_out);
-  const auto result =
-      replay(dir, path, vision_out, {"--speed", "0", "--referee-address", referee_out});
+  Listener tracker_listener(tracker_out);
+  const auto result = replay(dir, path, vision_out,
+                             {"--speed", "0", "--referee-address", referee_out,
+                              "--tracker-address", tracker_out});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(vision_listener.wait_for(4, 5s).size(), 4u);
+  const auto tracked_sent = tracker_listener.wait_for(1, 5s);
+  ASSERT_EQ(tracked_sent.size(), 1u);
+  EXPECT_EQ(tracked_sent[0].bytes, tracked.SerializeAsString());
   const auto sent = referee_listener.wait_for(2, 5s);
   ASSERT_EQ(sent.size(), 2u);
   EXPECT_EQ(sent[0].bytes, stop);

@@ -187,10 +187,10 @@ TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
   // 300 formations of 2 s of data time at 300x: 2 s of wall time, with the recorded spacing.
   const auto replay = testing::run_to_end(
       producer_program,
-      // The log's (made-up) referee messages kept off the default referee group, which other
-      // tests' daemons join.
+      // The log's (made-up) referee and tracker messages kept off the default groups, which
+      // other tests' daemons join.
       {"--replay", (dir / "match.log.gz").string(), "--speed", "300", "--vision-address", group,
-       "--referee-address", "none"},
+       "--referee-address", "none", "--tracker-address", "none"},
       dir.path(), "replay", 60s);
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
   ASSERT_TRUE(testing::wait_for_status(live, "formations", 300, 10s)) << live.stderr_text();

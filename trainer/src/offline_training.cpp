@@ -22,6 +22,7 @@
 #include "ssl_formation/app/progress.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/table_file.hpp"
+#include "ssl_formation/tracked_vision.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
@@ -36,6 +37,7 @@ constexpr std::uint64_t progress_bar_bytes = 4 << 20;
 struct Destination {
   bool all_teams = false;  // --opponent-team all
   bool per_team = false;   // --table-dir
+  bool tracked = false;    // --vision-source tracked: the logs' tracked vision (type 5) instead
   SamplerConfig config;
   std::optional<MotionConfig> motion;
   MatchRules rules;
@@ -82,12 +84,20 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
   // --opponent-team all: a training per team, made as the referee first names it.
   if (!to.all_teams) outcome.teams.push_back({new_training(to, to.rules.opponent)});
   VisionFrame frame;  // detection packets decoded straight from the log's bytes
+  TrackedVision tracked;
   LogReader::MatchInput kind{};
   std::string_view referee;
   std::int64_t receive_ns = 0;
   std::uint64_t reported_offset = 0;
   while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
-    if (kind == LogReader::MatchInput::referee) {
+    if (kind == LogReader::MatchInput::tracker) {
+      // The tracker's frames stand in for the raw ones with --vision-source tracked.
+      if (!to.tracked || !tracked.add(referee, static_cast<double>(receive_ns) * 1e-9, frame)) {
+        continue;
+      }
+    } else if (kind == LogReader::MatchInput::vision && to.tracked) {
+      continue;
+    } else if (kind == LogReader::MatchInput::referee) {
       const double receive_s = static_cast<double>(receive_ns) * 1e-9;
       for (TeamOfLog& team : outcome.teams) team.training->add_referee(referee, receive_s);
       if (to.all_teams) {
@@ -157,6 +167,7 @@ int run_offline(const TrainerOptions& options) {
   to.rules = match_rules(options);
   to.all_teams = options.model.opponent_team == "all";
   to.per_team = !options.table_dir.empty();
+  to.tracked = options.network.tracked();
   if (to.all_teams && !to.per_team) {
     throw app::UsageError("--opponent-team all trains a table per team: give --table-dir");
   }

@@ -91,14 +91,15 @@ class LogReader {
   // parsed by protobuf as above; offline training's protobuf parse was most of its reading time.
   bool next_vision(VisionFrame& frame, std::int64_t* receive_time_ns = nullptr);
   // What the match is followed by, in the file's order: the vision frames next_vision() returns
-  // (kind vision, into `frame`) and the referee messages (type 3; kind referee, their payload
-  // viewed in `referee`, valid until the next call). Everything else is skipped and counted.
-  enum class MatchInput { vision, referee };
-  bool next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& referee,
+  // (kind vision, into `frame`), the referee messages (type 3) and the trackers' packets (type
+  // 5), these two as their payload viewed in `payload` (valid until the next call). Everything
+  // else is skipped and counted.
+  enum class MatchInput { vision, referee, tracker };
+  bool next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& payload,
                         std::int64_t* receive_time_ns = nullptr);
   // The same with the vision packets as next_vision(SSL_WrapperPacket&) returns them (a replay
   // sends them on as they are).
-  bool next_match_input(MatchInput& kind, SSL_WrapperPacket& packet, std::string_view& referee,
+  bool next_match_input(MatchInput& kind, SSL_WrapperPacket& packet, std::string_view& payload,
                         std::int64_t* receive_time_ns = nullptr);
 
   const std::string& error() const { return error_; }

@@ -16,6 +16,8 @@ struct ProducerOptions {
   std::string vision_address = app::default_vision_address;
   // --replay sends a log's referee messages here; "none": not at all.
   std::string referee_address = app::default_referee_address;
+  // --replay sends a log's tracked vision (type 5) here; "none": not at all.
+  std::string tracker_address = app::default_tracker_address;
   std::string interface = app::default_interface;
   int ttl = net::kDefaultMulticastTtl;
   // Simulation (live and --write-log).
