@@ -377,17 +377,19 @@ bool LogReader::next_vision(VisionFrame& frame, std::int64_t* receive_time_ns) {
   return false;
 }
 
-bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& payload,
-                                 std::int64_t* receive_time_ns) {
+template <class Decode>
+bool LogReader::next_match_message(MatchInput& kind, std::string_view& payload,
+                                   std::int64_t* receive_time_ns, Decode decode) {
   Header header{};
   std::string_view bytes;
   while (next_view(header, bytes)) {
-    if (header.type == static_cast<std::int32_t>(LogMessageType::referee) ||
-        header.type == static_cast<std::int32_t>(LogMessageType::tracker)) {
-      kind = header.type == static_cast<std::int32_t>(LogMessageType::referee) ? MatchInput::referee
-                                                                              : MatchInput::tracker;
+    if (header.type == static_cast<std::int32_t>(LogMessageType::referee)) {
+      kind = MatchInput::referee;
       payload = bytes;
-    } else if (decode_vision(header, bytes, frame)) {
+    } else if (header.type == static_cast<std::int32_t>(LogMessageType::tracker)) {
+      kind = MatchInput::tracker;
+      payload = bytes;
+    } else if (decode(header, bytes)) {
       kind = MatchInput::vision;
     } else {
       continue;
@@ -398,25 +400,20 @@ bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::stri
   return false;
 }
 
+bool LogReader::next_match_input(MatchInput& kind, VisionFrame& frame, std::string_view& payload,
+                                 std::int64_t* receive_time_ns) {
+  return next_match_message(kind, payload, receive_time_ns,
+                            [&](const Header& header, std::string_view bytes) {
+                              return decode_vision(header, bytes, frame);
+                            });
+}
+
 bool LogReader::next_match_input(MatchInput& kind, SSL_WrapperPacket& packet,
                                  std::string_view& payload, std::int64_t* receive_time_ns) {
-  Header header{};
-  std::string_view bytes;
-  while (next_view(header, bytes)) {
-    if (header.type == static_cast<std::int32_t>(LogMessageType::referee) ||
-        header.type == static_cast<std::int32_t>(LogMessageType::tracker)) {
-      kind = header.type == static_cast<std::int32_t>(LogMessageType::referee) ? MatchInput::referee
-                                                                              : MatchInput::tracker;
-      payload = bytes;
-    } else if (parse_vision(header, bytes, packet)) {
-      kind = MatchInput::vision;
-    } else {
-      continue;
-    }
-    if (receive_time_ns != nullptr) *receive_time_ns = header.receive_time_ns;
-    return true;
-  }
-  return false;
+  return next_match_message(kind, payload, receive_time_ns,
+                            [&](const Header& header, std::string_view bytes) {
+                              return parse_vision(header, bytes, packet);
+                            });
 }
 
 std::uint64_t LogReader::compressed_offset() const {

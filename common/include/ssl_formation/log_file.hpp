@@ -127,6 +127,10 @@ class LogReader {
   bool parse_vision(const Header& header, std::string_view payload, SSL_WrapperPacket& packet);
   // The same into a frame, decoding a detection-only type-4 payload straight from its bytes.
   bool decode_vision(const Header& header, std::string_view payload, VisionFrame& frame);
+  // next_match_input() with `decode(header, bytes)` deciding whether a message is usable vision.
+  template <class Decode>
+  bool next_match_message(MatchInput& kind, std::string_view& payload,
+                          std::int64_t* receive_time_ns, Decode decode);
   // The next message's header and payload; the payload view stays valid until the next call.
   bool next_view(Header& header, std::string_view& payload);
   void count(std::int32_t type);
