@@ -19,17 +19,15 @@ std::string_view to_string(Because because) {
   return "default";
 }
 
-namespace {
-std::string_view trimmed(std::string_view text) {
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) {
-    text.remove_prefix(1);
+std::string_view trimmed_team_name(std::string_view name) {
+  while (!name.empty() && std::isspace(static_cast<unsigned char>(name.front()))) {
+    name.remove_prefix(1);
   }
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) {
-    text.remove_suffix(1);
+  while (!name.empty() && std::isspace(static_cast<unsigned char>(name.back()))) {
+    name.remove_suffix(1);
   }
-  return text;
+  return name;
 }
-}  // namespace
 
 OpponentChoice fixed_opponent(TeamColor color, std::optional<AttackDirection> attacks) {
   OpponentChoice choice;
@@ -40,8 +38,8 @@ OpponentChoice fixed_opponent(TeamColor color, std::optional<AttackDirection> at
 }
 
 bool same_team_name(std::string_view a, std::string_view b) {
-  a = trimmed(a);
-  b = trimmed(b);
+  a = trimmed_team_name(a);
+  b = trimmed_team_name(b);
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (std::tolower(static_cast<unsigned char>(a[i])) !=

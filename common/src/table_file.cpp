@@ -1,5 +1,7 @@
 #include "ssl_formation/table_file.hpp"
 
+#include "ssl_formation/match.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -1053,12 +1055,7 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTab
 }
 
 std::string team_table_file_name(std::string_view team) {
-  while (!team.empty() && std::isspace(static_cast<unsigned char>(team.front()))) {
-    team.remove_prefix(1);
-  }
-  while (!team.empty() && std::isspace(static_cast<unsigned char>(team.back()))) {
-    team.remove_suffix(1);
-  }
+  team = trimmed_team_name(team);
   constexpr std::size_t longest = 100;
   std::string name;
   for (const char raw : team.substr(0, longest)) {

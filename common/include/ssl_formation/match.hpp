@@ -51,6 +51,8 @@ OpponentChoice fixed_opponent(TeamColor color, std::optional<AttackDirection> at
 // Team names as the game controller spells them and as a user types them: equal ignoring case
 // and the spaces around them.
 bool same_team_name(std::string_view a, std::string_view b);
+// The name without the spaces around it.
+std::string_view trimmed_team_name(std::string_view name);
 
 // The opponent the options and what the referee said (none: no referee heard) make.
 Opponent resolve_opponent(const OpponentChoice& choice, const RefereeView* referee);
