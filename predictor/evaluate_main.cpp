@@ -71,6 +71,12 @@ int main(int argc, char** argv) {
           "--tests, --train-formations and --test-formations must be positive");
     }
     if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
+    if (!o.model.our_team.empty() || !o.model.opponent_team.empty()) {
+      // The evaluation reads vision only; it does not follow a log's referee yet.
+      throw sf::app::UsageError(
+          "ssl-evaluate does not follow a referee: give --opponent-color and --opponent-attacks, "
+          "not --our-team or --opponent-team");
+    }
     o.horizons = sf::evaluate::parse_horizons(horizons);
     (void)sf::app::recalibration_settings(o.recalibration_half_life_s);  // checked before any work
     sf::app::init_logging("ssl-evaluate");

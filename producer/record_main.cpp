@@ -12,7 +12,17 @@ int main(int argc, char** argv) {
   return sf::app::run_main("ssl-record", [&] {
     sf::producer::RecordOptions o;
     po::options_description general("Options");
-    sf::app::add_vision_options(general, o.network);
+    // clang-format off
+    general.add_options()
+        ("vision-address", po::value(&o.network.vision_address)->default_value(o.network.vision_address),
+         "SSL-Vision multicast group:port to record (type 4)")
+        ("referee-address", po::value(&o.network.referee_address)->default_value(o.network.referee_address),
+         "the game controller's referee group to record too (type 3); none: not recorded")
+        ("tracker-address", po::value(&o.network.tracker_address)->default_value(o.network.tracker_address),
+         "the trackers' group to record too (TrackerWrapperPacket, type 5); none: not recorded")
+        ("interface", po::value(&o.network.interface)->default_value(o.network.interface),
+         "IPv4 address of the interface to join on, or 'all' for every interface");
+    // clang-format on
     sf::app::add_daemon_options(general, o.daemon);
     // clang-format off
     general.add_options()
@@ -33,10 +43,11 @@ int main(int argc, char** argv) {
     // clang-format on
     if (!sf::app::parse_command_line(
             argc, argv, general, "ssl-record --output FILE [options]",
-            "Records a live SSL-Vision multicast feed into an official SSL log file (type-4 "
-            "messages,\nreceive time = Unix time in ns). Datagrams that are not SSL_WrapperPacket "
-            "are counted, not recorded.\nSIGINT/SIGTERM, --duration or --count end it with a "
-            "complete file.")) {
+            "Records a live SSL-Vision multicast feed, the referee and the trackers into an official "
+            "SSL log file\n(types 4, 3 and 5 in the order received, receive time = Unix time in "
+            "ns). Datagrams that are not\nwhat their group carries are counted, not recorded. "
+            "SIGINT/SIGTERM, --duration or --count\n(vision packets) end it with a complete "
+            "file.")) {
       return 0;
     }
     sf::app::init_logging("ssl-record", o.verbose);

@@ -39,6 +39,20 @@ std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& te
   return parse_group_option("referee-address", text);
 }
 
+std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& text) {
+  if (text == "none") return std::nullopt;
+  return parse_group_option("tracker-address", text);
+}
+
+bool geometry_only(const VisionFrame& frame, VisionFrame& out) {
+  if (!frame.has_geometry) return false;
+  out.has_detection = false;
+  out.has_geometry = true;
+  out.field_length = frame.field_length;
+  out.field_width = frame.field_width;
+  return true;
+}
+
 double steady_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
       .count();

@@ -76,7 +76,8 @@ Opponent resolve_opponent(const OpponentChoice& choice, const RefereeView* refer
       }
     }
   }
-  if (referee) {
+  // Unresolved, the colour is only the default: the team playing it is not the one named.
+  if (referee && opponent.unresolved.empty()) {
     opponent.name = opponent.color == TeamColor::yellow ? referee->yellow_name : referee->blue_name;
   }
   if (choice.attacks) {
@@ -121,17 +122,31 @@ std::string_view to_string(LearnDuring learn_during) {
 }
 
 MatchFollower::MatchFollower(OpponentChoice choice)
-    : choice_(std::move(choice)), opponent_(resolve_opponent(choice_, nullptr)) {}
+    : choice_(std::move(choice)), opponent_(resolve_opponent(choice_, nullptr)) {
+  remember_opponent();
+}
 
 RefereeChange MatchFollower::add_referee(std::string_view payload, double receive_s) {
   const RefereeChange change = referee_.add(payload, receive_s);
-  if (change.any()) opponent_ = resolve_opponent(choice_, &referee_.view());
+  if (change.any()) {
+    opponent_ = resolve_opponent(choice_, &referee_.view());
+    remember_opponent();
+  }
   return change;
 }
 
 void MatchFollower::reset() {
   referee_.reset();
   opponent_ = resolve_opponent(choice_, nullptr);
+  last_named_.clear();
+  ever_known_ = false;
+  remember_opponent();
+}
+
+void MatchFollower::remember_opponent() {
+  if (!opponent_known()) return;
+  ever_known_ = true;
+  if (!opponent_.name.empty()) last_named_ = opponent_.name;
 }
 
 }  // namespace ssl_formation

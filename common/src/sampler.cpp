@@ -450,10 +450,15 @@ void FormationSampler::set_opponent(TeamColor color, std::optional<AttackDirecti
   if (color != config_.opponent_color) {
     config_.opponent_color = color;
     ++counters_.opponent_switches;
-    // The other team's robots share the ids: nothing seen of the old opponent may stay.
+    // The other team's robots share the ids: nothing seen of the old opponent may stay, nor
+    // the side inferred from where its goalkeeper stood.
     break_chain();
     for (const std::uint32_t id : observed_ids_) observations_[id].seen = false;
     observed_ids_.clear();
+    if (config_.infer_attacks) {
+      attack_inference_.reset();
+      attacks_.reset();
+    }
   }
   if (attacks) {
     if (!config_.infer_attacks && attacks_ == attacks) return;

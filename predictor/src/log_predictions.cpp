@@ -27,6 +27,9 @@ constexpr std::size_t flush_bytes = 1 << 20;
 }  // namespace
 
 int run_from_log(const PredictorOptions& options) {
+  if (!options.table_dir.empty()) {
+    throw app::UsageError("--from-log predicts from one table: give --table, not --table-dir");
+  }
   const PredictionConfig config = prediction_config(options);
   auto loaded = load_table(options.table, config.sampler.grid);
   if (!loaded) throw std::runtime_error(loaded.error().message);
@@ -88,7 +91,9 @@ int run_from_log(const PredictorOptions& options) {
       if (kind == LogReader::MatchInput::tracker) {
         if (!tracked || !tracked_vision.add(payload, receive_s, frame)) continue;
       } else if (tracked) {
-        continue;
+        // The raw vision's geometry still gives the field size: the tracker's frames have none.
+        if (!frame.has_geometry) continue;
+        frame.has_detection = false;
       }
       pipeline.add(frame);
       if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);

@@ -97,6 +97,10 @@ class PredictorDaemon {
                        app::parse_interface_option(options_.network.interface, true),
                        options_.receive_buffer_bytes);
       tracked_->start([this](const VisionFrame& frame) { on_frame(frame); });
+      // The raw feed still gives the field size: the tracker's frames have none.
+      receiver_.start([this](const VisionFrame& frame, const net::udp::endpoint&) {
+        if (app::geometry_only(frame, geometry_)) on_frame(geometry_);
+      });
     } else {
       receiver_.start(
           [this](const VisionFrame& frame, const net::udp::endpoint&) { on_frame(frame); });
@@ -378,6 +382,7 @@ class PredictorDaemon {
   PredictionPipeline pipeline_;
   net::VisionReceiver receiver_;
   std::optional<net::TrackedVisionReceiver> tracked_;  // --vision-source tracked
+  VisionFrame geometry_;  // tracked: the raw feed's geometry alone
   std::optional<net::MulticastEndpoint> referee_group_;  // none: --referee-address none
   std::optional<net::MulticastReceiver> referee_;
   net::MulticastSender sender_;  // FormationPrediction datagrams, encoded by encode_prediction

@@ -114,9 +114,7 @@ int run_record(const RecordOptions& options) {
   const std::optional<net::MulticastEndpoint> referee_group =
       app::parse_referee_option(options.network.referee_address);
   const std::optional<net::MulticastEndpoint> tracker_group =
-      options.network.tracker_address == "none"
-          ? std::nullopt
-          : std::optional(app::parse_group_option("tracker-address", options.network.tracker_address));
+      app::parse_tracker_option(options.network.tracker_address);
   if (options.output.empty()) throw app::UsageError("--output FILE is required (.log or .log.gz)");
   if (!(options.duration_s >= 0.0) || options.duration_s > 1e9) {
     throw app::UsageError("--duration must be >= 0 seconds (0 = until a signal)");

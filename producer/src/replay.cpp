@@ -101,8 +101,9 @@ class LogReplay {
   bool finished() const { return finished_; }
 
   void log_status() const {
-    spdlog::info("status: sent={} referee_sent={} pass={} log_time={:.2f}s send_errors={}",
-                 sender_.sent(), referee_sent_, passes_, last_t_, sender_.send_errors());
+    spdlog::info(
+        "status: sent={} referee_sent={} tracker_sent={} pass={} log_time={:.2f}s send_errors={}",
+        sender_.sent(), referee_sent_, tracker_sent_, passes_, last_t_, sender_.send_errors());
   }
 
   void log_summary(const char* what) const {
@@ -111,13 +112,13 @@ class LogReplay {
     const double seconds = std::chrono::duration<double>(Clock::now() - started_).count();
     spdlog::info(
         "{}: {} packets sent in {:.2f} s ({} pass{} over {}, timing from {}, speed {}); "
-        "{} referee messages sent ({} of {} in the log {}), {} tracked vision packets sent ({} "
-        "in the log{}); skipped: blank={} unknown={} legacy_vision_unusable={} undecodable={}; "
+        "{} of the log's {} referee messages sent{}, {} of its {} tracked vision packets "
+        "sent{}; skipped: blank={} unknown={} legacy_vision_unusable={} undecodable={}; "
         "{} packets before --start, {} send errors",
         what, sender_.sent(), seconds, passes_, passes_ == 1 ? "" : "es", options_.replay,
-        to_string(timeline_.clock()), options_.speed, referee_sent_, referee_sent_,
-        counters.referee, referee_ ? "sent" : "sent: --referee-address none", tracker_sent_,
-        counters.tracker, tracker_ ? "" : ", --tracker-address none", counters.blank,
+        to_string(timeline_.clock()), options_.speed, referee_sent_, counters.referee,
+        referee_ ? "" : " (--referee-address none)", tracker_sent_, counters.tracker,
+        tracker_ ? "" : " (--tracker-address none)", counters.blank,
         counters.unknown, counters.legacy_unusable, counters.parse_errors, before_start_,
         sender_.send_errors() + (referee_ ? referee_->send_errors() : 0) +
             (tracker_ ? tracker_->send_errors() : 0));
@@ -214,6 +215,9 @@ class LogReplay {
               to->send(std::as_bytes(std::span(current_.payload)))) {
             ++(referee ? referee_sent_ : tracker_sent_);
           }
+          // They count for the batch too: a log of trackers' packets alone must not hold the
+          // thread (signals, the status timer) for its whole length.
+          if (++skipped_now >= kSkipsPerBatch) return yield();
           continue;
         }
         const double t = timeline_.time_of(current_.receive_time, current_.packet);
@@ -313,9 +317,7 @@ int run_replay(const ProducerOptions& options) {
   std::optional<net::MulticastSender> referee;
   if (referee_group) referee.emplace(io, *referee_group, interface.address, options.ttl);
   const std::optional<net::MulticastEndpoint> tracker_group =
-      options.tracker_address == "none"
-          ? std::nullopt
-          : std::optional(app::parse_group_option("tracker-address", options.tracker_address));
+      app::parse_tracker_option(options.tracker_address);
   std::optional<net::MulticastSender> tracker;
   if (tracker_group) tracker.emplace(io, *tracker_group, interface.address, options.ttl);
   LogReplay replay(io, options, sender, referee ? &*referee : nullptr,

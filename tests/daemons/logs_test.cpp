@@ -315,8 +315,8 @@ TEST(Logs, ReplaySendsLegacyVisionAndCountsWhatItSkips) {
   // referee message (before any vision) too; the rest is skipped and counted.
   EXPECT_EQ(referee_listener.wait_for(2, 5s).size(), 2u);
   EXPECT_EQ(tracker_listener.wait_for(1, 5s).size(), 1u);
-  EXPECT_NE(result.err.find("2 referee messages sent (2 of 2 in the log sent), 1 tracked vision "
-                            "packets sent (1 in the log); skipped: blank=0 unknown=0 "
+  EXPECT_NE(result.err.find("2 of the log's 2 referee messages sent, 1 of its 1 tracked vision "
+                            "packets sent; skipped: blank=0 unknown=0 "
                             "legacy_vision_unusable=1 undecodable=1"),
             std::string::npos)
       << result.err;
@@ -635,7 +635,7 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
   // Two sockets: a pause after each datagram keeps the order they reach the recorder in.
   const auto send = [](const std::string& group, const std::string& bytes) {
     ASSERT_TRUE(testing::send_to_group(group, bytes));
-    std::this_thread::sleep_for(50ms);
+    std::this_thread::sleep_for(150ms);
   };
   send(vision, detection_packet(0, 10.0).SerializeAsString());
   send(referee, stop);

@@ -69,10 +69,15 @@ int run_live(const TrainerOptions& options) {
   };
   // Raw vision, or a tracker's frames instead (never both: they would be two clocks).
   std::optional<net::TrackedVisionReceiver> tracked;
+  VisionFrame geometry;  // tracked: the raw feed's geometry alone
   if (options.network.tracked()) {
     tracked.emplace(io, app::parse_group_option("tracker-address", options.network.tracker_address),
                     interface, options.receive_buffer_bytes);
     tracked->start(on_frame);
+    // The raw feed still gives the field size: the tracker's frames have none.
+    receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
+      if (app::geometry_only(frame, geometry)) on_frame(geometry);
+    });
   } else {
     receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) { on_frame(frame); });
   }

@@ -84,6 +84,7 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
   // --opponent-team all: a training per team, made as the referee first names it.
   if (!to.all_teams) outcome.teams.push_back({new_training(to, to.rules.opponent)});
   VisionFrame frame;  // detection packets decoded straight from the log's bytes
+  VisionFrame geometry;  // the last geometry, for the trainings made part-way (all teams)
   TrackedVision tracked;
   LogReader::MatchInput kind{};
   std::string_view referee;
@@ -96,7 +97,9 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
         continue;
       }
     } else if (kind == LogReader::MatchInput::vision && to.tracked) {
-      continue;
+      // The raw vision's geometry still gives the field size: the tracker's frames have none.
+      if (!frame.has_geometry) continue;
+      frame.has_detection = false;
     } else if (kind == LogReader::MatchInput::referee) {
       const double receive_s = static_cast<double>(receive_ns) * 1e-9;
       for (TeamOfLog& team : outcome.teams) team.training->add_referee(referee, receive_s);
@@ -117,10 +120,17 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
           choice.our_team.clear();
           choice.opponent_team = *name;
           TeamOfLog& team = outcome.teams.emplace_back(TeamOfLog{new_training(to, choice)});
+          // The field the log's geometry gave so far.
+          if (geometry.has_geometry) team.training->add(geometry);
           team.training->add_referee(referee, receive_s);
         }
       }
       continue;
+    }
+    if (frame.has_geometry) {
+      geometry.has_geometry = true;
+      geometry.field_length = frame.field_length;
+      geometry.field_width = frame.field_width;
     }
     for (TeamOfLog& team : outcome.teams) team.training->add(frame);
     if ((++outcome.frames & 4095) == 0) {
@@ -136,10 +146,8 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
   outcome.read_error = reader->error();
   outcome.counters = reader->counters();
   for (TeamOfLog& team : outcome.teams) {
-    const MatchFollower& match = team.training->match();
     // A team named in the options that the referee never named: nothing was learned of it.
-    team.found = match.opponent_known() ||
-                 (match.choice().our_team.empty() && match.choice().opponent_team.empty());
+    team.found = team.training->match().opponent_ever_known();
   }
   return outcome;
 }
@@ -170,6 +178,10 @@ int run_offline(const TrainerOptions& options) {
   to.tracked = options.network.tracked();
   if (to.all_teams && !to.per_team) {
     throw app::UsageError("--opponent-team all trains a table per team: give --table-dir");
+  }
+  if (to.all_teams && options.model.opponent_color != "referee") {
+    throw app::UsageError("--opponent-team all finds each team's colour by its name: leave out "
+                          "--opponent-color");
   }
   if (options.jobs < 0) throw app::UsageError("--jobs must be 0 (every core) or more");
   if (to.per_team) {
@@ -239,8 +251,9 @@ int run_offline(const TrainerOptions& options) {
       continue;
     }
     const LogReadCounters& c = log.counters;
-    spdlog::info("{}: {} vision packets ({} parse errors), {} referee, skipped {} tracker, {} other",
-                 log.file, log.frames, c.parse_errors, c.referee, c.tracker,
+    spdlog::info("{}: {} {} ({} parse errors), {} referee, {} {} tracker, {} other", log.file,
+                 log.frames, to.tracked ? "tracked frames" : "vision packets", c.parse_errors,
+                 c.referee, to.tracked ? "of" : "skipped", c.tracker,
                  c.unknown + c.blank + c.legacy_unusable);
     if (to.all_teams && log.teams.empty()) {
       spdlog::warn("{}: no team named by a referee: nothing learned (--opponent-team all)",
@@ -252,10 +265,20 @@ int run_offline(const TrainerOptions& options) {
         spdlog::warn("{}: skipped, {}", log.file, training.match().opponent().unresolved);
         continue;
       }
+      if (!training.match().opponent_known()) {
+        spdlog::info("{}: the opponent was found, then no longer named ({}): what was learned "
+                     "while it was is kept",
+                     log.file, training.match().opponent().unresolved);
+      }
       spdlog::info("{}: opponent {}", log.file, describe_team(team));
+      // The team's table: the one named (the file names ignore case as names do), else the
+      // last opponent the referee named (--our-team), else the unnamed team's.
+      const OpponentChoice& choice = training.match().choice();
+      const std::string& team_name = !choice.opponent_team.empty()
+                                         ? choice.opponent_team
+                                         : training.match().last_named_opponent();
       const std::filesystem::path path =
-          to.per_team ? std::filesystem::path(options.table_dir) /
-                            team_table_file_name(training.match().opponent().name)
+          to.per_team ? std::filesystem::path(options.table_dir) / team_table_file_name(team_name)
                       : std::filesystem::path(options.table);
       std::unique_ptr<Training>& table = tables[path];
       if (!table) {

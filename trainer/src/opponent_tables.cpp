@@ -34,7 +34,9 @@ OpponentTables::OpponentTables(const TrainerOptions& options)
 }
 
 std::unique_ptr<Training> OpponentTables::open(const std::filesystem::path& path) {
-  return open_training(path, config_, options_.reset, motion_, rules_);
+  const bool reset = options_.reset && !opened_.contains(path);
+  opened_.insert(path);
+  return open_training(path, config_, reset, motion_, rules_);
 }
 
 RefereeChange OpponentTables::add_referee(std::string_view payload, double receive_s) {
@@ -57,7 +59,15 @@ RefereeChange OpponentTables::add_referee(std::string_view payload, double recei
                                       rules_);
     saving_ = false;
   }
-  // The new table's training hears what the old one heard last.
+  // The new table's training knows the field the old one learned from geometry, and hears what
+  // the old one heard last.
+  if (training_->sampler().counters().geometry_packets > 0) {
+    VisionFrame geometry;
+    geometry.has_geometry = true;
+    geometry.field_length = static_cast<std::int32_t>(training_->sampler().field().length_mm);
+    geometry.field_width = static_cast<std::int32_t>(training_->sampler().field().width_mm);
+    next->add(geometry);
+  }
   next->add_referee(payload, receive_s);
   training_ = std::move(next);
   path_ = wanted;

@@ -84,6 +84,12 @@ class MatchFollower {
   // Whether the opponent is known: always unless the options name a team (--our-team,
   // --opponent-team) that the referee has not (yet) found.
   bool opponent_known() const { return opponent_.unresolved.empty(); }
+  // The referee's name of the opponent the last time it was known by a name (empty if never):
+  // a log over a whole day may name a team first and other teams after it.
+  const std::string& last_named_opponent() const { return last_named_; }
+  // Whether the opponent the options name was ever found in the referee's names (always true
+  // when they name none).
+  bool opponent_ever_known() const { return ever_known_; }
   // Whether learning may count now: never while a named opponent is not found (its colour is
   // not known: a log of other teams teaches nothing about it); else always without a referee
   // heard (the game state is not known) or with LearnDuring::all, else only in running play.
@@ -94,9 +100,13 @@ class MatchFollower {
   }
 
  private:
+  void remember_opponent();
+
   OpponentChoice choice_;
   RefereeFollower referee_;
   Opponent opponent_;
+  std::string last_named_;
+  bool ever_known_ = false;
 };
 
 }  // namespace ssl_formation

@@ -46,9 +46,11 @@ class TrackedVision {
     return changed;
   }
   const TrackerCounters& counters() const { return counters_; }
+  // Forgets the tracker followed (a new log file): the next one heard is followed.
   void reset() {
     uuid_.clear();
     name_.clear();
+    last_s_ = 0.0;
   }
 
  private:

@@ -28,8 +28,13 @@ void init_logging(const std::string& program, bool verbose = false);
 net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text);
 net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_all);
 
-// --referee-address: the group to join, or none for "none". Throws UsageError.
+// --referee-address, --tracker-address: the group, or none for "none". Throw UsageError.
 std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& text);
+std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& text);
+
+// --vision-source tracked: the geometry of a raw vision frame alone, into `out`; false for a frame
+// without geometry. The tracker's frames carry no field size, the raw feed's geometry does.
+bool geometry_only(const VisionFrame& frame, VisionFrame& out);
 
 // Seconds on the steady clock: the receive time the referee follower takes from a live feed.
 double steady_seconds();

@@ -68,7 +68,7 @@ void add_recalibration_option(po::options_description& options, double& half_lif
 // negative or non-finite one.
 std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s);
 
-// --learn-during, for the programs that train (ssl-trainer, ssl-evaluate).
+// --learn-during, for the program that trains from the referee (ssl-trainer).
 void add_learn_during_option(po::options_description& options, std::string& learn_during);
 LearnDuring parsed_learn_during(const std::string& learn_during);  // throws UsageError
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string_view>
 
 #include "ssl_formation/trainer/trainer.hpp"
@@ -50,6 +51,9 @@ class OpponentTables {
   std::filesystem::path path_;
   std::unique_ptr<Training> training_;
   bool saving_ = true;  // false for a table whose file could not be resumed
+  // Tables opened in this run: --reset empties each only the first time (an opponent met again
+  // later in the run keeps what it was taught earlier).
+  std::set<std::filesystem::path> opened_;
 };
 
 }  // namespace ssl_formation::trainer
