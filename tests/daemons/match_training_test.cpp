@@ -320,5 +320,46 @@ TEST(MatchTraining, ScoutingLearnsTheNamedTeamFromEveryLogItPlaysInOnEveryCore) 
   }
 }
 
+TEST(MatchTraining, ScoutingKeepsATeamThatWasNamedAndThenNotInTheSameLog) {
+  TempDir dir;
+  // A day's recording: the scouted team's match for 15 s, then two other teams'.
+  testing::MatchScript script;
+  script.seconds = 30.0;
+  script.frame = [](double t) -> std::optional<DetectionFrameSpec> {
+    DetectionFrameSpec frame;
+    frame.yellow = team(t, 0, false);
+    frame.blue = team(t, 6, true);
+    return frame;
+  };
+  script.referee = [](double t) -> std::optional<testing::RefereeSpec> {
+    testing::RefereeSpec spec;
+    spec.yellow = t < 15.0 ? "Scouted" : "Gamma";
+    spec.blue = t < 15.0 ? "Alpha" : "Delta";
+    spec.command_counter = t < 15.0 ? 1 : 2;
+    spec.blue_on_positive_half = true;
+    return spec;
+  };
+  ASSERT_EQ(testing::write_match_log(dir / "day.log", script), "");
+  const auto run = testing::run_to_end(
+      trainer_program,
+      {"--from-log", (dir / "day.log").string(), "--opponent-team", "scouted", "--table-dir",
+       (dir / "tables").string()},
+      dir.path(), "day", 60s);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("the opponent was found, then no longer named"), std::string::npos)
+      << run.err;
+  const auto table = load_table(dir / "tables" / "scouted.bin", Grid(3, 2));
+  ASSERT_TRUE(table && table->motion) << run.err;
+  // About 15 s of play: learned, and nothing after the teams changed.
+  EXPECT_GT(table->table.transitions(), 3000u);
+  const auto half = train(dir, dir / "day.log", dir / "all.bin",
+                          {"--opponent-color", "yellow", "--opponent-attacks", "+x"}, "all");
+  ASSERT_EQ(half.exit_code, 0) << half.err;
+  const auto whole = load_table(dir / "all.bin", Grid(3, 2));
+  ASSERT_TRUE(whole);
+  EXPECT_LT(table->table.transitions(), whole->table.transitions() * 6 / 10);
+  EXPECT_GT(table->table.transitions(), whole->table.transitions() * 4 / 10);
+}
+
 }  // namespace
 }  // namespace ssl_formation
