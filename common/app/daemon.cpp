@@ -60,10 +60,11 @@ double steady_seconds() {
 
 void MatchLog::update(const MatchFollower& match, std::optional<AttackDirection> attacks_now,
                       const RefereeChange& change) {
-  const std::string opponent = describe(match.opponent(), attacks_now);
-  if (opponent != logged_opponent_) {
-    spdlog::info("opponent: {}", opponent);
-    logged_opponent_ = opponent;
+  if (!logged_opponent_ || !(*logged_opponent_ == match.opponent()) ||
+      logged_attacks_ != attacks_now) {
+    spdlog::info("opponent: {}", describe(match.opponent(), attacks_now));
+    logged_opponent_ = match.opponent();
+    logged_attacks_ = attacks_now;
   }
   const RefereeFollower& referee = match.referee();
   if (referee.heard() && logged_state_ != match.game_state()) {

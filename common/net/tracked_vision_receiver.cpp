@@ -17,7 +17,7 @@ void TrackedVisionReceiver::start(FrameHandler on_frame) {
   receiver_.start([this](std::span<const std::byte> data, const udp::endpoint&) {
     const double now_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-    const std::string_view payload(reinterpret_cast<const char*>(data.data()), data.size());
+    const std::string_view payload = as_text(data);
     const std::uint64_t switches = tracked_.counters().source_switches;
     const bool got = tracked_.add(payload, now_s, frame_);
     if (tracked_.take_source_change()) {

@@ -29,11 +29,14 @@ std::string_view trimmed_team_name(std::string_view name) {
   return name;
 }
 
-OpponentChoice fixed_opponent(TeamColor color, std::optional<AttackDirection> attacks) {
+OpponentChoice fixed_opponent(TeamColor color, AttackDirection attacks, bool infer_attacks) {
   OpponentChoice choice;
   choice.color = color;
-  choice.attacks = attacks;
-  choice.infer_attacks = !attacks;
+  if (infer_attacks) {
+    choice.infer_attacks = true;
+  } else {
+    choice.attacks = attacks;
+  }
   return choice;
 }
 

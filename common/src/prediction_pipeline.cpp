@@ -27,9 +27,8 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_predi
       sampler_(config.sampler, [this](const FormationSample& sample) { on_sample(sample); }),
       match_(config.opponent ? *config.opponent
                              : fixed_opponent(config.sampler.opponent_color,
-                                              config.sampler.infer_attacks
-                                                  ? std::nullopt
-                                                  : std::optional(config.sampler.opponent_attacks))) {
+                                              config.sampler.opponent_attacks,
+                                              config.sampler.infer_attacks)) {
   if (config_.model == ModelKind::motion && config_.sampler.sampling != Sampling::frame) {
     throw std::invalid_argument(
         "the motion model predicts from every frame's velocities: it needs --sampling frame");

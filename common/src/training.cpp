@@ -13,10 +13,8 @@ Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t sa
       motion_history_(motion_ ? motion_->config() : MotionConfig{}),
       sampler_(config, [this](const FormationSample& sample) { on_sample(sample); }),
       match_(rules ? rules->opponent
-                   : fixed_opponent(config.opponent_color,
-                                    config.infer_attacks
-                                        ? std::nullopt
-                                        : std::optional(config.opponent_attacks))),
+                   : fixed_opponent(config.opponent_color, config.opponent_attacks,
+                                    config.infer_attacks)),
       learn_during_(rules ? rules->learn_during : LearnDuring::running),
       samples_before_(samples_before),
       saved_transitions_(table_.transitions()),

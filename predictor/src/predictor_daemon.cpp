@@ -112,9 +112,8 @@ class PredictorDaemon {
                        app::parse_interface_option(options_.network.interface, true),
                        options_.receive_buffer_bytes);
       referee_->start([this](std::span<const std::byte> datagram, const net::udp::endpoint&) {
-        const std::string_view payload(reinterpret_cast<const char*>(datagram.data()),
-                                       datagram.size());
-        const RefereeChange change = pipeline_.add_referee(payload, app::steady_seconds());
+        const RefereeChange change =
+            pipeline_.add_referee(net::as_text(datagram), app::steady_seconds());
         if (change.any()) ours_.set_color(other_team(pipeline_.sampler().config().opponent_color));
         if (change.teams) follow_opponent_table();
         match_log_.update(pipeline_.match(), pipeline_.sampler().attacks(), change);

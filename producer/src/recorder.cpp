@@ -41,7 +41,7 @@ class Recorder {
       }
       return true;
     }
-    const std::string_view payload(reinterpret_cast<const char*>(data.data()), data.size());
+    const std::string_view payload = net::as_text(data);
     if (!writer_.write(static_cast<std::int32_t>(LogMessageType::vision), unix_time_ns(),
                        payload)) {
       failed_ = true;
@@ -85,7 +85,7 @@ class Recorder {
       }
       return true;
     }
-    const std::string_view payload(reinterpret_cast<const char*>(data.data()), data.size());
+    const std::string_view payload = net::as_text(data);
     if (!writer_.write(static_cast<std::int32_t>(type), unix_time_ns(), payload)) {
       failed_ = true;
       return false;

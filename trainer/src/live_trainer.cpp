@@ -86,9 +86,8 @@ int run_live(const TrainerOptions& options) {
   if (referee_group) {
     referee.emplace(io, *referee_group, interface, options.receive_buffer_bytes);
     referee->start([&](std::span<const std::byte> datagram, const net::udp::endpoint&) {
-      const std::string_view payload(reinterpret_cast<const char*>(datagram.data()),
-                                     datagram.size());
-      const RefereeChange change = tables.add_referee(payload, app::steady_seconds());
+      const RefereeChange change =
+          tables.add_referee(net::as_text(datagram), app::steady_seconds());
       match_log.update(tables.training().match(), tables.training().sampler().attacks(), change);
     });
   }

@@ -85,6 +85,7 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
   if (!to.all_teams) outcome.teams.push_back({new_training(to, to.rules.opponent)});
   VisionFrame frame;  // detection packets decoded straight from the log's bytes
   VisionFrame geometry;  // the last geometry, for the trainings made part-way (all teams)
+  RefereeFollower names;  // --opponent-team all: who the referee names, to make their trainings
   TrackedVision tracked;
   LogReader::MatchInput kind{};
   std::string_view referee;
@@ -104,10 +105,9 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
       const double receive_s = static_cast<double>(receive_ns) * 1e-9;
       for (TeamOfLog& team : outcome.teams) team.training->add_referee(referee, receive_s);
       if (to.all_teams) {
-        const RefereeView* view = nullptr;
-        RefereeFollower names;
+        // The names as the log's one followed game controller gives them.
         names.add(referee, receive_s);
-        if (names.heard()) view = &names.view();
+        const RefereeView* view = names.heard() ? &names.view() : nullptr;
         for (const std::string* name : {view ? &view->yellow_name : nullptr,
                                         view ? &view->blue_name : nullptr}) {
           if (!name || name->empty()) continue;  // an unnamed team could be anyone

@@ -44,9 +44,9 @@ struct Opponent {
   friend bool operator==(const Opponent&, const Opponent&) = default;
 };
 
-// Options that fix the colour and the side (none: inferred), winning over the referee: what a
+// Options that fix the colour and the side (or infer the side), winning over the referee: what a
 // program given --opponent-color and --opponent-attacks follows.
-OpponentChoice fixed_opponent(TeamColor color, std::optional<AttackDirection> attacks);
+OpponentChoice fixed_opponent(TeamColor color, AttackDirection attacks, bool infer_attacks);
 
 // Team names as the game controller spells them and as a user types them: equal ignoring case
 // and the spaces around them.

@@ -49,7 +49,10 @@ class MatchLog {
               const RefereeChange& change = {});
 
  private:
-  std::string logged_opponent_;
+  // What was logged last, compared before anything is formatted: update() runs for every frame
+  // while the side is inferred.
+  std::optional<Opponent> logged_opponent_;
+  std::optional<AttackDirection> logged_attacks_;
   std::optional<GameState> logged_state_;
   RefereeCounters reported_;
 };

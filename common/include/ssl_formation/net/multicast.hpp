@@ -119,6 +119,11 @@ struct ReceiverCounters {
   std::atomic<std::uint64_t> kernel_drops{0};
 };
 
+// A datagram's bytes as the text view protobuf's parsers and the log writer take.
+inline std::string_view as_text(std::span<const std::byte> data) {
+  return {reinterpret_cast<const char*>(data.data()), data.size()};
+}
+
 // Receives whole datagrams sent to one multicast group and port.
 //
 // start() opens a UDP socket with SO_REUSEADDR (several processes can share the port), sets
