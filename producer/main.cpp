@@ -1,5 +1,6 @@
 // ssl-producer: SSL-Vision-style packets on multicast. By default the paper's simulated vision
-// (three plays and random formations), one formation every --period seconds. With --write-log
+// (three plays and random formations), one formation every --period seconds, with a simulated
+// game controller's referee messages on the referee group. With --write-log
 // it writes the same packets to an official SSL log instead; with --replay it sends a log's
 // vision packets with their recorded timing.
 
@@ -19,8 +20,8 @@ int main(int argc, char** argv) {
         ("vision-address", po::value(&o.vision_address)->default_value(o.vision_address),
          "multicast group:port to send to")
         ("referee-address", po::value(&o.referee_address)->default_value(o.referee_address),
-         "--replay: where the log's referee messages go (the game controller's group); none: "
-         "not sent")
+         "where the simulated game controller's referee messages go, or with --replay the log's "
+         "(the game controller's group); none: not sent")
         ("tracker-address", po::value(&o.tracker_address)->default_value(o.tracker_address),
          "--replay: where the log's tracked vision (TrackerWrapperPacket) goes; none: not sent")
         ("interface", po::value(&o.interface)->default_value(o.interface),
@@ -48,13 +49,28 @@ int main(int argc, char** argv) {
         ("opponent-color", po::value(&o.opponent_color)->default_value(o.opponent_color),
          "colour of the simulated opponent: yellow or blue")
         ("opponent-attacks", po::value(&o.opponent_attacks)->default_value(o.opponent_attacks),
-         "direction the simulated opponent attacks in the feed's coordinates: +x or -x")
+         "direction the simulated opponent attacks in the feed's coordinates in the first half: "
+         "+x or -x (the teams change ends at half time when the game controller runs)")
         ("field-length", po::value(&o.field_length_mm)->default_value(o.field_length_mm),
          "field length, mm (plays are drawn for 9000 and stretched)")
         ("field-width", po::value(&o.field_width_mm)->default_value(o.field_width_mm),
          "field width, mm (plays are drawn for 6000 and stretched)")
         ("start-time", po::value(&o.start_time_s)->default_value(o.start_time_s),
          "t_capture of the first formation, seconds");
+    // clang-format on
+    po::options_description game("Simulated game controller (live and --write-log)");
+    // clang-format off
+    game.add_options()
+        ("referee", po::value(&o.referee)->default_value(o.referee, "on"),
+         "on: referee messages go with the simulation, as at a match (team names, kick-offs, "
+         "stoppages and free kicks, two halves with a change of ends), to --referee-address or "
+         "into --write-log; off: vision only, the paper's protocol")
+        ("our-team", po::value(&o.our_team)->default_value(o.our_team),
+         "the name the referee gives our team (give the daemons the same --our-team)")
+        ("opponent-team", po::value(&o.opponent_team)->default_value(o.opponent_team),
+         "the name the referee gives the simulated opponent")
+        ("half-length", po::value(&o.half_length_s)->default_value(o.half_length_s),
+         "seconds of data time (t_capture) in each half; half time is 20 s");
     // clang-format on
     po::options_description logs("Log files (official SSL format; .log.gz is gzip-compressed)");
     // clang-format off
@@ -81,7 +97,7 @@ int main(int argc, char** argv) {
         ("verbose", po::bool_switch(&o.verbose), "log every formation sent");
     // clang-format on
     sf::app::add_daemon_options(general, o.daemon);
-    general.add(network).add(simulation).add(logs);
+    general.add(network).add(simulation).add(game).add(logs);
     if (!sf::app::parse_command_line(
             argc, argv, general,
             "ssl-producer [options]\n"
@@ -89,8 +105,9 @@ int main(int argc, char** argv) {
             "       ssl-producer --replay FILE [--speed X] [--loop] [--start S] [--end S] "
             "[--vision-address G:P]",
             "Sends SSL-Vision packets of the paper's simulated opponent (three plays and random "
-            "formations) on multicast,\nwrites them to an official SSL log (--write-log), or "
-            "replays a log with its recorded timing (--replay).")) {
+            "formations) on multicast,\nwith a game controller's referee messages, writes them "
+            "to an official SSL log (--write-log), or replays a log\nwith its recorded timing "
+            "(--replay).")) {
       return 0;
     }
     if (!o.write_log.empty() && !o.replay.empty()) {

@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
 # Runs the whole system on this machine's loopback: ssl-producer sends the paper's simulated
-# opponent (or replays a recorded match with --replay), ssl-trainer learns the table,
-# ssl-predictor predicts and prints one line per prediction (a prediction at every frame). Stops
-# all three on Ctrl-C or after --duration seconds.
+# opponent with a game controller's referee messages (or replays a recorded match with
+# --replay), ssl-trainer learns the table, ssl-predictor predicts and prints one line per
+# prediction (a prediction at every frame). Stops all three on Ctrl-C or after --duration seconds.
 #
 #   scripts/demo.sh [--duration SECONDS] [--period SECONDS] [--grid LxW] [--horizon N]
 #                   [--cameras N] [--keep-table] [--http-port PORT] [--replay LOG] [--model M]
 #
 # The paper's simulated opponent jumps from formation to formation every 2 s of data time, so
-# the demo runs the paper's model on it (--model paper). --replay LOG (an official log of a real
-# or simulated match, e.g. ../shared/data/grsim-match-A-600s.log.gz, yellow attacking +x) loops
-# the recording instead and runs the motion model, the daemons' default.
+# the demo runs the paper's model on it (--model paper). The daemons are told only our team's
+# name, as at a tournament: the referee gives the opponent's colour and side (the teams change
+# ends at half time, every 300 s of data time: 15 s of the demo) and learning happens in running
+# play only. --replay LOG (an official log of a real or simulated match, e.g.
+# ../shared/data/grsim-match-A-600s.log.gz, yellow attacking +x) loops the recording instead and
+# runs the motion model, the daemons' default.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -23,7 +26,7 @@ keep_table=0
 http_port=8080
 replay=""
 model=""
-usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --duration) duration="$2"; shift 2 ;;
@@ -73,15 +76,19 @@ trap cleanup EXIT
 trap 'exit 0' INT TERM
 
 rm -f "$run_dir"/*.ready
+# The simulation's game controller names our team; a recorded match may carry no referee at all,
+# and then the opponent is the default one (yellow attacking +x, as the shared recordings play).
+match_options=()
+[ -n "$replay" ] || match_options=(--our-team ssl-formation)
 "$build_dir/trainer/ssl-trainer" --vision-address "$vision" --table "$table" --grid "$grid" \
   --model "$model" --sampling frame --flush-interval 1 --status-interval 5 --ready-file "$run_dir/trainer.ready" \
-  2>"$run_dir/trainer.log" &
+  "${match_options[@]}" 2>"$run_dir/trainer.log" &
 pids+=($!)
 "$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
   --table "$table" --grid "$grid" --model "$model" --horizon "$horizon" --sampling frame \
   --reload-interval 0.5 \
   --http-port "$http_port" --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
-  2>"$run_dir/predictor.log" &
+  "${match_options[@]}" 2>"$run_dir/predictor.log" &
 pids+=($!)
 # The producer starts once both daemons have joined the group (they write their ready files).
 for _ in $(seq 100); do
@@ -96,7 +103,7 @@ if [ -n "$replay" ]; then
     2>"$run_dir/producer.log" &
 else
   "$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
-    --cameras "$cameras" 2>"$run_dir/producer.log" &
+    --cameras "$cameras" --our-team ssl-formation 2>"$run_dir/producer.log" &
 fi
 pids+=($!)
 
@@ -104,7 +111,8 @@ echo "Live field view: open http://127.0.0.1:$http_port/"
 if [ -n "$replay" ]; then
   source_line="Replaying $replay in a loop; the $model model, grid $grid."
 else
-  source_line="One formation every $period s (2 s of data time each), grid $grid, $cameras cameras; the $model model."
+  source_line="One formation every $period s (2 s of data time each), grid $grid, $cameras cameras; the $model model.
+The referee (224.5.23.1:10003) names our team 'ssl-formation' and the opponent; the teams change ends at half time."
 fi
 cat <<EOT
 ssl-producer -> $vision -> ssl-trainer + ssl-predictor -> predictions on $predictions

@@ -100,7 +100,7 @@ TeamPositions SimulatedVision::random_formation() {
 SimulatedFormation SimulatedVision::next() {
   SimulatedFormation formation;
   formation.index = formations_;
-  formation.t_capture = config_.start_time_s + static_cast<double>(formations_) * config_.step_s;
+  formation.t_capture = next_t_capture();
   formation.frame_number = frame_number_++;
   ++formations_;
 

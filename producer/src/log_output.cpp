@@ -1,7 +1,7 @@
 // --write-log: the simulated feed written straight to an official SSL log, with no network and
 // no waiting. Every packet gets the receive time its formation's t_capture gives (in ns), so the
 // file replays with the data clock's own timing and holds exactly what the live producer sends
-// for the same options.
+// for the same options: each formation's referee message (type 3), then its vision packets.
 
 #include <spdlog/spdlog.h>
 
@@ -12,6 +12,7 @@
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/producer/producer_options.hpp"
+#include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation::producer {
 
@@ -41,12 +42,18 @@ int run_write_log(const ProducerOptions& options) {
 
   Result<LogWriter> writer = LogWriter::create(options.write_log);
   if (!writer) throw std::runtime_error(writer.error().message);
-  spdlog::info("writing simulated vision to {}: {} formations, step {} s, {} camera(s), seed {}",
-               options.write_log, options.count, options.step_s, options.cameras, options.seed);
+  const std::optional<sim::GameControllerConfig> game = game_controller_config(options, false);
+  spdlog::info(
+      "writing simulated vision to {}: {} formations, step {} s, {} camera(s), seed {}, {}",
+      options.write_log, options.count, options.step_s, options.cameras, options.seed,
+      game ? fmt::format("referee messages of our team '{}' against '{}', halves of {} s",
+                         game->our_name, game->opponent_name, game->half_s)
+           : std::string("no referee messages (--referee off)"));
 
-  sim::SimulatedVision vision(config);
+  sim::RefereedSimulation simulation(config, game);
   std::uint64_t formations = 0;
   std::uint64_t packets = 0;
+  std::uint64_t referee_messages = 0;
   std::uint64_t dropped = 0;
   bool stopped = false;
   const auto started = std::chrono::steady_clock::now();
@@ -54,9 +61,12 @@ int run_write_log(const ProducerOptions& options) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     spdlog::info(
-        "{}: {} formations, {} packets written ({} bytes, {} dropped by --drop-rate) "
-        "to {} in {:.2f} s",
-        what, formations, packets, writer->offset(), dropped, options.write_log, seconds);
+        "{}: {} formations, {} packets and {} referee messages written ({} bytes, {} dropped by "
+        "--drop-rate) to {} in {:.2f} s{}",
+        what, formations, packets, referee_messages, writer->offset(), dropped, options.write_log,
+        seconds,
+        simulation.game_controller() ? "; " + sim::describe(*simulation.game_controller())
+                                     : std::string());
   };
 
   // Signals and status lines through the same io_context as the other modes, polled between
@@ -70,9 +80,17 @@ int run_write_log(const ProducerOptions& options) {
 
   while (!stopped && formations < options.count) {
     for (int i = 0; i < kFormationsPerBatch && formations < options.count; ++i) {
-      const sim::SimulatedFormation formation = vision.next();
+      const sim::RefereedFormation step = simulation.next();
+      const sim::SimulatedFormation& formation = step.formation;
       const auto receive_time_ns =
           static_cast<std::int64_t>(std::llround(formation.t_capture * 1e9));
+      if (step.referee) {
+        if (!writer->write(static_cast<std::int32_t>(LogMessageType::referee), receive_time_ns,
+                           step.referee->SerializeAsString())) {
+          throw std::runtime_error(writer->error());
+        }
+        ++referee_messages;
+      }
       for (const SSL_WrapperPacket& packet : formation.packets) {
         if (!writer->write_vision(packet, receive_time_ns)) {
           throw std::runtime_error(writer->error());

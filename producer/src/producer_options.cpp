@@ -1,5 +1,10 @@
 #include "ssl_formation/producer/producer_options.hpp"
 
+#include <cmath>
+
+#include "ssl_formation/app/daemon.hpp"
+#include "ssl_formation/match.hpp"
+
 namespace ssl_formation::producer {
 
 sim::SimulationConfig simulation_config(const ProducerOptions& options) {
@@ -28,6 +33,30 @@ sim::SimulationConfig simulation_config(const ProducerOptions& options) {
   config.field = FieldSize{options.field_length_mm, options.field_width_mm};
   if (!config.field.valid())
     throw app::UsageError("--field-length and --field-width must be positive");
+  return config;
+}
+
+std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOptions& options,
+                                                                bool live) {
+  if (!options.referee) return std::nullopt;
+  if (live && !app::parse_referee_option(options.referee_address)) return std::nullopt;
+  if (!(options.half_length_s > 0.0) || !std::isfinite(options.half_length_s)) {
+    throw app::UsageError("--half-length must be a positive number of seconds");
+  }
+  if (trimmed_team_name(options.our_team).empty() ||
+      trimmed_team_name(options.opponent_team).empty()) {
+    throw app::UsageError("--our-team and --opponent-team must not be empty");
+  }
+  if (same_team_name(options.our_team, options.opponent_team)) {
+    throw app::UsageError(
+        "--our-team and --opponent-team must differ: the daemons tell the "
+        "teams apart by name");
+  }
+  sim::GameControllerConfig config;
+  config.seed = options.seed;
+  config.our_name = options.our_team;
+  config.opponent_name = options.opponent_team;
+  config.half_s = options.half_length_s;
   return config;
 }
 

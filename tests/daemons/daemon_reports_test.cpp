@@ -28,8 +28,9 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
 testing::RunResult write_log(const TempDir& dir, const std::string& name,
                              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{"--write-log", (dir / name).string(), "--count", "120",
-                                "--seed",      "3",                   "--cameras", "2"};
+  std::vector<std::string> args{"--referee", "off", "--write-log", (dir / name).string(),
+                                "--count",   "120", "--seed",      "3",
+                                "--cameras", "2"};
   args.insert(args.end(), extra.begin(), extra.end());
   return testing::run_to_end(producer_program, args, dir.path(), "write-" + name, 30s);
 }

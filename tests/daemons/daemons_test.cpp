@@ -63,9 +63,11 @@ std::vector<std::string> trainer_args(const std::string& group,
 // Runs the producer to the end on `group`.
 void produce(const TempDir& dir, const std::string& group, std::uint64_t seed, int count,
              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{
-      "--vision-address",    group,      "--seed", std::to_string(seed), "--count",
-      std::to_string(count), "--period", "0.002",  "--status-interval",  "100"};
+  std::vector<std::string> args{"--vision-address", group, "--seed", std::to_string(seed),
+                                "--count", std::to_string(count), "--period", "0.002",
+                                "--status-interval", "100",
+                                // The paper's protocol: vision only, as reference_table() trains.
+                                "--referee", "off"};
   args.insert(args.end(), extra.begin(), extra.end());
   const auto result =
       testing::run_to_end(producer_program, args, dir.path(), "producer-" + std::to_string(seed));
@@ -163,10 +165,10 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
 TEST(Daemons, ProducerSendsNinetyPercentPlaysOverTenThousandCycles) {
   TempDir dir;
   // 10,000 cycles are about 25,000 formations; nobody needs to listen for the proportions.
-  const auto result = testing::run_to_end(
-      producer_program,
-      {"--vision-address", new_group(), "--period", "0", "--count", "25000", "--seed", "99"},
-      dir.path(), "producer");
+  const auto result = testing::run_to_end(producer_program,
+                                          {"--referee", "off", "--vision-address", new_group(),
+                                           "--period", "0", "--count", "25000", "--seed", "99"},
+                                          dir.path(), "producer");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   std::smatch match;
   const std::regex summary(
@@ -425,7 +427,8 @@ TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
                                  "--model", "paper"},
         dir.path(), "predictor", Readiness::ready_file));
     daemons.push_back(std::make_unique<ChildProcess>(
-        producer_program, std::vector<std::string>{"--vision-address", group, "--period", "0.05"},
+        producer_program,
+        std::vector<std::string>{"--referee", "off", "--vision-address", group, "--period", "0.05"},
         dir.path(), "producer", Readiness::ready_file));
     for (auto& d : daemons) {
       ASSERT_TRUE(d->wait_until_ready(10s)) << d->stderr_text();

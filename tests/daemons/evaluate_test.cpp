@@ -164,10 +164,11 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
   for (const auto& [name, seed] :
        {std::pair{"a.log", "1"}, std::pair{"b.log.gz", "2"}, std::pair{"c.log", "3"}}) {
-    const auto written = testing::run_to_end(
-        producer_program,
-        {"--write-log", (dir / name).string(), "--count", "300", "--seed", seed, "--cameras", "2"},
-        dir.path(), std::string("write-") + name, 30s);
+    const auto written =
+        testing::run_to_end(producer_program,
+                            {"--referee", "off", "--write-log", (dir / name).string(), "--count",
+                             "300", "--seed", seed, "--cameras", "2"},
+                            dir.path(), std::string("write-") + name, 30s);
     ASSERT_EQ(written.exit_code, 0) << written.err;
   }
   const auto split =

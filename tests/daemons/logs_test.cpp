@@ -180,12 +180,13 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
   for (const std::string name : {"feed.log", "feed.log.gz"}) {
     SCOPED_TRACE(name);
     const auto path = dir / name;
-    const auto result =
-        testing::run_to_end(producer_program,
-                            {"--write-log", path.string(), "--count", "80", "--seed", "7",
-                             "--cameras", "3", "--jitter-mm", "12", "--drop-rate", "0.1",
-                             "--opponent-color", "blue", "--step", "0.5", "--start-time", "100"},
-                            dir.path(), "write-log", 20s);
+    const auto result = testing::run_to_end(
+        producer_program,
+        {"--referee",   "off",    "--write-log", path.string(),  "--count",
+         "80",          "--seed", "7",           "--cameras",    "3",
+         "--jitter-mm", "12",     "--drop-rate", "0.1",          "--opponent-color",
+         "blue",        "--step", "0.5",         "--start-time", "100"},
+        dir.path(), "write-log", 20s);
     ASSERT_EQ(result.exit_code, 0) << result.err;
 
     sim::SimulationConfig config;
@@ -251,10 +252,10 @@ TEST(Logs, WriteLogNeedsACountAndRefusesReplayToo) {
 TEST(Logs, ReplaySendsExactlyTheFilesPackets) {
   TempDir dir;
   const auto path = dir / "feed.log.gz";
-  ASSERT_EQ(testing::run_to_end(
-                producer_program,
-                {"--write-log", path.string(), "--count", "40", "--seed", "5", "--cameras", "2"},
-                dir.path(), "write-log", 20s)
+  ASSERT_EQ(testing::run_to_end(producer_program,
+                                {"--referee", "off", "--write-log", path.string(), "--count", "40",
+                                 "--seed", "5", "--cameras", "2"},
+                                dir.path(), "write-log", 20s)
                 .exit_code,
             0);
   const LogVisionPackets file = read_vision_log(path).value();
@@ -515,8 +516,8 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
   EXPECT_EQ(recorder.ready_fact("output"), path.string());
   const auto produced =
       testing::run_to_end(producer_program,
-                          {"--vision-address", group, "--period", "0.002", "--count", "100",
-                           "--seed", "3", "--status-interval", "100"},
+                          {"--referee", "off", "--vision-address", group, "--period", "0.002",
+                           "--count", "100", "--seed", "3", "--status-interval", "100"},
                           dir.path(), "producer", 20s);
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
   ASSERT_TRUE(testing::wait_for_status(recorder, "recorded", expected.size(), 10s))

@@ -241,7 +241,8 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
     return std::make_unique<ChildProcess>(
         producer_program,
         std::vector<std::string>{"--vision-address", group, "--seed", seed, "--start-time", start,
-                                 "--period", "0.005", "--count", "300", "--status-interval", "100"},
+                                 "--period", "0.005", "--count", "300", "--status-interval", "100",
+                                 "--referee", "off"},
         dir.path(), std::string("producer-") + seed);
   };
   auto live = producer("71", "0");

@@ -93,8 +93,8 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   constexpr int formations = 1000;
   ChildProcess producer(
       producer_program,
-      {"--vision-address", vision, "--seed", "9", "--count", std::to_string(formations), "--period",
-       "0.003", "--status-interval", "100"},
+      {"--referee", "off", "--vision-address", vision, "--seed", "9", "--count",
+       std::to_string(formations), "--period", "0.003", "--status-interval", "100"},
       dir.path(), "producer");
   // Meanwhile, clients that vanish mid-frame, mid-request and mid-write, again and again.
   std::thread vandal([&] {

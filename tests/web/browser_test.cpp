@@ -69,10 +69,11 @@ std::optional<std::string> missing_browser_tools(std::filesystem::path& chromium
 void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const std::string& group,
                     const std::string& name) {
   out.reset();
-  out.emplace(producer_program,
-              std::vector<std::string>{"--vision-address", group, "--seed", "5", "--period", "0.1",
-                                       "--cameras", "4", "--status-interval", "100"},
-              dir.path(), name);
+  out.emplace(
+      producer_program,
+      std::vector<std::string>{"--referee", "off", "--vision-address", group, "--seed", "5",
+                               "--period", "0.1", "--cameras", "4", "--status-interval", "100"},
+      dir.path(), name);
 }
 
 // Starts the predictor and waits until it serves the field view at `url` with its table loaded.

@@ -99,8 +99,8 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   // The simulated feed: 2 s of data clock every 0.05 s of wall time, so an age taken from the
   // data's t_capture would be far off (and one from before a clock reset negative).
   ChildProcess producer(producer_program,
-                        {"--vision-address", vision, "--seed", "5", "--count", "60", "--period",
-                         "0.05", "--status-interval", "100"},
+                        {"--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
+                         "60", "--period", "0.05", "--status-interval", "100"},
                         dir.path(), "producer");
   std::string bytes;
   std::vector<std::string> live_statuses;
@@ -201,8 +201,8 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
   RawClient view(port);
   ASSERT_TRUE(view.upgrade());
   ChildProcess producer(producer_program,
-                        {"--vision-address", vision, "--seed", "5", "--count", "40", "--period",
-                         "0.05", "--status-interval", "100"},
+                        {"--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
+                         "40", "--period", "0.05", "--status-interval", "100"},
                         dir.path(), "producer");
   std::string bytes;
   for (const auto deadline = std::chrono::steady_clock::now() + 15s;

@@ -62,6 +62,13 @@ class SimulatedVision {
   explicit SimulatedVision(SimulationConfig config);
 
   SimulatedFormation next();
+  // The t_capture next() gives its formation.
+  double next_t_capture() const {
+    return config_.start_time_s + static_cast<double>(formations_) * config_.step_s;
+  }
+  // From the next formation on, the opponent attacks `direction` in the feed (and our team
+  // defends the other end): the teams change ends at half time.
+  void set_opponent_attacks(AttackDirection direction) { config_.opponent_attacks = direction; }
 
   const SimulationConfig& config() const { return config_; }
 

@@ -3,18 +3,21 @@
 // writes (--write-log) or replays (--replay). Parsed in main.cpp, used by the three modes.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/simulation/simulated_game_controller.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 
 namespace ssl_formation::producer {
 
 struct ProducerOptions {
   // Network (live simulation and --replay).
   std::string vision_address = app::default_vision_address;
-  // --replay sends a log's referee messages here; "none": not at all.
+  // The simulated game controller's referee messages (live), or a log's (--replay), go here;
+  // "none": not at all.
   std::string referee_address = app::default_referee_address;
   // --replay sends a log's tracked vision (type 5) here; "none": not at all.
   std::string tracker_address = app::default_tracker_address;
@@ -34,6 +37,11 @@ struct ProducerOptions {
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   double start_time_s = 0.0;
+  // The simulated game controller (live and --write-log).
+  bool referee = true;
+  std::string our_team = "ssl-formation";
+  std::string opponent_team = "Simulated Opponent";
+  double half_length_s = 300.0;
   // Log files.
   std::string write_log;  // --write-log FILE
   std::string replay;     // --replay FILE
@@ -49,6 +57,10 @@ struct ProducerOptions {
 
 // The simulation the options describe; throws app::UsageError naming the bad option.
 sim::SimulationConfig simulation_config(const ProducerOptions& options);
+// Its game controller: none with --referee off (live: also with --referee-address none, as
+// changing ends with nobody told would only mislead the daemons).
+std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOptions& options,
+                                                                bool live);
 
 // The three modes; each returns the exit status.
 int run_simulation(const ProducerOptions& options);  // live_feed.cpp
