@@ -447,9 +447,12 @@ void FormationSampler::start_new_stream() {
 }
 
 void FormationSampler::set_opponent(TeamColor color, std::optional<AttackDirection> attacks) {
+  // Switches before the first sample change nothing sampled (the referee's first message
+  // replacing the defaults): they are not counted as changes.
+  const bool sampled = counters_.samples > 0;
   if (color != config_.opponent_color) {
     config_.opponent_color = color;
-    ++counters_.opponent_switches;
+    if (sampled) ++counters_.opponent_switches;
     // The other team's robots share the ids: nothing seen of the old opponent may stay, nor
     // the side inferred from where its goalkeeper stood.
     break_chain();
@@ -463,7 +466,7 @@ void FormationSampler::set_opponent(TeamColor color, std::optional<AttackDirecti
   if (attacks) {
     if (!config_.infer_attacks && attacks_ == attacks) return;
     if (attacks_ && *attacks_ != *attacks) {
-      ++counters_.attack_switches;
+      if (sampled) ++counters_.attack_switches;
       break_chain();
     }
     config_.infer_attacks = false;

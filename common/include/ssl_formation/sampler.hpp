@@ -112,8 +112,9 @@ struct SamplerCounters {
   std::uint64_t samples_forced = 0;      // handed on without every live camera (a dropped frame)
   std::uint64_t chain_breaks = 0;        // gaps, field changes and clock resets
   std::uint64_t samples_undirected = 0;  // not handed on: the attack direction is not known yet
-  std::uint64_t attack_switches = 0;     // the attack direction changed (ends changed)
-  std::uint64_t opponent_switches = 0;   // the opponent's colour changed (set_opponent)
+  // After the first sample (a setting replaced before it changes nothing sampled):
+  std::uint64_t attack_switches = 0;    // the attack direction changed (ends changed)
+  std::uint64_t opponent_switches = 0;  // the opponent's colour changed (set_opponent)
   std::uint64_t transitions = 0;
 };
 
