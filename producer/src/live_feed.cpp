@@ -22,12 +22,12 @@ class SimulatedFeed {
   // `referee`: where the game controller's messages go; null: no game controller.
   SimulatedFeed(boost::asio::io_context& io, const ProducerOptions& options,
                 net::ProtoMulticastSender<SSL_WrapperPacket>& sender,
-                net::ProtoMulticastSender<Referee>* referee)
+                net::ProtoMulticastSender<Referee>* referee,
+                std::optional<sim::GameControllerConfig> game)
       : io_(io),
         timer_(io),
         options_(options),
-        simulation_(simulation_config(options),
-                    referee ? game_controller_config(options, true) : std::nullopt),
+        simulation_(simulation_config(options), referee ? std::move(game) : std::nullopt),
         sender_(sender),
         referee_(referee) {}
 
@@ -129,7 +129,7 @@ int run_simulation(const ProducerOptions& options) {
     referee.emplace(io, *referee_group, interface.address, options.ttl);
     referee->open();
   }
-  SimulatedFeed feed(io, options, sender, referee ? &*referee : nullptr);
+  SimulatedFeed feed(io, options, sender, referee ? &*referee : nullptr, game);
   spdlog::info(
       "sending simulated vision to {} (interface {}, ttl {}): period {} s, step {} s, "
       "{} camera(s), seed {}, {} formations",

@@ -40,9 +40,11 @@ int run_write_log(const ProducerOptions& options) {
   }
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
 
+  // Checked before the file is created, as the options above: a usage error writes nothing.
+  const std::optional<sim::GameControllerConfig> game = game_controller_config(options, false);
+
   Result<LogWriter> writer = LogWriter::create(options.write_log);
   if (!writer) throw std::runtime_error(writer.error().message);
-  const std::optional<sim::GameControllerConfig> game = game_controller_config(options, false);
   spdlog::info(
       "writing simulated vision to {}: {} formations, step {} s, {} camera(s), seed {}, {}",
       options.write_log, options.count, options.step_s, options.cameras, options.seed,

@@ -179,5 +179,31 @@ TEST(SimulatedReferee, ThePredictorFollowsTheLiveSimulationsRefereeThroughHalfTi
       << log;
 }
 
+TEST(SimulatedReferee, TheGameControllersOptionsShowTheirDefaultsAndBadOnesAreUsageErrors) {
+  TempDir dir;
+  const auto help = testing::run_to_end(producer_program, {"--help"}, dir.path(), "help");
+  EXPECT_EQ(help.exit_code, 0);
+  for (const std::string option :
+       {"--referee arg (=on)", "--our-team arg (=ssl-formation)",
+        "--opponent-team arg (=Simulated Opponent)", "--half-length arg (=300)",
+        "--referee-address arg (=224.5.23.1:10003)"}) {
+    EXPECT_NE(help.out.find(option), std::string::npos) << "ssl-producer lacks " << option;
+  }
+  const std::string log = (dir / "x.log").string();
+  for (const auto& [options, complaint] :
+       std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--half-length", "0"}, "--half-length must be a positive number of seconds"},
+           {{"--our-team", "Rival", "--opponent-team", " rival"}, "must differ"},
+           {{"--opponent-team", "  "}, "must not be empty"},
+           {{"--referee", "maybe"}, "referee"}}) {
+    std::vector<std::string> args{"--write-log", log, "--count", "3"};
+    args.insert(args.end(), options.begin(), options.end());
+    const auto refused = testing::run_to_end(producer_program, args, dir.path(), "refused");
+    EXPECT_EQ(refused.exit_code, 2) << refused.err;
+    EXPECT_NE(refused.err.find(complaint), std::string::npos) << refused.err;
+    EXPECT_FALSE(std::filesystem::exists(log)) << "nothing written for a usage error";
+  }
+}
+
 }  // namespace
 }  // namespace ssl_formation
