@@ -7,7 +7,7 @@ SSLF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Debian 12 packages the build and the tests need.
 SSLF_PACKAGES=(cmake ninja-build g++ pkg-config protobuf-compiler libprotobuf-dev
   libboost-dev libboost-program-options-dev libboost-iostreams-dev
-  libspdlog-dev libfmt-dev zlib1g-dev libgtest-dev libgmock-dev libbenchmark-dev)
+  libspdlog-dev libfmt-dev zlib1g-dev libisal-dev libgtest-dev libgmock-dev libbenchmark-dev)
 
 sslf_install_packages() {
   local missing=()

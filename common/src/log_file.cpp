@@ -4,38 +4,23 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <span>
-#include <system_error>
 #include <utility>
+
+#include "zlib_errors.hpp"
 
 namespace ssl_formation {
 
 namespace {
 
 // Big enough that a whole vision packet (a few hundred bytes, geometry a few KiB) is nearly
-// always contiguous in it, so the payload is parsed in place.
+// always contiguous in it, so the payload is parsed in place; fill()'s reads into it are mostly
+// large enough to skip the input's own buffer.
 constexpr std::size_t kReadBufferSize = 256 * 1024;
+static_assert(kReadBufferSize >= 4 * CompressedInput::kDirectReadSize);
+// The writer's zlib buffer.
 constexpr unsigned kGzBufferSize = 128 * 1024;
-// An uncompressed log goes through zlib too (transparently), and zlib copies it through its own
-// buffer unless a read asks for at least twice that buffer: with a small one, fill()'s reads
-// land straight in ours, one copy fewer per byte.
-constexpr unsigned kPlainBufferSize = 16 * 1024;
-static_assert(kReadBufferSize >= 8 * kPlainBufferSize);
-
-// Whether a regular file starts as a gzip stream does. Anything else (a pipe, a file that cannot
-// be read: gzopen says why) counts as gzip: a pipe's bytes, once read here, would be gone.
-bool starts_as_gzip(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return true;
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return true;
-  unsigned char magic[2] = {0, 0};
-  const std::size_t got = std::fread(magic, 1, sizeof magic, file);
-  std::fclose(file);
-  return got == sizeof magic && magic[0] == 0x1f && magic[1] == 0x8b;
-}
 
 std::int64_t load_be64(const char* p) {
   std::uint64_t v = 0;
@@ -62,15 +47,6 @@ void store_be32(char* p, std::int32_t value) {
 bool ends_with_gz(const std::filesystem::path& path) {
   const std::string name = path.filename().string();
   return name.size() >= 3 && name.compare(name.size() - 3, 3, ".gz") == 0;
-}
-
-std::string errno_text(int err) { return err != 0 ? std::strerror(err) : "out of memory"; }
-
-// zlib prefixes its messages with the path it was given; ours already start with it.
-std::string strip_path(std::string message, const std::filesystem::path& path) {
-  const std::string prefix = path.string() + ": ";
-  if (message.compare(0, prefix.size(), prefix) == 0) message.erase(0, prefix.size());
-  return message;
 }
 
 // A type-2 packet decoded with today's schema is usable when the detection fields that mean the
@@ -113,30 +89,22 @@ void GzFileCloser::operator()(gzFile_s* file) const noexcept {
 // ---------------------------------------------------------------------------------------------
 // LogReader
 
-LogReader::LogReader(std::filesystem::path path, detail::GzFilePtr file)
+LogReader::LogReader(std::filesystem::path path, CompressedInput input)
     : path_(std::move(path)),
-      file_(std::move(file)),
+      input_(std::move(input)),
       buffer_(std::make_unique<char[]>(kReadBufferSize)) {}
 
-Result<LogReader> LogReader::open(const std::filesystem::path& path) {
+Result<LogReader> LogReader::open(const std::filesystem::path& path, Inflater inflater) {
   const auto failure = [&](const std::string& message) {
     return ssl_formation::fail(path.string() + ": " + message);
   };
-  const unsigned zlib_buffer = starts_as_gzip(path) ? kGzBufferSize : kPlainBufferSize;
-  errno = 0;
-  gzFile file = gzopen(path.c_str(), "rb");
-  if (file == nullptr) return failure("cannot open: " + errno_text(errno));
-  gzbuffer(file, zlib_buffer);  // before the first read, as zlib requires
-  LogReader reader(path, detail::GzFilePtr(file));
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  reader.compressed_size_ = ec ? 0 : static_cast<std::uint64_t>(size);
+  Result<CompressedInput> input = CompressedInput::open(path, inflater);
+  if (!input) return Unexpected(std::move(input).error());
+  LogReader reader(path, std::move(*input));
 
   reader.fill(kLogFileHeaderSize);
-  int gz_error = Z_OK;
-  const char* gz_message = gzerror(file, &gz_error);
-  if (gz_error != Z_OK && gz_error != Z_BUF_ERROR) {
-    return failure("cannot read: " + strip_path(gz_message, path));
+  if (reader.input_.fault() == CompressedInput::Fault::damaged) {
+    return failure("cannot read: " + reader.input_.fault_message());
   }
   const char* data = reader.buffer_.get() + reader.begin_;
   if (reader.available() == 0) return failure("not an SSL log file (empty)");
@@ -172,13 +140,12 @@ bool LogReader::fill(std::size_t n) {
     begin_ = 0;
   }
   while (end_ < n && !eof_) {
-    const int got =
-        gzread(file_.get(), buffer_.get() + end_, static_cast<unsigned>(kReadBufferSize - end_));
-    if (got <= 0) {
-      eof_ = true;  // a read error (got < 0) is reported by gz_problem()
+    const std::size_t got = input_.read(buffer_.get() + end_, kReadBufferSize - end_);
+    if (got == 0) {
+      eof_ = true;  // a fault is reported by input_problem()
       break;
     }
-    end_ += static_cast<std::size_t>(got);
+    end_ += got;
   }
   return available() >= n;
 }
@@ -189,32 +156,33 @@ std::size_t LogReader::read_large(std::size_t size) {
   std::memcpy(scratch_.data(), buffer_.get() + begin_, got);
   consume(got);
   while (got < size && !eof_) {
-    const int n = gzread(file_.get(), scratch_.data() + got, static_cast<unsigned>(size - got));
-    if (n <= 0) {
+    const std::size_t n = input_.read(scratch_.data() + got, size - got);
+    if (n == 0) {
       eof_ = true;
       break;
     }
-    got += static_cast<std::size_t>(n);
-    offset_ += static_cast<std::size_t>(n);
+    got += n;
+    offset_ += n;
   }
   return got;
 }
 
-std::string LogReader::gz_problem() const {
-  int code = Z_OK;
-  const char* message = gzerror(file_.get(), &code);
-  if (code == Z_OK) return {};
-  // Z_BUF_ERROR: the gzip stream stops in the middle, i.e. the file was cut off.
-  if (code == Z_BUF_ERROR) return " (the gzip stream is cut off)";
-  return " (gzip: " + strip_path(message != nullptr ? message : "", path_) + ")";
+std::string LogReader::input_problem() const {
+  switch (input_.fault()) {
+    case CompressedInput::Fault::none:
+      return {};
+    case CompressedInput::Fault::cut_off:
+      return " (the gzip stream is cut off)";
+    case CompressedInput::Fault::damaged:
+      break;
+  }
+  return " (gzip: " + input_.fault_message() + ")";
 }
 
 LogReader::Ending LogReader::cut_off_ending() const {
-  int code = Z_OK;
-  gzerror(file_.get(), &code);
   // The bytes simply stop (a plain file, or a gzip stream cut off): a cut-off last message.
-  // Any other gzip error is damage inside the stream.
-  return code == Z_OK || code == Z_BUF_ERROR ? Ending::cut_off : Ending::damaged;
+  // Any other fault is damage inside the stream or a failed read.
+  return input_.fault() == CompressedInput::Fault::damaged ? Ending::damaged : Ending::cut_off;
 }
 
 bool LogReader::fail(std::string message, Ending ending) {
@@ -253,20 +221,20 @@ void LogReader::count(std::int32_t type) {
 }
 
 bool LogReader::next_view(Header& header, std::string_view& payload) {
-  if (done_ || !file_) return false;
+  if (done_ || !buffer_) return false;  // no buffer: moved from
   const std::uint64_t at = offset_;
   if (!fill(kLogMessageHeaderSize)) {
-    const std::string gz = gz_problem();
-    if (available() == 0 && gz.empty()) {
+    const std::string problem = input_problem();
+    if (available() == 0 && problem.empty()) {
       done_ = true;  // clean end
       return false;
     }
     if (available() == 0) {
-      return fail("read failed at byte " + std::to_string(at) + gz, cut_off_ending());
+      return fail("read failed at byte " + std::to_string(at) + problem, cut_off_ending());
     }
     return fail("truncated message header at byte " + std::to_string(at) + ": " +
                     std::to_string(kLogMessageHeaderSize) + " bytes needed, " +
-                    std::to_string(available()) + " remain" + gz,
+                    std::to_string(available()) + " remain" + problem,
                 cut_off_ending());
   }
   const char* data = buffer_.get() + begin_;
@@ -291,7 +259,7 @@ bool LogReader::next_view(Header& header, std::string_view& payload) {
       return fail("truncated message at byte " + std::to_string(at) + ": header says " +
                       std::to_string(size) + " bytes, " +
                       std::to_string(available() - kLogMessageHeaderSize) + " remain" +
-                      gz_problem(),
+                      input_problem(),
                   cut_off_ending());
     }
     payload = std::string_view(buffer_.get() + begin_ + kLogMessageHeaderSize, size);
@@ -302,7 +270,7 @@ bool LogReader::next_view(Header& header, std::string_view& payload) {
     if (got < size) {
       return fail("truncated message at byte " + std::to_string(at) + ": header says " +
                       std::to_string(size) + " bytes, " + std::to_string(got) + " remain" +
-                      gz_problem(),
+                      input_problem(),
                   cut_off_ending());
     }
     payload = scratch_;
@@ -416,12 +384,6 @@ bool LogReader::next_match_input(MatchInput& kind, SSL_WrapperPacket& packet,
                             });
 }
 
-std::uint64_t LogReader::compressed_offset() const {
-  if (!file_) return 0;
-  const auto at = gzoffset(file_.get());
-  return at < 0 ? 0 : static_cast<std::uint64_t>(at);
-}
-
 // ---------------------------------------------------------------------------------------------
 // LogWriter
 
@@ -432,7 +394,8 @@ Result<LogWriter> LogWriter::create(const std::filesystem::path& path) {
   errno = 0;
   // "T": zlib writes the bytes through uncompressed, so both kinds share one code path.
   gzFile file = gzopen(path.c_str(), ends_with_gz(path) ? "wb6" : "wbT");
-  if (file == nullptr) return fail(path.string() + ": cannot create: " + errno_text(errno));
+  if (file == nullptr)
+    return fail(path.string() + ": cannot create: " + detail::zlib_errno_text(errno));
   gzbuffer(file, kGzBufferSize);
   LogWriter writer(path, detail::GzFilePtr(file));
   char header[kLogFileHeaderSize];
@@ -448,8 +411,9 @@ bool LogWriter::put(const void* data, std::size_t size) {
   if (written != static_cast<int>(size)) {
     int code = Z_OK;
     const char* message = gzerror(file_.get(), &code);
-    error_ = path_.string() + ": cannot write at byte " + std::to_string(offset_) + ": " +
-             (code == Z_ERRNO ? errno_text(errno) : strip_path(message, path_));
+    error_ =
+        path_.string() + ": cannot write at byte " + std::to_string(offset_) + ": " +
+        (code == Z_ERRNO ? detail::zlib_errno_text(errno) : detail::without_path(message, path_));
     failed_ = true;
     return false;
   }
@@ -524,7 +488,7 @@ bool LogWriter::close(bool indexed) {
   const int result = gzclose(file_.release());
   if (ok && result != Z_OK) {
     error_ = path_.string() + ": cannot finish writing: " +
-             (result == Z_ERRNO ? errno_text(errno) : std::string(zError(result)));
+             (result == Z_ERRNO ? detail::zlib_errno_text(errno) : std::string(zError(result)));
     ok = false;
   }
   failed_ = failed_ || !ok;

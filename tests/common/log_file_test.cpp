@@ -17,6 +17,8 @@
 #include <tuple>
 #include <type_traits>
 
+#include "gzip_member.hpp"
+
 namespace ssl_formation {
 namespace {
 
@@ -641,6 +643,200 @@ TEST_F(LogFileTest, CutOffGzipStreamIsAnErrorAndKeepsWhatCameBefore) {
   EXPECT_LT(log.packets.size(), 2000u);
   for (std::size_t i = 0; i < log.packets.size(); ++i)
     ASSERT_EQ(log.packets[i].detection().frame_number(), i);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The two inflaters: ISA-L's reads what zlib's reads, and loses nothing more when a file is bad
+
+// Everything a reader gives with one inflater, and where it got to on disk after each message.
+struct Reading {
+  Inflater inflater = Inflater::automatic;
+  std::vector<LogMessage> messages;
+  std::vector<std::uint64_t> compressed_offsets;
+  std::string error;
+  LogReader::Ending ending = LogReader::Ending::none;
+};
+
+Reading read_with(const fs::path& file, Inflater inflater) {
+  Reading out;
+  Result<LogReader> reader = LogReader::open(file, inflater);
+  if (!reader) {
+    ADD_FAILURE() << error_of(reader);
+    return out;
+  }
+  out.inflater = reader->inflater();
+  LogMessage message;
+  while (reader->next(message)) {
+    out.messages.push_back(message);
+    out.compressed_offsets.push_back(reader->compressed_offset());
+  }
+  out.error = reader->error();
+  out.ending = reader->ending();
+  return out;
+}
+
+bool same_message(const LogMessage& a, const LogMessage& b) {
+  return a.type == b.type && a.receive_time_ns == b.receive_time_ns && a.offset == b.offset &&
+         a.payload == b.payload;
+}
+
+// How many of `got` come first in `expected`, each the same message (reported when not).
+std::size_t same_prefix(const std::vector<LogMessage>& got,
+                        const std::vector<LogMessage>& expected) {
+  std::size_t i = 0;
+  for (; i < got.size() && i < expected.size(); ++i) {
+    if (!same_message(got[i], expected[i])) {
+      ADD_FAILURE() << "message " << i << " differs";
+      break;
+    }
+  }
+  return i;
+}
+
+// Both inflaters read every message of `file`, the same as zlib's, to a clean end.
+void expect_both_read_it_all(const fs::path& file, std::size_t expected_messages) {
+  const Reading zlib = read_with(file, Inflater::zlib);
+  const Reading isal = read_with(file, Inflater::isal);
+  EXPECT_EQ(zlib.inflater, Inflater::zlib);
+  EXPECT_EQ(isal.inflater, Inflater::isal);
+  for (const Reading* reading : {&zlib, &isal}) {
+    EXPECT_EQ(reading->error, "");
+    EXPECT_EQ(reading->ending, LogReader::Ending::none);
+    ASSERT_EQ(reading->messages.size(), expected_messages);
+    // Progress moves forward to the end of the file.
+    EXPECT_TRUE(
+        std::is_sorted(reading->compressed_offsets.begin(), reading->compressed_offsets.end()));
+    EXPECT_EQ(reading->compressed_offsets.back(), fs::file_size(file));
+  }
+  EXPECT_EQ(same_prefix(isal.messages, zlib.messages), expected_messages);
+}
+
+std::vector<Written> many_vision_messages(std::uint32_t count) {
+  std::vector<Written> out;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    out.push_back({4, 1'000'000 * std::int64_t{i}, detection_packet(i % 4, i).SerializeAsString()});
+  }
+  return out;
+}
+
+#define SKIP_WITHOUT_ISAL() \
+  if (!isal_available()) GTEST_SKIP() << "this build has no ISA-L (SSLF_ISAL)"
+
+TEST_F(LogFileTest, BothInflatersReadEveryMessageOfAWrittenLog) {
+  SKIP_WITHOUT_ISAL();
+  const fs::path file = path("written.log.gz");
+  std::vector<Written> written = every_type();
+  for (Written& w : many_vision_messages(40'000)) written.push_back(std::move(w));
+  {
+    Result<LogWriter> writer = LogWriter::create(file);
+    ASSERT_TRUE(writer) << error_of(writer);
+    for (const Written& w : written) ASSERT_TRUE(writer->write(w.type, w.time_ns, w.payload));
+    ASSERT_TRUE(writer->close()) << writer->error();
+  }
+  expect_both_read_it_all(file, written.size());
+  const Reading isal = read_with(file, Inflater::isal);
+  ASSERT_EQ(isal.messages.size(), written.size());
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    ASSERT_EQ(isal.messages[i].type, written[i].type) << "message " << i;
+    ASSERT_TRUE(isal.messages[i].payload == written[i].payload) << "message " << i;
+  }
+  // Several reads of compressed input, each showing in the progress.
+  const std::set<std::uint64_t> offsets(isal.compressed_offsets.begin(),
+                                        isal.compressed_offsets.end());
+  EXPECT_GE(offsets.size(), 3u) << "a file of " << fs::file_size(file) << " bytes";
+  EXPECT_LT(isal.compressed_offsets.front(), fs::file_size(file));
+}
+
+// `cat a.log.gz b.log.gz`, split inside a message: the members read as one stream.
+TEST_F(LogFileTest, BothInflatersReadALogOfSeveralGzipMembers) {
+  SKIP_WITHOUT_ISAL();
+  std::string bytes = file_header();
+  const std::vector<Written> written = many_vision_messages(5'000);
+  for (const Written& w : written) bytes += message_bytes(w.time_ns, w.type, w.payload);
+  const std::size_t split = bytes.size() / 3 + 5;
+  const fs::path file = path("members.log.gz");
+  std::ofstream(file, std::ios::binary)
+      << testing::gzip_member(bytes.substr(0, split))
+      << testing::gzip_member(bytes.substr(split, split), 1, "second.log")
+      << testing::gzip_member(bytes.substr(2 * split));
+  expect_both_read_it_all(file, written.size());
+}
+
+TEST_F(LogFileTest, BothInflatersReadTheRecording) {
+  SKIP_WITHOUT_ISAL();
+  expect_both_read_it_all(fs::path(SSLF_TEST_DATA_DIR) / "grsim-4cam-11v11-idle.log.gz", 2353u);
+}
+
+fs::path write_vision_log(const fs::path& file, std::uint32_t count) {
+  Result<LogWriter> writer = LogWriter::create(file);
+  EXPECT_TRUE(writer) << error_of(writer);
+  for (std::uint32_t i = 0; writer && i < count; ++i) {
+    EXPECT_TRUE(writer->write_vision(detection_packet(i % 4, i), i));
+  }
+  EXPECT_TRUE(writer && writer->close());
+  return file;
+}
+
+TEST_F(LogFileTest, ACutOffGzipLogIsCutOffWithBothAndBothKeepTheSame) {
+  SKIP_WITHOUT_ISAL();
+  const std::string bytes = raw_bytes(write_vision_log(path("whole.log.gz"), 20'000));
+  const fs::path cut = path("cut.log.gz");
+  std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() * 2 / 3);
+  const Reading zlib = read_with(cut, Inflater::zlib);
+  const Reading isal = read_with(cut, Inflater::isal);
+  EXPECT_EQ(isal.ending, LogReader::Ending::cut_off);
+  EXPECT_NE(isal.error.find("the gzip stream is cut off"), std::string::npos) << isal.error;
+  EXPECT_GT(isal.messages.size(), 10'000u);
+  EXPECT_LT(isal.messages.size(), 20'000u);
+  // zlib gives what comes before a cut too: the same messages and the same error.
+  EXPECT_EQ(isal.ending, zlib.ending);
+  EXPECT_EQ(isal.error, zlib.error);
+  EXPECT_EQ(same_prefix(isal.messages, zlib.messages), zlib.messages.size());
+  EXPECT_EQ(isal.messages.size(), zlib.messages.size());
+}
+
+// A second member whose first deflate block has the reserved type 3: invalid from its first bit.
+TEST_F(LogFileTest, ADamagedGzipMemberIsDamagedWithBothAndIsalKeepsAllBeforeIt) {
+  SKIP_WITHOUT_ISAL();
+  const std::vector<Written> written = many_vision_messages(12'000);
+  std::string first = file_header();
+  std::string second;
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    (i < 10'000 ? first : second) += message_bytes(written[i].time_ns, 4, written[i].payload);
+  }
+  std::string damaged = testing::gzip_member(second);
+  damaged[10] = static_cast<char>(damaged[10] | 0x06);  // after the 10-byte header: BTYPE = 3
+  const fs::path file = path("damaged-member.log.gz");
+  std::ofstream(file, std::ios::binary) << testing::gzip_member(first) << damaged;
+
+  const Reading zlib = read_with(file, Inflater::zlib);
+  const Reading isal = read_with(file, Inflater::isal);
+  EXPECT_EQ(isal.ending, LogReader::Ending::damaged);
+  EXPECT_EQ(isal.error, file.string() + ": read failed at byte " + std::to_string(first.size()) +
+                            " (gzip: invalid deflate block)");
+  EXPECT_EQ(isal.messages.size(), 10'000u) << "every message of the good member";
+  EXPECT_EQ(zlib.ending, LogReader::Ending::damaged);
+  EXPECT_NE(zlib.error.find("(gzip: invalid block type)"), std::string::npos) << zlib.error;
+  // zlib drops what its last read inflated before the damage; ISA-L keeps it.
+  EXPECT_LE(zlib.messages.size(), isal.messages.size());
+  EXPECT_EQ(same_prefix(zlib.messages, isal.messages), zlib.messages.size());
+}
+
+// A byte changed in the middle of the deflate data: the data may still decode, to other bytes,
+// until an invalid code, the CRC-32 of the trailer or a message header that makes no sense stops
+// it. Both stop damaged, ISA-L having given at least what zlib gave, the same.
+TEST_F(LogFileTest, ACorruptByteInTheDeflateDataIsDamagedWithBoth) {
+  SKIP_WITHOUT_ISAL();
+  std::string bytes = raw_bytes(write_vision_log(path("whole.log.gz"), 20'000));
+  bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x5a);
+  const fs::path file = path("corrupt.log.gz");
+  std::ofstream(file, std::ios::binary) << bytes;
+  const Reading zlib = read_with(file, Inflater::zlib);
+  const Reading isal = read_with(file, Inflater::isal);
+  EXPECT_EQ(zlib.ending, LogReader::Ending::damaged) << zlib.error;
+  EXPECT_EQ(isal.ending, LogReader::Ending::damaged) << isal.error;
+  EXPECT_LE(zlib.messages.size(), isal.messages.size());
+  EXPECT_EQ(same_prefix(zlib.messages, isal.messages), zlib.messages.size());
 }
 
 TEST_F(LogFileTest, MissingFileNamesThePathAndTheCause) {

@@ -11,11 +11,12 @@
 #include <string_view>
 #include <vector>
 
+#include "ssl_formation/compressed_input.hpp"
 #include "ssl_formation/result.hpp"
 #include "ssl_formation/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
-struct gzFile_s;  // zlib's file, kept out of this header
+struct gzFile_s;  // zlib's file (the writer's), kept out of this header
 
 namespace ssl_formation {
 
@@ -74,8 +75,10 @@ using GzFilePtr = std::unique_ptr<gzFile_s, GzFileCloser>;
 // Reads messages one by one through a buffer, reusing its storage: no allocation per message.
 class LogReader {
  public:
-  // Opens and checks the header; on failure the error names the path and the problem.
-  static Result<LogReader> open(const std::filesystem::path& path);
+  // Opens and checks the header; on failure the error names the path and the problem. The
+  // inflater is for tests and benchmarks that compare zlib's with ISA-L's (compressed_input.hpp).
+  static Result<LogReader> open(const std::filesystem::path& path,
+                                Inflater inflater = Inflater::automatic);
 
   // Next raw message; false at the end of the file or on an error. An index message ends the
   // file: it is counted but not read or returned (a long log's index may exceed the size limit).
@@ -111,8 +114,10 @@ class LogReader {
   const LogReadCounters& counters() const { return counters_; }
   const std::filesystem::path& path() const { return path_; }
   std::uint64_t offset() const { return offset_; }  // bytes consumed so far (uncompressed)
-  std::uint64_t compressed_size() const { return compressed_size_; }  // the file on disk
-  std::uint64_t compressed_offset() const;  // how far into the file on disk, for progress bars
+  std::uint64_t compressed_size() const { return input_.compressed_size(); }  // the file on disk
+  // How far into the file on disk, for progress bars.
+  std::uint64_t compressed_offset() const { return input_.compressed_offset(); }
+  Inflater inflater() const { return input_.inflater(); }  // zlib or isal: what reads the file
 
  private:
   struct Header {
@@ -122,7 +127,7 @@ class LogReader {
     std::uint64_t offset;
   };
 
-  explicit LogReader(std::filesystem::path path, detail::GzFilePtr file);
+  explicit LogReader(std::filesystem::path path, CompressedInput input);
   // Parses a vision payload (type 4, or a usable type 2) into `packet`, counting what fails.
   bool parse_vision(const Header& header, std::string_view payload, SSL_WrapperPacket& packet);
   // The same into a frame, decoding a detection-only type-4 payload straight from its bytes.
@@ -141,13 +146,14 @@ class LogReader {
   // Fills `scratch_` with a payload too large for the buffer; returns the bytes got.
   std::size_t read_large(std::size_t size);
   bool fail(std::string message, Ending ending = Ending::damaged);
-  // zlib's own error after a short read (corrupt or cut-off gzip data), or empty.
-  std::string gz_problem() const;
-  // cut_off when the file (or its gzip stream) just stops, damaged for any other gzip error.
+  // The input's fault after a short read (corrupt or cut-off gzip data), or empty.
+  std::string input_problem() const;
+  // cut_off when the file (or its gzip stream) just stops, damaged for corrupt gzip data or a
+  // failed read.
   Ending cut_off_ending() const;
 
   std::filesystem::path path_;
-  detail::GzFilePtr file_;
+  CompressedInput input_;
   std::unique_ptr<char[]> buffer_;
   std::size_t begin_ = 0;
   std::size_t end_ = 0;
@@ -159,7 +165,6 @@ class LogReader {
   Ending ending_ = Ending::none;
   LogReadCounters counters_;
   std::uint64_t offset_ = 0;
-  std::uint64_t compressed_size_ = 0;
 };
 
 // Writes a log, gzip-compressed when the path ends in ".gz". Failed writes are sticky.
