@@ -81,24 +81,45 @@ std::uint32_t frame_number_of(const SSL_WrapperPacket& packet) {
   return packet.detection().frame_number();
 }
 
-// The floor: read every vision packet, nothing else. Into a VisionFrame (BM_ReadAndParse) as
-// offline training reads it (detection frames decoded straight from the bytes), or into an
-// SSL_WrapperPacket (BM_ReadAndParseProtobuf): protobuf's full parse, what offline training read
-// through before the direct decoder.
+// The isal argument of the reading benchmarks: a .log.gz inflated by zlib (0) or ISA-L (1).
+sf::Inflater inflater_of(std::int64_t isal) {
+  return isal ? sf::Inflater::isal : sf::Inflater::zlib;
+}
+
+// Reads every vision packet of `path`, nothing else; bytes are the log's uncompressed ones. The
+// label is `name` and, for a .log.gz, the inflater.
 template <typename Frame>
-void BM_Read(benchmark::State& state) {
-  const auto& path = log_path(state.range(0) != 0);
+void read_vision(benchmark::State& state, const std::filesystem::path& path, sf::Inflater inflater,
+                 const std::string& name) {
   std::int64_t frames = 0;
+  std::int64_t bytes = 0;
   Frame frame;
   for (auto _ : state) {
-    auto reader = sf::LogReader::open(path).value();  // throws with the reason
+    auto reader = sf::LogReader::open(path, inflater).value();  // throws with the reason
     while (reader.next_vision(frame)) {
       benchmark::DoNotOptimize(frame_number_of(frame));
       ++frames;
     }
+    bytes += static_cast<std::int64_t>(reader.offset());
   }
   state.SetItemsProcessed(frames);
-  state.SetLabel(state.range(0) ? ".log.gz" : ".log");
+  state.SetBytesProcessed(bytes);
+  if (path.extension() != ".gz") {
+    state.SetLabel(name);
+  } else {
+    state.SetLabel(name +
+                   (inflater == sf::Inflater::isal ? ", ISA-L's inflate" : ", zlib's inflate"));
+  }
+}
+
+// The floor: read every vision packet, nothing else. Into a VisionFrame (BM_ReadAndParse) as
+// offline training reads it (detection frames decoded straight from the bytes), or into an
+// SSL_WrapperPacket (BM_ReadAndParseProtobuf): protobuf's full parse, what offline training read
+// through before the direct decoder. range(0): .log or .log.gz; range(1): the inflater.
+template <typename Frame>
+void BM_Read(benchmark::State& state) {
+  const bool gzip = state.range(0) != 0;
+  read_vision<Frame>(state, log_path(gzip), inflater_of(state.range(1)), gzip ? ".log.gz" : ".log");
 }
 
 // Offline training: the same reading feeding the Training the live trainer uses; range(1) chooses
@@ -205,16 +226,27 @@ const std::filesystem::path& one_camera_halves_log(const std::filesystem::path& 
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A .log.gz with both inflaters in one run, where the build has ISA-L.
+  const std::int64_t inflaters = sf::isal_available() ? 2 : 1;
   for (const auto& [name, read] :
        {std::pair{"BM_ReadAndParse", &BM_Read<sf::VisionFrame>},
         std::pair{"BM_ReadAndParseProtobuf", &BM_Read<SSL_WrapperPacket>}}) {
-    benchmark::RegisterBenchmark(name, read)
-        ->ArgName("gzip")
-        ->Arg(0)
-        ->Arg(1)
-        ->Unit(benchmark::kMillisecond);  // CPU time: one core
+    auto* benchmark = benchmark::RegisterBenchmark(name, read)->ArgNames({"gzip", "isal"});
+    benchmark->Args({0, 0});
+    for (std::int64_t isal = 0; isal < inflaters; ++isal) benchmark->Args({1, isal});
+    benchmark->Unit(benchmark::kMillisecond);  // CPU time: one core
   }
   if (const char* recording = std::getenv("SSLF_BENCH_RECORDING")) {
+    // The floor on the recording, with each inflater when it is a .log.gz.
+    auto* benchmark = benchmark::RegisterBenchmark(
+        "BM_ReadRecorded", [path = std::filesystem::path(recording)](benchmark::State& state) {
+          read_vision<sf::VisionFrame>(state, path, inflater_of(state.range(0)),
+                                       path.filename().string());
+        });
+    benchmark->ArgName("isal");
+    const bool gzip = std::filesystem::path(recording).extension() == ".gz";
+    for (std::int64_t isal = 0; isal < (gzip ? inflaters : 1); ++isal) benchmark->Arg(isal);
+    benchmark->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark("BM_OfflineTrainingRecorded", BM_OfflineTrainingRecorded,
                                  std::filesystem::path(recording))
         ->Unit(benchmark::kMillisecond);
