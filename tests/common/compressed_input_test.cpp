@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "fed_pipe.hpp"
 #include "gzip_member.hpp"
 #include "scratch_dir.hpp"
 
@@ -155,22 +156,11 @@ TEST_F(CompressedInputTest, APipeGoesThroughZlib) {
   const std::string bytes = gzip_member(data);
   for (const Inflater inflater : named_inflaters()) {
     SCOPED_TRACE(name_of(inflater));
-    int pipe_ends[2] = {-1, -1};
-    ASSERT_EQ(::pipe(pipe_ends), 0) << std::strerror(errno);
-    std::thread feeder([&] {
-      for (std::size_t at = 0; at < bytes.size();) {
-        const ssize_t wrote = ::write(pipe_ends[1], bytes.data() + at, bytes.size() - at);
-        if (wrote <= 0) break;
-        at += static_cast<std::size_t>(wrote);
-      }
-      ::close(pipe_ends[1]);
-    });
-    const ReadBack got = read_back("/dev/fd/" + std::to_string(pipe_ends[0]), inflater);
-    char sink[4096];
-    while (::read(pipe_ends[0], sink, sizeof sink) > 0) {
+    ReadBack got;
+    {
+      const testing::FedPipe pipe(bytes);
+      got = read_back(pipe.path(), inflater);
     }
-    ::close(pipe_ends[0]);
-    feeder.join();
     EXPECT_EQ(got.inflater, Inflater::zlib);
     EXPECT_TRUE(got.bytes == data) << got.bytes.size() << " bytes";
     EXPECT_EQ(got.compressed_size, 0u) << "a pipe has no size";

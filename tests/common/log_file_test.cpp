@@ -17,6 +17,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "fed_pipe.hpp"
 #include "gzip_member.hpp"
 
 namespace ssl_formation {
@@ -241,24 +242,13 @@ TEST_P(LogFileRoundTrip, ALogReadFromAPipeGivesEveryMessage) {
     for (const Written& w : written) ASSERT_TRUE(writer->write(w.type, w.time_ns, w.payload));
     ASSERT_TRUE(writer->close()) << writer->error();
   }
-  // A pipe, named as a shell's process substitution names one (/dev/fd/N).
-  int pipe_ends[2] = {-1, -1};
-  ASSERT_EQ(::pipe(pipe_ends), 0) << std::strerror(errno);
-  const std::string bytes = raw_bytes(file);
-  std::thread feeder([&] {
-    for (std::size_t at = 0; at < bytes.size();) {
-      const ssize_t wrote = ::write(pipe_ends[1], bytes.data() + at, bytes.size() - at);
-      if (wrote <= 0) break;
-      at += static_cast<std::size_t>(wrote);
-    }
-    ::close(pipe_ends[1]);
-  });
-  // Everything is read before anything is checked; what the reader leaves is drained, so that
-  // the feeder always gets to its end.
+  // A pipe, named as a shell's process substitution names one (/dev/fd/N). Everything is read
+  // before anything is checked.
   std::vector<LogMessage> got;
   std::string open_error, read_error;
   {
-    Result<LogReader> reader = LogReader::open("/dev/fd/" + std::to_string(pipe_ends[0]));
+    const testing::FedPipe pipe(raw_bytes(file));
+    Result<LogReader> reader = LogReader::open(pipe.path());
     if (reader) {
       LogMessage message;
       while (reader->next(message)) got.push_back(message);
@@ -267,11 +257,6 @@ TEST_P(LogFileRoundTrip, ALogReadFromAPipeGivesEveryMessage) {
       open_error = error_of(reader);
     }
   }
-  char sink[4096];
-  while (::read(pipe_ends[0], sink, sizeof sink) > 0) {
-  }
-  ::close(pipe_ends[0]);
-  feeder.join();
   ASSERT_EQ(open_error, "");
   EXPECT_EQ(read_error, "");
   ASSERT_EQ(got.size(), written.size());
