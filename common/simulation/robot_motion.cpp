@@ -1,0 +1,121 @@
+#include "ssl_formation/simulation/robot_motion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ssl_formation::sim {
+
+namespace {
+
+double length(Point p) { return std::hypot(p.x, p.y); }
+Point scaled(Point p, double k) { return Point{p.x * k, p.y * k}; }
+Point plus(Point a, Point b) { return Point{a.x + b.x, a.y + b.y}; }
+Point minus(Point a, Point b) { return Point{a.x - b.x, a.y - b.y}; }
+double dot(Point a, Point b) { return a.x * b.x + a.y * b.y; }
+
+// `p` shortened to at most `most` long.
+Point at_most(Point p, double most) {
+  const double l = length(p);
+  return l > most && l > 0.0 ? scaled(p, most / l) : p;
+}
+
+bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
+
+// Within this distance of its target a robot counts as there: it stops rather than dither
+// around the point at the frame rate.
+constexpr double kArrivedMm = 1.0;
+// A robot's speed towards a neighbour is bounded by sqrt(a * gap / kApproachShare). With 4, each
+// neighbour's bound shrinks no faster than braking at a / 4 follows: four neighbours pressing at
+// once still fit in one robot's acceleration.
+constexpr double kApproachShare = 4.0;
+constexpr double kSpeedNearFactor = 2.0;
+
+}  // namespace
+
+TeamMotion::TeamMotion(MotionLimits limits, std::vector<Point> positions)
+    : limits_(limits),
+      positions_(std::move(positions)),
+      velocities_(positions_.size(), Point{0.0, 0.0}),
+      next_velocities_(positions_.size(), Point{0.0, 0.0}) {
+  if (!positive_finite(limits_.max_speed_mm_s) ||
+      !positive_finite(limits_.max_acceleration_mm_s2) ||
+      !positive_finite(limits_.robot_radius_mm) || !(limits_.clearance_mm >= 0.0) ||
+      !std::isfinite(limits_.clearance_mm)) {
+    throw std::invalid_argument("motion limits must be positive and finite");
+  }
+  for (std::size_t i = 0; i < positions_.size(); ++i) {
+    for (std::size_t j = i + 1; j < positions_.size(); ++j) {
+      if (length(minus(positions_[i], positions_[j])) < closest_allowed_mm()) {
+        throw std::invalid_argument("robots " + std::to_string(i) + " and " + std::to_string(j) +
+                                    " start inside one another");
+      }
+    }
+  }
+}
+
+Point TeamMotion::wanted_velocity(std::size_t i, Point target, double dt_s) const {
+  const Point to_target = minus(target, positions_[i]);
+  const double distance = length(to_target);
+  if (distance < kArrivedMm) return Point{0.0, 0.0};
+  // The fastest speed v from which braking at a still stops on the target when the braking only
+  // starts after this step: v * dt + v^2 / (2 a) <= distance.
+  const double a = limits_.max_acceleration_mm_s2;
+  const double braking = -a * dt_s + std::sqrt(a * dt_s * a * dt_s + 2.0 * a * distance);
+  const double speed = std::min({limits_.max_speed_mm_s, braking, distance / dt_s});
+  return scaled(to_target, speed / distance);
+}
+
+void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
+  if (targets.size() != positions_.size()) {
+    throw std::invalid_argument("step needs one target per robot");
+  }
+  if (!positive_finite(dt_s)) throw std::invalid_argument("step needs a positive time");
+  const double a = limits_.max_acceleration_mm_s2;
+  const double most_change = a * dt_s;
+  for (std::size_t i = 0; i < positions_.size(); ++i) {
+    Point wanted = wanted_velocity(i, targets[i], dt_s);
+    // Towards each neighbour no faster than the gap allows. What is taken off the approach is
+    // turned to the robot's right, so two robots meeting head on pass each other rather than
+    // stand nose to nose.
+    const auto approach_bound = [&](double gap) {
+      return std::min(std::sqrt(a * gap / kApproachShare), gap / (2.0 * dt_s));
+    };
+    for (std::size_t j = 0; j < positions_.size(); ++j) {
+      if (j == i) continue;
+      const Point between = minus(positions_[j], positions_[i]);
+      const double distance = length(between);
+      const double gap = std::max(0.0, distance - closest_allowed_mm());
+      const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
+      const double excess = dot(wanted, towards) - approach_bound(gap);
+      if (excess > 0.0) {
+        const Point right{towards.y, -towards.x};
+        wanted = plus(minus(wanted, scaled(towards, excess)), scaled(right, 0.5 * excess));
+      }
+    }
+    wanted = at_most(wanted, limits_.max_speed_mm_s);
+    Point next = plus(velocities_[i], at_most(minus(wanted, velocities_[i]), most_change));
+    // The turn to the right may point at another neighbour: within the acceleration still left,
+    // take off any approach beyond a bound.
+    for (std::size_t j = 0; j < positions_.size(); ++j) {
+      if (j == i) continue;
+      const Point between = minus(positions_[j], positions_[i]);
+      const double distance = length(between);
+      const double gap = std::max(0.0, distance - closest_allowed_mm());
+      const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
+      const double excess = dot(next, towards) - approach_bound(gap);
+      if (excess > 0.0) next = minus(next, scaled(towards, excess));
+      // Close by, a neighbour passing sideways turns the line between the two fast, and with it
+      // any speed along it: near one, a robot slows down whichever way it goes.
+      next = at_most(next, kSpeedNearFactor * approach_bound(gap));
+    }
+    next = plus(velocities_[i], at_most(minus(next, velocities_[i]), most_change));
+    next_velocities_[i] = at_most(next, limits_.max_speed_mm_s);
+  }
+  for (std::size_t i = 0; i < positions_.size(); ++i) {
+    velocities_[i] = next_velocities_[i];
+    positions_[i] = plus(positions_[i], scaled(velocities_[i], dt_s));
+  }
+}
+
+}  // namespace ssl_formation::sim
