@@ -41,7 +41,9 @@ TeamMotion::TeamMotion(MotionLimits limits, std::vector<Point> positions)
   if (!positive_finite(limits_.max_speed_mm_s) ||
       !positive_finite(limits_.max_acceleration_mm_s2) ||
       !positive_finite(limits_.robot_radius_mm) || !(limits_.clearance_mm >= 0.0) ||
-      !std::isfinite(limits_.clearance_mm)) {
+      !std::isfinite(limits_.clearance_mm) || !(limits_.area_half_length_mm >= 0.0) ||
+      !std::isfinite(limits_.area_half_length_mm) || !(limits_.area_half_width_mm >= 0.0) ||
+      !std::isfinite(limits_.area_half_width_mm)) {
     throw std::invalid_argument("motion limits must be positive and finite");
   }
   for (std::size_t i = 0; i < positions_.size(); ++i) {
@@ -64,6 +66,19 @@ Point TeamMotion::wanted_velocity(std::size_t i, Point target, double dt_s) cons
   const double braking = -a * dt_s + std::sqrt(a * dt_s * a * dt_s + 2.0 * a * distance);
   const double speed = std::min({limits_.max_speed_mm_s, braking, distance / dt_s});
   return scaled(to_target, speed / distance);
+}
+
+template <class Visit>
+void TeamMotion::for_each_wall(std::size_t i, Visit visit) const {
+  const Point p = positions_[i];
+  if (limits_.area_half_length_mm > 0.0) {
+    visit(Point{1.0, 0.0}, std::max(0.0, limits_.area_half_length_mm - p.x));
+    visit(Point{-1.0, 0.0}, std::max(0.0, limits_.area_half_length_mm + p.x));
+  }
+  if (limits_.area_half_width_mm > 0.0) {
+    visit(Point{0.0, 1.0}, std::max(0.0, limits_.area_half_width_mm - p.y));
+    visit(Point{0.0, -1.0}, std::max(0.0, limits_.area_half_width_mm + p.y));
+  }
 }
 
 void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
@@ -93,6 +108,10 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
         wanted = plus(minus(wanted, scaled(towards, excess)), scaled(right, 0.5 * excess));
       }
     }
+    for_each_wall(i, [&](Point towards, double gap) {
+      const double excess = dot(wanted, towards) - approach_bound(gap);
+      if (excess > 0.0) wanted = minus(wanted, scaled(towards, excess));
+    });
     wanted = at_most(wanted, limits_.max_speed_mm_s);
     Point next = plus(velocities_[i], at_most(minus(wanted, velocities_[i]), most_change));
     // The turn to the right may point at another neighbour: within the acceleration still left,
@@ -109,6 +128,10 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
       // any speed along it: near one, a robot slows down whichever way it goes.
       next = at_most(next, kSpeedNearFactor * approach_bound(gap));
     }
+    for_each_wall(i, [&](Point towards, double gap) {
+      const double excess = dot(next, towards) - approach_bound(gap);
+      if (excess > 0.0) next = minus(next, scaled(towards, excess));
+    });
     next = plus(velocities_[i], at_most(minus(next, velocities_[i]), most_change));
     next_velocities_[i] = at_most(next, limits_.max_speed_mm_s);
   }

@@ -31,6 +31,10 @@ struct MotionLimits {
   // Free space kept between two robots' shells on top of not touching, so the vision's noise
   // never shows two robots in one another.
   double clearance_mm = 20.0;
+  // Where robots may go, centred on the origin (their centres stay within +-half sizes); 0: no
+  // bounds. The walls are kept to as neighbours are: robots brake for them in time.
+  double area_half_length_mm = 0.0;
+  double area_half_width_mm = 0.0;
 };
 
 class TeamMotion {
@@ -54,6 +58,9 @@ class TeamMotion {
   // The velocity robot `i` wants: straight at its target, as fast as it can still brake for in
   // steps of `dt_s`.
   Point wanted_velocity(std::size_t i, Point target, double dt_s) const;
+  // visit(direction out, free space) for each wall of the area around robot `i`.
+  template <class Visit>
+  void for_each_wall(std::size_t i, Visit visit) const;
 
   MotionLimits limits_;
   std::vector<Point> positions_;
