@@ -30,6 +30,12 @@ constexpr double kArrivedMm = 1.0;
 // once still fit in one robot's acceleration.
 constexpr double kApproachShare = 4.0;
 constexpr double kSpeedNearFactor = 2.0;
+// However close, a robot may still creep along its neighbour this fast (its approach stays
+// bounded): two robots at the closest distance would otherwise hold each other forever. What
+// turning the line between them adds at this speed, the clearance takes up.
+constexpr double kCreepMmS = 100.0;
+// Inside the clearance, a robot moves away at this many mm/s for each mm it is in.
+constexpr double kPushOutPerS = 4.0;
 
 }  // namespace
 
@@ -56,7 +62,8 @@ TeamMotion::TeamMotion(MotionLimits limits, std::vector<Point> positions)
   }
 }
 
-Point TeamMotion::wanted_velocity(std::size_t i, Point target, double dt_s) const {
+Point TeamMotion::wanted_velocity(std::size_t i, Point target, double dt_s,
+                                  double top_speed) const {
   const Point to_target = minus(target, positions_[i]);
   const double distance = length(to_target);
   if (distance < kArrivedMm) return Point{0.0, 0.0};
@@ -64,7 +71,7 @@ Point TeamMotion::wanted_velocity(std::size_t i, Point target, double dt_s) cons
   // starts after this step: v * dt + v^2 / (2 a) <= distance.
   const double a = limits_.max_acceleration_mm_s2;
   const double braking = -a * dt_s + std::sqrt(a * dt_s * a * dt_s + 2.0 * a * distance);
-  const double speed = std::min({limits_.max_speed_mm_s, braking, distance / dt_s});
+  const double speed = std::min({top_speed, braking, distance / dt_s});
   return scaled(to_target, speed / distance);
 }
 
@@ -81,26 +88,37 @@ void TeamMotion::for_each_wall(std::size_t i, Visit visit) const {
   }
 }
 
-void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
+void TeamMotion::mirror() {
+  for (Point& p : positions_) p = Point{-p.x, -p.y};
+  for (Point& v : velocities_) v = Point{-v.x, -v.y};
+}
+
+void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double speed_cap_mm_s) {
   if (targets.size() != positions_.size()) {
     throw std::invalid_argument("step needs one target per robot");
   }
   if (!positive_finite(dt_s)) throw std::invalid_argument("step needs a positive time");
   const double a = limits_.max_acceleration_mm_s2;
   const double most_change = a * dt_s;
+  const double top_speed = speed_cap_mm_s > 0.0 ? std::min(speed_cap_mm_s, limits_.max_speed_mm_s)
+                                                : limits_.max_speed_mm_s;
   for (std::size_t i = 0; i < positions_.size(); ++i) {
-    Point wanted = wanted_velocity(i, targets[i], dt_s);
+    Point wanted = wanted_velocity(i, targets[i], dt_s, top_speed);
+    // The fastest a robot may go towards a neighbour (or a wall) with `gap` of free space
+    // between them. Inside the clearance (a negative gap, left over from a crowd) it has to
+    // move away, at a speed growing with how far in it is.
+    const auto approach_bound = [&](double gap) {
+      if (gap < 0.0) return gap * kPushOutPerS;
+      return std::min(std::sqrt(a * gap / kApproachShare), gap / (2.0 * dt_s));
+    };
     // Towards each neighbour no faster than the gap allows. What is taken off the approach is
     // turned to the robot's right, so two robots meeting head on pass each other rather than
     // stand nose to nose.
-    const auto approach_bound = [&](double gap) {
-      return std::min(std::sqrt(a * gap / kApproachShare), gap / (2.0 * dt_s));
-    };
     for (std::size_t j = 0; j < positions_.size(); ++j) {
       if (j == i) continue;
       const Point between = minus(positions_[j], positions_[i]);
       const double distance = length(between);
-      const double gap = std::max(0.0, distance - closest_allowed_mm());
+      const double gap = distance - closest_allowed_mm();
       const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
       const double excess = dot(wanted, towards) - approach_bound(gap);
       if (excess > 0.0) {
@@ -112,7 +130,7 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
       const double excess = dot(wanted, towards) - approach_bound(gap);
       if (excess > 0.0) wanted = minus(wanted, scaled(towards, excess));
     });
-    wanted = at_most(wanted, limits_.max_speed_mm_s);
+    wanted = at_most(wanted, top_speed);
     Point next = plus(velocities_[i], at_most(minus(wanted, velocities_[i]), most_change));
     // The turn to the right may point at another neighbour: within the acceleration still left,
     // take off any approach beyond a bound.
@@ -120,13 +138,17 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets) {
       if (j == i) continue;
       const Point between = minus(positions_[j], positions_[i]);
       const double distance = length(between);
-      const double gap = std::max(0.0, distance - closest_allowed_mm());
+      const double gap = distance - closest_allowed_mm();
       const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
       const double excess = dot(next, towards) - approach_bound(gap);
       if (excess > 0.0) next = minus(next, scaled(towards, excess));
       // Close by, a neighbour passing sideways turns the line between the two fast, and with it
-      // any speed along it: near one, a robot slows down whichever way it goes.
-      next = at_most(next, kSpeedNearFactor * approach_bound(gap));
+      // any speed along it: near one, a robot slows down unless it is clearly leaving (more
+      // than 120 degrees away from the neighbour), or two robots side by side could never part.
+      if (dot(next, towards) > -0.5 * length(next)) {
+        next = at_most(next,
+                       std::max(kCreepMmS, kSpeedNearFactor * approach_bound(std::max(0.0, gap))));
+      }
     }
     for_each_wall(i, [&](Point towards, double gap) {
       const double excess = dot(next, towards) - approach_bound(gap);

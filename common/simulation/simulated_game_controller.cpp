@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "ssl_formation/match.hpp"
@@ -39,6 +40,8 @@ std::uint64_t microseconds(double t_s) {
 
 // A running phase lasts until the game controller plans the next stoppage (negative duration).
 constexpr double kUntilStoppage = -1.0;
+// A ball placement the match carries out lasts until it says the ball is placed.
+constexpr double kUntilPlaced = -2.0;
 
 }  // namespace
 
@@ -104,6 +107,15 @@ void SimulatedGameController::set_sides() {
 }
 
 void SimulatedGameController::issue(Referee::Command command, double at_s) {
+  // Where to place the ball goes with the placement command only.
+  const bool placing =
+      command == Referee::BALL_PLACEMENT_YELLOW || command == Referee::BALL_PLACEMENT_BLUE;
+  if (placing && placement_) {
+    message_.mutable_designated_position()->set_x(static_cast<float>(placement_->x));
+    message_.mutable_designated_position()->set_y(static_cast<float>(placement_->y));
+  } else {
+    message_.clear_designated_position();
+  }
   phase_.command = command;
   message_.set_command(command);
   message_.set_command_counter(message_.command_counter() + 1);
@@ -129,26 +141,52 @@ void SimulatedGameController::start_stoppage(double at_s) {
   std::uniform_real_distribution<double> draw(0.0, 1.0);
   const double kind = draw(random_);
   const TeamColor team = draw(random_) < 0.5 ? TeamColor::yellow : TeamColor::blue;
-  issue(Referee::STOP, at_s);
   if (kind < 0.5) {
-    // The ball left the field: the team to restart places it, then takes a free kick.
-    phase_.until_s = at_s + kStopS;
-    queued_.push_back({for_team(Referee::BALL_PLACEMENT_YELLOW, team), kBallPlacementS});
-    queued_.push_back({for_team(Referee::DIRECT_FREE_YELLOW, team), kUntilStoppage});
+    stop_for_ball_out(team, at_s, std::nullopt);
   } else if (kind < 0.8) {
-    // A foul: a free kick where it happened.
-    phase_.until_s = at_s + kStopS;
-    queued_.push_back({for_team(Referee::DIRECT_FREE_YELLOW, team), kUntilStoppage});
+    stop_for_foul(team, at_s);
   } else {
-    // A goal for `team`: the other kicks off.
-    Referee::TeamInfo& scorer =
-        team == TeamColor::yellow ? *message_.mutable_yellow() : *message_.mutable_blue();
-    scorer.set_score(++(team == TeamColor::yellow ? yellow_score_ : blue_score_));
-    phase_.until_s = at_s + kGoalStopS;
-    queued_.push_back(
-        {for_team(Referee::PREPARE_KICKOFF_YELLOW, other(team)), kKickoffPreparationS});
-    queued_.push_back({Referee::NORMAL_START, kUntilStoppage});
+    stop_for_goal(team, at_s);
   }
+}
+
+void SimulatedGameController::stop_for_ball_out(TeamColor restart_team, double at_s,
+                                                std::optional<Point> placement) {
+  // The team to restart places the ball, then takes a free kick.
+  queued_.clear();
+  issue(Referee::STOP, at_s);
+  phase_.until_s = at_s + kStopS;
+  placement_ = placement;
+  queued_.push_back({for_team(Referee::BALL_PLACEMENT_YELLOW, restart_team),
+                     config_.random_stoppages ? kBallPlacementS : kUntilPlaced});
+  queued_.push_back({for_team(Referee::DIRECT_FREE_YELLOW, restart_team), kUntilStoppage});
+}
+
+void SimulatedGameController::ball_placed(double at_s) {
+  const bool placing = phase_.command == Referee::BALL_PLACEMENT_YELLOW ||
+                       phase_.command == Referee::BALL_PLACEMENT_BLUE;
+  if (placing && at_s < phase_.until_s) phase_.until_s = at_s;
+}
+
+void SimulatedGameController::stop_for_foul(TeamColor restart_team, double at_s) {
+  // A free kick where it happened.
+  queued_.clear();
+  issue(Referee::STOP, at_s);
+  phase_.until_s = at_s + kStopS;
+  queued_.push_back({for_team(Referee::DIRECT_FREE_YELLOW, restart_team), kUntilStoppage});
+}
+
+void SimulatedGameController::stop_for_goal(TeamColor scorer, double at_s) {
+  // The other team kicks off.
+  queued_.clear();
+  Referee::TeamInfo& team =
+      scorer == TeamColor::yellow ? *message_.mutable_yellow() : *message_.mutable_blue();
+  team.set_score(++(scorer == TeamColor::yellow ? yellow_score_ : blue_score_));
+  issue(Referee::STOP, at_s);
+  phase_.until_s = at_s + kGoalStopS;
+  queued_.push_back(
+      {for_team(Referee::PREPARE_KICKOFF_YELLOW, other(scorer)), kKickoffPreparationS});
+  queued_.push_back({Referee::NORMAL_START, kUntilStoppage});
 }
 
 void SimulatedGameController::advance(double from_s) {
@@ -162,9 +200,16 @@ void SimulatedGameController::advance(double from_s) {
       phase_.stage = Referee::NORMAL_SECOND_HALF;
     }
     if (next.duration_s == kUntilStoppage) {
-      std::uniform_real_distribution<double> play(config_.play_min_s, config_.play_max_s);
-      const double drawn = play(random_);
+      // Play goes on until the next stoppage: drawn at random, or (stoppages called by the
+      // match) until the half ends.
+      double drawn = half_ends_s_ - from_s;
+      if (config_.random_stoppages) {
+        std::uniform_real_distribution<double> play(config_.play_min_s, config_.play_max_s);
+        drawn = play(random_);
+      }
       phase_.until_s = from_s + std::max(kShortestPlayS, std::min(drawn, half_ends_s_ - from_s));
+    } else if (next.duration_s == kUntilPlaced) {
+      phase_.until_s = std::numeric_limits<double>::infinity();
     } else {
       phase_.until_s = from_s + next.duration_s;
     }

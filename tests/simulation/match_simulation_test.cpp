@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <set>
 
 namespace ssl_formation::sim {
@@ -148,6 +149,129 @@ TEST(MatchSimulation, TheSameSeedGivesTheSameBytesAndAnotherSeedOthers) {
   const std::string first = bytes(8);
   EXPECT_EQ(first, bytes(8));
   EXPECT_NE(first, bytes(9));
+}
+
+MatchSimulationConfig refereed(Division division, std::uint64_t seed, double half_s) {
+  MatchSimulationConfig config = config_with("wings", division, seed);
+  GameControllerConfig game;
+  game.half_s = half_s;
+  config.game = game;
+  return config;
+}
+
+Point feed(Point normalised, AttackDirection attacks) { return normalise(normalised, attacks); }
+
+// With the game controller: halves, stoppages and the change of ends, every robot still within
+// its limits on the wire (feed coordinates), where the change of ends moves nothing.
+TEST(MatchSimulation, WithTheRefereeEveryRobotStillKeepsToItsLimitsThroughHalfTime) {
+  MatchSimulation match(refereed(Division::b, 4, 60.0));
+  const MotionLimits& limits = match.config().limits;
+  const double dt = 1.0 / match.config().frame_rate_hz;
+  MatchFrame before = match.next();
+  std::vector<Point> velocity_before(12, Point{0.0, 0.0});
+  double fastest = 0.0;
+  double hardest = 0.0;
+  double closest = 1e9;
+  std::set<bool> sides;
+  for (int f = 1; f < 60 * 400; ++f) {
+    const MatchFrame frame = match.next();
+    ASSERT_TRUE(frame.referee.has_value());
+    sides.insert(frame.referee->blue_team_on_positive_half());
+    std::vector<Point> all;
+    std::vector<Point> all_before;
+    for (const auto* robots : {&frame.opponent, &frame.ours}) {
+      for (const Point p : *robots) all.push_back(feed(p, frame.opponent_attacks));
+    }
+    for (const auto* robots : {&before.opponent, &before.ours}) {
+      for (const Point p : *robots) all_before.push_back(feed(p, before.opponent_attacks));
+    }
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const Point v{(all[i].x - all_before[i].x) / dt, (all[i].y - all_before[i].y) / dt};
+      fastest = std::max(fastest, length(v));
+      hardest = std::max(
+          hardest, length(Point{v.x - velocity_before[i].x, v.y - velocity_before[i].y}) / dt);
+      velocity_before[i] = v;
+      for (std::size_t j = i + 1; j < all.size(); ++j) {
+        closest = std::min(closest, length(Point{all[i].x - all[j].x, all[i].y - all[j].y}));
+      }
+    }
+    before = frame;
+  }
+  EXPECT_LE(fastest, limits.max_speed_mm_s * 1.000001);
+  EXPECT_LE(hardest, limits.max_acceleration_mm_s2 * 1.0001);
+  EXPECT_GE(closest, 2.0 * limits.robot_radius_mm);
+  EXPECT_EQ(sides.size(), 2u) << "the teams changed ends";
+}
+
+// What the referee says and where the ball is agree: kick-offs from the centre, free kicks
+// from where the ball was placed, goals when the ball crossed the goal line, and while the game
+// is stopped the robots keep away from the ball.
+TEST(MatchSimulation, TheRefereesCommandsAndTheBallAgreeWithThePlay) {
+  MatchSimulation match(refereed(Division::a, 6, 120.0));
+  const double half_length = match.field().length_mm / 2;
+  std::uint32_t counter = 0;
+  int command = -1;
+  int kickoffs = 0;
+  int free_kicks = 0;
+  int goals = 0;
+  int stops_checked = 0;
+  int stops_clear = 0;
+  std::uint32_t score = 0;
+  std::optional<Point> placed;  // feed coordinates, from the last placement command
+  MatchFrame before = match.next();
+  for (int f = 1; f < 60 * 900; ++f) {
+    const MatchFrame frame = match.next();
+    const Referee& referee = *frame.referee;
+    const Point ball = feed(frame.ball, frame.opponent_attacks);
+    if (referee.command_counter() != counter) {
+      // The last frame of a STOP before a restart (not the 2 s one that ends a half): everybody
+      // but the keepers has made way for the ball.
+      if (command == Referee::STOP && referee.command() != Referee::HALT) {
+        const Point before_ball = before.ball;
+        bool clear = true;
+        for (std::size_t id = 1; id < before.opponent.size(); ++id) {
+          clear = clear && length(Point{before.opponent[id].x - before_ball.x,
+                                        before.opponent[id].y - before_ball.y}) >= 500.0;
+          clear = clear && length(Point{before.ours[id].x - before_ball.x,
+                                        before.ours[id].y - before_ball.y}) >= 500.0;
+        }
+        ++stops_checked;
+        stops_clear += clear ? 1 : 0;
+      }
+      counter = referee.command_counter();
+      command = referee.command();
+      if (command == Referee::BALL_PLACEMENT_YELLOW || command == Referee::BALL_PLACEMENT_BLUE) {
+        ASSERT_TRUE(referee.has_designated_position());
+        placed = Point{referee.designated_position().x(), referee.designated_position().y()};
+      }
+      if (command == Referee::NORMAL_START &&
+          (before.referee->command() == Referee::PREPARE_KICKOFF_YELLOW ||
+           before.referee->command() == Referee::PREPARE_KICKOFF_BLUE)) {
+        ++kickoffs;
+        EXPECT_LT(length(frame.ball), 1.0) << "a kick-off from the centre, t=" << frame.t_capture;
+      }
+      if (command == Referee::DIRECT_FREE_YELLOW || command == Referee::DIRECT_FREE_BLUE) {
+        ++free_kicks;
+        ASSERT_TRUE(placed.has_value());
+        EXPECT_LT(length(Point{ball.x - placed->x, ball.y - placed->y}), 50.0)
+            << "a free kick from where the ball was placed, t=" << frame.t_capture;
+        placed.reset();
+      }
+      const std::uint32_t now_score = referee.yellow().score() + referee.blue().score();
+      if (now_score != score) {
+        ++goals;
+        EXPECT_EQ(command, Referee::STOP);
+        EXPECT_GE(before.ball.x, half_length - 1.0) << "the ball was over the goal line";
+        score = now_score;
+      }
+    }
+    before = frame;
+  }
+  EXPECT_GT(kickoffs, 3);
+  EXPECT_GT(free_kicks, 3);
+  EXPECT_GT(goals, 1);
+  EXPECT_GT(stops_checked, 5);
+  EXPECT_GE(stops_clear * 10, stops_checked * 9) << stops_clear << " of " << stops_checked;
 }
 
 TEST(MatchSimulation, ConfigsItCannotRunAreRefused) {

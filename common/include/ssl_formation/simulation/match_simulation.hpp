@@ -13,6 +13,7 @@
 //   const MatchFrame frame = match.next();  // frame.packets: geometry when due, then detections
 
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "ssl_formation/grid.hpp"
 #include "ssl_formation/simulation/playbook.hpp"
 #include "ssl_formation/simulation/robot_motion.hpp"
+#include "ssl_formation/simulation/simulated_game_controller.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::sim {
@@ -51,6 +53,10 @@ struct MatchSimulationConfig {
   // Loose play between two plays lasts a uniform time in this range (seconds).
   double loose_play_min_s = 1.5;
   double loose_play_max_s = 4.0;
+  // The match's game controller, its stoppages called by the play (a goal, the ball out of the
+  // field); its colour, side and start time are the match's. None: no referee, and restarts
+  // happen at once.
+  std::optional<GameControllerConfig> game;
 };
 
 struct MatchFrame {
@@ -62,6 +68,9 @@ struct MatchFrame {
   Point ball;                   // normalised mm
   std::string play;             // what the opponent runs now; "" in loose play
   int play_step = -1;
+  AttackDirection opponent_attacks = AttackDirection::positive_x;  // in the feed, now
+  // The game controller's message, sent before the frame's packets; none without one.
+  std::optional<Referee> referee;
   // What goes on the wire for this frame, in order: a geometry packet when one is due, then one
   // detection packet per camera (minus the dropped ones).
   std::vector<SSL_WrapperPacket> packets;
@@ -84,13 +93,24 @@ class MatchSimulation {
   std::uint64_t passes() const { return passes_; }
   std::uint64_t shots() const { return shots_; }
   std::uint64_t goals() const { return goals_; }
+  const SimulatedGameController* game_controller() const { return game_ ? &*game_ : nullptr; }
 
  private:
+  // What the robots do, as the referee's command has it.
+  enum class Mode {
+    opponent_play,        // running play, the opponent's ball (or nobody's)
+    our_possession,       // running play, our ball until the opponent wins it back
+    stopped,              // STOP (and HALT): slow, away from the ball
+    kickoff_preparation,  // both teams in their halves, the kicker at the ball
+    ball_placement,       // the ball carried to where the free kick will be
+    half_time,            // the break: the teams change ends
+  };
+
   struct Ball {
     Point position;
     Point velocity;
-    int holder = -1;       // opponent robot with the ball; -1 while it travels or lies loose
-    int receiver = -1;     // who is to have it next: a pass's target or a loose ball's fetcher
+    int holder = -1;       // the robot (index into robots_) with the ball; -1 if none
+    int receiver = -1;     // who is to have it next (index): a pass's target or a fetcher
     bool rolling = false;  // a pass on its way to the receiver
     bool shot = false;     // on its way to the goal
   };
@@ -104,11 +124,28 @@ class MatchSimulation {
   void move_ball(double dt_s, double now_s);
   // A shot over the goal line: a goal and a kick-off, or wide and a free kick.
   void restart(double now_s);
+  // Follows a new command or stage of the game controller's.
+  void follow_referee(const Referee& message, double now_s);
+  // The ball over the goal line after a shot, with a game controller: a goal, a corner for the
+  // opponent or a goal kick for us, each called as the stoppage it is.
+  void call_stoppage(double now_s);
+  // Our side wins the ball (a goal kick, our kick-off): it keeps it for a while.
+  void start_our_possession(double now_s);
+  bool ours(int robot) const { return robot >= team_size_; }
   void build_packets(MatchFrame& frame);
   Point on_field(Point fraction) const;  // a playbook point in normalised mm
   Point inside_field(Point p) const;
 
   MatchSimulationConfig config_;
+  std::optional<SimulatedGameController> game_;
+  AttackDirection attacks_;  // where the opponent attacks in the feed now
+  Mode mode_ = Mode::opponent_play;
+  std::uint32_t command_counter_ = 0;  // the last command followed
+  int stage_ = -1;                     // the last stage followed
+  double possession_ends_s_ = 0.0;     // our possession: when the opponent wins the ball
+  bool holding_play_ = false;          // a restart's play waits at its first step
+  bool kickoff_by_opponent_ = true;    // whose kick-off is being prepared
+  Point placement_;                    // where the ball is being placed (normalised)
   FieldSize field_;
   int team_size_ = 0;
   std::mt19937_64 random_;

@@ -30,7 +30,7 @@ struct MotionLimits {
   double robot_radius_mm = 90.0;  // SSL robots are at most 180 mm across
   // Free space kept between two robots' shells on top of not touching, so the vision's noise
   // never shows two robots in one another.
-  double clearance_mm = 20.0;
+  double clearance_mm = 40.0;
   // Where robots may go, centred on the origin (their centres stay within +-half sizes); 0: no
   // bounds. The walls are kept to as neighbours are: robots brake for them in time.
   double area_half_length_mm = 0.0;
@@ -45,7 +45,12 @@ class TeamMotion {
 
   // Advances every robot by `dt_s` seconds towards its target (one per robot, in order). A
   // target inside another robot's shell is driven towards as far as the shells allow.
-  void step(double dt_s, const std::vector<Point>& targets);
+  // `speed_cap_mm_s` (0: the limit) caps the speed robots aim for, as the rules do while the
+  // game is stopped (1.5 m/s); robots above it brake to it within the acceleration limit.
+  void step(double dt_s, const std::vector<Point>& targets, double speed_cap_mm_s = 0.0);
+  // The same robots seen from the other end of the field: every position and velocity turned
+  // about the centre.
+  void mirror();
 
   std::size_t size() const { return positions_.size(); }
   Point position(std::size_t robot) const { return positions_.at(robot); }
@@ -57,7 +62,7 @@ class TeamMotion {
  private:
   // The velocity robot `i` wants: straight at its target, as fast as it can still brake for in
   // steps of `dt_s`.
-  Point wanted_velocity(std::size_t i, Point target, double dt_s) const;
+  Point wanted_velocity(std::size_t i, Point target, double dt_s, double top_speed) const;
   // visit(direction out, free space) for each wall of the area around robot `i`.
   template <class Visit>
   void for_each_wall(std::size_t i, Visit visit) const;

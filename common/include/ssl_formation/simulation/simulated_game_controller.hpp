@@ -41,6 +41,10 @@ struct GameControllerConfig {
   double play_min_s = 30.0;
   double play_max_s = 90.0;
   std::string source_identifier = "ssl-producer";
+  // Whether the game controller stops the play itself, at random: the paper's simulation has no
+  // ball to go out of the field. A simulated match calls its stoppages (stop_for_goal() and the
+  // others) and leaves this off.
+  bool random_stoppages = true;
 };
 
 // What the match looks like at one moment.
@@ -60,6 +64,19 @@ class SimulatedGameController {
   // come in non-decreasing time; a time before the previous call's is an error
   // (std::invalid_argument). The reference stays valid until the next call.
   const Referee& message_at(double t_s);
+
+  // Stoppages the match calls at `at_s` (its time, not before the last message_at()'s), in
+  // running play; each queues the restart the rules give:
+  // - the ball out of the field: STOP, the restarting team places the ball at `placement` (feed
+  //   coordinates, mm; the message's designated_position), then its free kick;
+  // - a foul: STOP, then the other team's free kick (`restart_team`'s);
+  // - a goal for `scorer`: STOP, then the other team's kick-off.
+  void stop_for_ball_out(TeamColor restart_team, double at_s, std::optional<Point> placement);
+  void stop_for_foul(TeamColor restart_team, double at_s);
+  void stop_for_goal(TeamColor scorer, double at_s);
+  // With stoppages called by the match, a ball placement lasts until the match says the ball
+  // is on its spot: the restart follows from `at_s`.
+  void ball_placed(double at_s);
 
   // The side the opponent attacks at the last message_at() time (the ends change at half time).
   AttackDirection opponent_attacks() const { return opponent_attacks_; }
@@ -95,6 +112,7 @@ class SimulatedGameController {
   double last_t_s_ = -1e300;
   bool second_half_ = false;
   AttackDirection opponent_attacks_;
+  std::optional<Point> placement_;  // where the queued ball placement puts the ball
   std::uint32_t matches_ = 0;
   std::uint32_t yellow_score_ = 0;
   std::uint32_t blue_score_ = 0;
