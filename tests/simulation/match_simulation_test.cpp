@@ -217,7 +217,8 @@ TEST(MatchSimulation, TheRefereesCommandsAndTheBallAgreeWithThePlay) {
   int stops_checked = 0;
   int stops_clear = 0;
   std::uint32_t score = 0;
-  std::optional<Point> placed;  // feed coordinates, from the last placement command
+  Point placed;  // feed coordinates, from the last placement command
+  bool have_placed = false;
   MatchFrame before = match.next();
   for (int f = 1; f < 60 * 900; ++f) {
     const MatchFrame frame = match.next();
@@ -243,6 +244,7 @@ TEST(MatchSimulation, TheRefereesCommandsAndTheBallAgreeWithThePlay) {
       if (command == Referee::BALL_PLACEMENT_YELLOW || command == Referee::BALL_PLACEMENT_BLUE) {
         ASSERT_TRUE(referee.has_designated_position());
         placed = Point{referee.designated_position().x(), referee.designated_position().y()};
+        have_placed = true;
       }
       if (command == Referee::NORMAL_START &&
           (before.referee->command() == Referee::PREPARE_KICKOFF_YELLOW ||
@@ -252,11 +254,10 @@ TEST(MatchSimulation, TheRefereesCommandsAndTheBallAgreeWithThePlay) {
       }
       if (command == Referee::DIRECT_FREE_YELLOW || command == Referee::DIRECT_FREE_BLUE) {
         ++free_kicks;
-        ASSERT_TRUE(placed.has_value());
-        const Point spot = placed.value_or(Point{1e9, 1e9});
-        EXPECT_LT(length(Point{ball.x - spot.x, ball.y - spot.y}), 50.0)
+        ASSERT_TRUE(have_placed);
+        EXPECT_LT(length(Point{ball.x - placed.x, ball.y - placed.y}), 50.0)
             << "a free kick from where the ball was placed, t=" << frame.t_capture;
-        placed.reset();
+        have_placed = false;
       }
       const std::uint32_t now_score = referee.yellow().score() + referee.blue().score();
       if (now_score != score) {
