@@ -1,6 +1,7 @@
 // ssl-producer: SSL-Vision-style packets on multicast. By default the paper's simulated vision
-// (three plays and random formations), one formation every --period seconds, with a simulated
-// game controller's referee messages on the referee group. With --write-log
+// (three plays and random formations), one formation every --period seconds; --simulation match
+// a team running a playbook at 60 frames a second. Either with a simulated game controller's
+// referee messages on the referee group. With --write-log
 // it writes the same packets to an official SSL log instead; with --replay it sends a log's
 // vision packets with their recorded timing.
 
@@ -31,12 +32,27 @@ int main(int argc, char** argv) {
     po::options_description simulation("Simulation (live and --write-log)");
     // clang-format off
     simulation.add_options()
+        ("simulation", po::value(&o.simulation)->default_value(o.simulation),
+         "paper: the paper's opponent, jumping between the formations of three plays every "
+         "--step seconds; match: a team running a playbook with real motion, 60 frames a "
+         "second, against our marking team")
+        ("division", po::value(&o.division)->default_value(o.division),
+         "match: A (11 robots a team, 12 x 9 m) or B (6, 9 x 6 m)")
+        ("frame-rate", po::value(&o.frame_rate_hz)->default_value(o.frame_rate_hz),
+         "match: frames a second, per camera (also the live feed's rate)")
+        ("playbook", po::value(&o.playbook)->default_value(o.playbook),
+         "match: the opponent's set plays, a built-in playbook (wings, centre) or a file "
+         "(format in the README)")
+        ("duration", po::value(&o.duration_s)->default_value(o.duration_s),
+         "seconds of data time to send or write, then exit; 0 = no limit (or --count)")
         ("period", po::value(&o.period_s)->default_value(o.period_s),
-         "wall-clock seconds between formations; 0 = as fast as possible (not used by --write-log)")
+         "paper: wall-clock seconds between formations; 0 = as fast as possible (not used by "
+         "--write-log)")
         ("step", po::value(&o.step_s)->default_value(o.step_s),
-         "data-clock seconds (t_capture) between formations")
+         "paper: data-clock seconds (t_capture) between formations")
         ("count", po::value(&o.count)->default_value(o.count),
-         "formations to send or write, then exit; 0 = no limit. With --replay: packets to send")
+         "formations (paper) or frames (match) to send or write, then exit; 0 = no limit. With "
+         "--replay: packets to send")
         ("seed", po::value(&o.seed)->default_value(o.seed), "random seed: the same seed sends the same packets")
         ("cameras", po::value(&o.cameras)->default_value(o.cameras),
          "cameras the field is split among (1-8); robots in overlaps are reported by both")
@@ -52,9 +68,10 @@ int main(int argc, char** argv) {
          "direction the simulated opponent attacks in the feed's coordinates in the first half: "
          "+x or -x (the teams change ends at half time when the game controller runs)")
         ("field-length", po::value(&o.field_length_mm)->default_value(o.field_length_mm),
-         "field length, mm (plays are drawn for 9000 and stretched)")
+         "paper: field length, mm (plays are drawn for 9000 and stretched; the match's field "
+         "is its division's)")
         ("field-width", po::value(&o.field_width_mm)->default_value(o.field_width_mm),
-         "field width, mm (plays are drawn for 6000 and stretched)")
+         "paper: field width, mm (plays are drawn for 6000 and stretched)")
         ("start-time", po::value(&o.start_time_s)->default_value(o.start_time_s),
          "t_capture of the first formation, seconds");
     // clang-format on
@@ -77,7 +94,7 @@ int main(int argc, char** argv) {
     logs.add_options()
         ("write-log", po::value(&o.write_log)->value_name("FILE"),
          "write the simulated feed to FILE (.log or .log.gz) as fast as possible, no network; "
-         "receive time = t_capture in ns; needs --count")
+         "receive time = t_capture in ns; needs --count or --duration")
         ("replay", po::value(&o.replay)->value_name("FILE"),
          "send FILE's vision packets (types 4 and 2) with their recorded timing instead of the "
          "simulation; the simulation options are ignored")
@@ -101,12 +118,14 @@ int main(int argc, char** argv) {
     if (!sf::app::parse_command_line(
             argc, argv, general,
             "ssl-producer [options]\n"
-            "       ssl-producer --write-log FILE --count N [simulation options]\n"
+            "       ssl-producer --simulation match [--division A|B] [--playbook NAME|FILE]\n"
+            "       ssl-producer --write-log FILE --count N|--duration S [simulation options]\n"
             "       ssl-producer --replay FILE [--speed X] [--loop] [--start S] [--end S] "
             "[--vision-address G:P]",
-            "Sends SSL-Vision packets of the paper's simulated opponent (three plays and random "
-            "formations) on multicast,\nwith a game controller's referee messages, writes them "
-            "to an official SSL log (--write-log), or replays a log\nwith its recorded timing "
+            "Sends SSL-Vision packets of a simulated opponent on multicast, with a game "
+            "controller's referee messages:\nthe paper's (three plays and random formations) or "
+            "a match (a team running a playbook, 60 frames a\nsecond). Writes them to an "
+            "official SSL log instead (--write-log), or replays a log with its recorded\ntiming "
             "(--replay).")) {
       return 0;
     }

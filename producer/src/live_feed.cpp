@@ -1,5 +1,6 @@
-// The live simulated feed: the paper's simulated opponent on multicast, one formation every
-// --period seconds of wall time, each after the simulated game controller's referee message.
+// The live simulated feed on multicast: the paper's simulated opponent (a formation every
+// --period seconds of wall time) or the match (a frame every 1/--frame-rate seconds), each
+// step after the simulated game controller's referee message.
 
 #include <spdlog/spdlog.h>
 
@@ -10,6 +11,7 @@
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/producer/producer_options.hpp"
+#include "ssl_formation/producer/simulation_source.hpp"
 #include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation::producer {
@@ -21,13 +23,13 @@ class SimulatedFeed {
  public:
   // `referee`: where the game controller's messages go; null: no game controller.
   SimulatedFeed(boost::asio::io_context& io, const ProducerOptions& options,
+                std::unique_ptr<SimulationSource> simulation,
                 net::ProtoMulticastSender<SSL_WrapperPacket>& sender,
-                net::ProtoMulticastSender<Referee>* referee,
-                std::optional<sim::GameControllerConfig> game)
+                net::ProtoMulticastSender<Referee>* referee)
       : io_(io),
         timer_(io),
         options_(options),
-        simulation_(simulation_config(options), referee ? std::move(game) : std::nullopt),
+        simulation_(std::move(simulation)),
         sender_(sender),
         referee_(referee) {}
 
@@ -39,19 +41,20 @@ class SimulatedFeed {
     stopped_ = true;
     timer_.cancel();
   }
-  bool finished() const { return options_.count != 0 && formations_ >= options_.count; }
+  bool finished() const {
+    return (options_.count != 0 && steps_ >= options_.count) ||
+           (options_.duration_s > 0.0 &&
+            static_cast<double>(steps_) * simulation_->step_s() >= options_.duration_s - 1e-9);
+  }
 
   void log_summary(const char* what) const {
-    const double total = static_cast<double>(formations_ ? formations_ : 1);
-    spdlog::info(
-        "{}: {} formations ({} from plays = {:.1f}%, {} random = {:.1f}%), {} packets sent, "
-        "{} dropped by --drop-rate, {} send errors{}",
-        what, formations_, play_formations_, 100.0 * play_formations_ / total,
-        formations_ - play_formations_, 100.0 * (formations_ - play_formations_) / total,
-        sender_.sent(), dropped_, sender_.send_errors() + (referee_ ? referee_->send_errors() : 0),
-        referee_ ? fmt::format("; {} referee messages sent, {}", referee_->sent(),
-                               sim::describe(*simulation_.game_controller()))
-                 : std::string());
+    const sim::SimulatedGameController* game = simulation_->game_controller();
+    spdlog::info("{}: {}, {} packets sent, {} dropped by --drop-rate, {} send errors{}", what,
+                 simulation_->describe(steps_), sender_.sent(), dropped_,
+                 sender_.send_errors() + (referee_ ? referee_->send_errors() : 0),
+                 referee_ && game ? fmt::format("; {} referee messages sent, {}", referee_->sent(),
+                                                sim::describe(*game))
+                                  : std::string());
   }
 
  private:
@@ -61,48 +64,41 @@ class SimulatedFeed {
       io_.stop();
       return;
     }
-    if (options_.period_s <= 0.0) {
+    const double period_s = simulation_->live_period_s();
+    if (period_s <= 0.0) {
       // As fast as possible, in batches, so signals and timers still get their turn.
       for (int i = 0; i < 64 && !finished(); ++i) send_one();
       boost::asio::post(io_, [this] { schedule(); });
       return;
     }
     timer_.expires_at(next_send_);
-    timer_.async_wait([this](const boost::system::error_code& error) {
+    timer_.async_wait([this, period_s](const boost::system::error_code& error) {
       if (error || stopped_) return;
       send_one();
       next_send_ += std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-          std::chrono::duration<double>(options_.period_s));
+          std::chrono::duration<double>(period_s));
       schedule();
     });
   }
 
   void send_one() {
-    const sim::RefereedFormation step = simulation_.next();
-    const sim::SimulatedFormation& formation = step.formation;
-    if (step.referee) referee_->send(*step.referee);
-    for (const SSL_WrapperPacket& packet : formation.packets) sender_.send(packet);
-    ++formations_;
-    dropped_ += static_cast<std::uint64_t>(formation.dropped_packets);
-    if (formation.source == sim::FormationSource::play) ++play_formations_;
-    if (formation.source == sim::FormationSource::play) {
-      spdlog::debug("formation {} t={:.2f}: play {} ({}) step {}/3", formation.index,
-                    formation.t_capture, formation.play + 1, sim::play_name(formation.play),
-                    formation.play_step + 1);
-    } else {
-      spdlog::debug("formation {} t={:.2f}: random", formation.index, formation.t_capture);
-    }
+    const SimulatedStep step = simulation_->next();
+    if (step.referee && referee_) referee_->send(*step.referee);
+    for (const SSL_WrapperPacket& packet : step.packets) sender_.send(packet);
+    ++steps_;
+    dropped_ += static_cast<std::uint64_t>(step.dropped_packets);
+    spdlog::debug("{} {} t={:.3f}: {} packets", simulation_->steps_name(), step.index,
+                  step.t_capture, step.packets.size());
   }
 
   boost::asio::io_context& io_;
   boost::asio::steady_timer timer_;
   const ProducerOptions& options_;
-  sim::RefereedSimulation simulation_;
+  std::unique_ptr<SimulationSource> simulation_;
   net::ProtoMulticastSender<SSL_WrapperPacket>& sender_;
   net::ProtoMulticastSender<Referee>* referee_;
   std::chrono::steady_clock::time_point next_send_;
-  std::uint64_t formations_ = 0;
-  std::uint64_t play_formations_ = 0;
+  std::uint64_t steps_ = 0;
   std::uint64_t dropped_ = 0;
   bool stopped_ = false;
 };
@@ -119,7 +115,9 @@ int run_simulation(const ProducerOptions& options) {
   const std::optional<net::MulticastEndpoint> referee_group =
       options.referee ? app::parse_referee_option(options.referee_address) : std::nullopt;
   // Checked before any socket opens, so a bad option is a usage error and nothing else.
-  const auto game = game_controller_config(options, true);
+  std::unique_ptr<SimulationSource> simulation =
+      make_simulation_source(options, referee_group.has_value());
+  const sim::SimulatedGameController* game = simulation->game_controller();
 
   boost::asio::io_context io;
   net::ProtoMulticastSender<SSL_WrapperPacket> sender(io, group, interface.address, options.ttl);
@@ -129,24 +127,26 @@ int run_simulation(const ProducerOptions& options) {
     referee.emplace(io, *referee_group, interface.address, options.ttl);
     referee->open();
   }
-  SimulatedFeed feed(io, options, sender, referee ? &*referee : nullptr, game);
   spdlog::info(
-      "sending simulated vision to {} (interface {}, ttl {}): period {} s, step {} s, "
-      "{} camera(s), seed {}, {} formations",
-      group.to_string(), interface.to_string(), options.ttl, options.period_s, options.step_s,
-      options.cameras, options.seed,
-      options.count ? std::to_string(options.count) : std::string("unlimited"));
+      "sending the {} simulation to {} (interface {}, ttl {}): a step every {} s of wall time "
+      "and {} s of data time, {} camera(s), seed {}, {}",
+      options.simulation, group.to_string(), interface.to_string(), options.ttl,
+      simulation->live_period_s(), simulation->step_s(), options.cameras, options.seed,
+      options.count            ? fmt::format("{} {}", options.count, simulation->steps_name())
+      : options.duration_s > 0 ? fmt::format("{} s", options.duration_s)
+                               : std::string("no end"));
   if (referee) {
     spdlog::info(
         "simulated game controller on {}: our team '{}', opponent '{}' ({} attacking {} "
         "in the first half), halves of {} s of data time",
-        referee_group->to_string(), game->our_name, game->opponent_name,
-        to_string(*parse_team_color(options.opponent_color)), options.opponent_attacks,
-        game->half_s);
+        referee_group->to_string(), game->config().our_name, game->config().opponent_name,
+        to_string(game->config().opponent_color), to_string(game->config().opponent_attacks),
+        game->config().half_s);
   } else {
     spdlog::info("no simulated game controller ({})",
                  options.referee ? "--referee-address none" : "--referee off");
   }
+  SimulatedFeed feed(io, options, std::move(simulation), sender, referee ? &*referee : nullptr);
   app::RepeatingTimer status(io, status_period, [&] { feed.log_summary("status"); });
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: stopping", signal);

@@ -1,7 +1,7 @@
 // --write-log: the simulated feed written straight to an official SSL log, with no network and
-// no waiting. Every packet gets the receive time its formation's t_capture gives (in ns), so the
-// file replays with the data clock's own timing and holds exactly what the live producer sends
-// for the same options: each formation's referee message (type 3), then its vision packets.
+// no waiting. Every packet gets the receive time its step's t_capture gives (in ns), so the file
+// replays with the data clock's own timing and holds exactly what the live producer sends for
+// the same options: each step's referee message (type 3), then its vision packets.
 
 #include <spdlog/spdlog.h>
 
@@ -12,63 +12,73 @@
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/log_file.hpp"
 #include "ssl_formation/producer/producer_options.hpp"
+#include "ssl_formation/producer/simulation_source.hpp"
 #include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation::producer {
 
 namespace {
 
-// Formations written between two looks at signals and timers.
-constexpr int kFormationsPerBatch = 256;
+// Steps (formations or frames) written between two looks at signals and timers.
+constexpr int kStepsPerBatch = 256;
 // Receive times are int64 nanoseconds: t_capture must stay well inside that.
 constexpr double kMaxDataTimeS = 9.0e9;
 
 }  // namespace
 
 int run_write_log(const ProducerOptions& options) {
-  const sim::SimulationConfig config = simulation_config(options);
-  if (options.count == 0) {
-    throw app::UsageError("--write-log needs --count: the number of formations to write");
-  }
-  const double last_time_s =
-      options.start_time_s + static_cast<double>(options.count) * options.step_s;
-  if (!std::isfinite(options.start_time_s) || std::abs(options.start_time_s) > kMaxDataTimeS ||
-      std::abs(last_time_s) > kMaxDataTimeS) {
+  if (options.count == 0 && !(options.duration_s > 0.0)) {
     throw app::UsageError(
-        "--start-time, --step and --count give data times beyond what a log's "
-        "nanosecond receive times can hold");
+        "--write-log needs --count (formations or frames) or --duration (seconds of data time)");
   }
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
-
-  // Checked before the file is created, as the options above: a usage error writes nothing.
-  const std::optional<sim::GameControllerConfig> game = game_controller_config(options, false);
+  // Every option is checked before the file is created: a usage error writes nothing.
+  std::unique_ptr<SimulationSource> simulation = make_simulation_source(options, true);
+  const double seconds = options.count != 0
+                             ? static_cast<double>(options.count) * simulation->step_s()
+                             : options.duration_s;
+  const double last_time_s = options.start_time_s + seconds;
+  if (!std::isfinite(options.start_time_s) || std::abs(options.start_time_s) > kMaxDataTimeS ||
+      !std::isfinite(last_time_s) || std::abs(last_time_s) > kMaxDataTimeS) {
+    throw app::UsageError(
+        "--start-time, --step, --count and --duration give data times beyond what a log's "
+        "nanosecond receive times can hold");
+  }
+  const auto done = [&](std::uint64_t steps) {
+    return (options.count != 0 && steps >= options.count) ||
+           (options.duration_s > 0.0 &&
+            static_cast<double>(steps) * simulation->step_s() >= options.duration_s - 1e-9);
+  };
 
   Result<LogWriter> writer = LogWriter::create(options.write_log);
   if (!writer) throw std::runtime_error(writer.error().message);
+  const sim::SimulatedGameController* game = simulation->game_controller();
   spdlog::info(
-      "writing simulated vision to {}: {} formations, step {} s, {} camera(s), seed {}, {}",
-      options.write_log, options.count, options.step_s, options.cameras, options.seed,
+      "writing the {} simulation to {}: {}, {} s of data time a step, {} camera(s), "
+      "seed {}, {}",
+      options.simulation, options.write_log,
+      options.count ? fmt::format("{} {}", options.count, simulation->steps_name())
+                    : fmt::format("{} s", options.duration_s),
+      simulation->step_s(), options.cameras, options.seed,
       game ? fmt::format("referee messages of our team '{}' against '{}', halves of {} s",
-                         game->our_name, game->opponent_name, game->half_s)
+                         game->config().our_name, game->config().opponent_name,
+                         game->config().half_s)
            : std::string("no referee messages (--referee off)"));
 
-  sim::RefereedSimulation simulation(config, game);
-  std::uint64_t formations = 0;
+  std::uint64_t steps = 0;
   std::uint64_t packets = 0;
   std::uint64_t referee_messages = 0;
   std::uint64_t dropped = 0;
   bool stopped = false;
   const auto started = std::chrono::steady_clock::now();
   const auto log_status = [&](const char* what) {
-    const double seconds =
+    const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     spdlog::info(
-        "{}: {} formations, {} packets and {} referee messages written ({} bytes, {} dropped by "
+        "{}: {}, {} packets and {} referee messages written ({} bytes, {} dropped by "
         "--drop-rate) to {} in {:.2f} s{}",
-        what, formations, packets, referee_messages, writer->offset(), dropped, options.write_log,
-        seconds,
-        simulation.game_controller() ? "; " + sim::describe(*simulation.game_controller())
-                                     : std::string());
+        what, simulation->describe(steps), packets, referee_messages, writer->offset(), dropped,
+        options.write_log, wall_s, game ? "; " + sim::describe(*game) : std::string());
   };
 
   // Signals and status lines through the same io_context as the other modes, polled between
@@ -80,12 +90,10 @@ int run_write_log(const ProducerOptions& options) {
     stopped = true;
   });
 
-  while (!stopped && formations < options.count) {
-    for (int i = 0; i < kFormationsPerBatch && formations < options.count; ++i) {
-      const sim::RefereedFormation step = simulation.next();
-      const sim::SimulatedFormation& formation = step.formation;
-      const auto receive_time_ns =
-          static_cast<std::int64_t>(std::llround(formation.t_capture * 1e9));
+  while (!stopped && !done(steps)) {
+    for (int i = 0; i < kStepsPerBatch && !done(steps); ++i) {
+      const SimulatedStep step = simulation->next();
+      const auto receive_time_ns = static_cast<std::int64_t>(std::llround(step.t_capture * 1e9));
       if (step.referee) {
         if (!writer->write(static_cast<std::int32_t>(LogMessageType::referee), receive_time_ns,
                            step.referee->SerializeAsString())) {
@@ -93,14 +101,14 @@ int run_write_log(const ProducerOptions& options) {
         }
         ++referee_messages;
       }
-      for (const SSL_WrapperPacket& packet : formation.packets) {
+      for (const SSL_WrapperPacket& packet : step.packets) {
         if (!writer->write_vision(packet, receive_time_ns)) {
           throw std::runtime_error(writer->error());
         }
         ++packets;
       }
-      dropped += static_cast<std::uint64_t>(formation.dropped_packets);
-      ++formations;
+      dropped += static_cast<std::uint64_t>(step.dropped_packets);
+      ++steps;
     }
     io.poll();
   }

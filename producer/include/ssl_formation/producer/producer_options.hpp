@@ -8,6 +8,7 @@
 
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/simulation/match_simulation.hpp"
 #include "ssl_formation/simulation/simulated_game_controller.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 
@@ -24,6 +25,11 @@ struct ProducerOptions {
   std::string interface = app::default_interface;
   int ttl = net::kDefaultMulticastTtl;
   // Simulation (live and --write-log).
+  std::string simulation = "paper";  // paper | match
+  std::string division = "A";        // the match simulation's: A | B
+  double frame_rate_hz = 60.0;       // the match simulation's frames per second
+  std::string playbook = "wings";    // the match simulation's: a built-in name or a file
+  double duration_s = 0.0;           // seconds of data time to simulate; 0: --count decides
   double period_s = 2.0;
   double step_s = 2.0;
   std::uint64_t count = 0;  // formations; with --replay: packets
@@ -57,10 +63,11 @@ struct ProducerOptions {
 
 // The simulation the options describe; throws app::UsageError naming the bad option.
 sim::SimulationConfig simulation_config(const ProducerOptions& options);
-// Its game controller: none with --referee off (live: also with --referee-address none, as
-// changing ends with nobody told would only mislead the daemons).
-std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOptions& options,
-                                                                bool live);
+// The match simulation the options describe (--simulation match); the game controller is set
+// apart (game_controller_config).
+sim::MatchSimulationConfig match_simulation_config(const ProducerOptions& options);
+// Its game controller: none with --referee off.
+std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOptions& options);
 
 // The three modes; each returns the exit status.
 int run_simulation(const ProducerOptions& options);  // live_feed.cpp

@@ -1,0 +1,93 @@
+#include "ssl_formation/producer/simulation_source.hpp"
+
+#include <fmt/format.h>
+
+namespace ssl_formation::producer {
+
+namespace {
+
+// The paper's simulated opponent: a formation every --step seconds, sent every --period.
+class PaperSource final : public SimulationSource {
+ public:
+  PaperSource(const ProducerOptions& options, std::optional<sim::GameControllerConfig> game)
+      : simulation_(simulation_config(options), std::move(game)), period_s_(options.period_s) {}
+
+  SimulatedStep next() override {
+    sim::RefereedFormation step = simulation_.next();
+    SimulatedStep out;
+    out.index = step.formation.index;
+    out.t_capture = step.formation.t_capture;
+    out.referee = std::move(step.referee);
+    out.packets = std::move(step.formation.packets);
+    out.dropped_packets = step.formation.dropped_packets;
+    if (step.formation.source == sim::FormationSource::play) ++play_formations_;
+    return out;
+  }
+  const char* steps_name() const override { return "formations"; }
+  double step_s() const override { return simulation_.vision().config().step_s; }
+  double live_period_s() const override { return period_s_; }
+  std::string describe(std::uint64_t steps) const override {
+    const double total = static_cast<double>(steps ? steps : 1);
+    return fmt::format("{} formations ({} from plays = {:.1f}%, {} random = {:.1f}%)", steps,
+                       play_formations_, 100.0 * play_formations_ / total, steps - play_formations_,
+                       100.0 * (steps - play_formations_) / total);
+  }
+  const sim::SimulatedGameController* game_controller() const override {
+    return simulation_.game_controller();
+  }
+
+ private:
+  sim::RefereedSimulation simulation_;
+  double period_s_;
+  std::uint64_t play_formations_ = 0;
+};
+
+// The match: 60 frames a second of a team running its playbook, sent in real time.
+class MatchSource final : public SimulationSource {
+ public:
+  explicit MatchSource(sim::MatchSimulationConfig config) : match_(std::move(config)) {}
+
+  SimulatedStep next() override {
+    sim::MatchFrame frame = match_.next();
+    SimulatedStep out;
+    out.index = frame.index;
+    out.t_capture = frame.t_capture;
+    out.referee = std::move(frame.referee);
+    out.packets = std::move(frame.packets);
+    out.dropped_packets = frame.dropped_packets;
+    return out;
+  }
+  const char* steps_name() const override { return "frames"; }
+  double step_s() const override { return 1.0 / match_.config().frame_rate_hz; }
+  double live_period_s() const override { return step_s(); }
+  std::string describe(std::uint64_t steps) const override {
+    return fmt::format("{} frames ({:.1f} s of match), {} plays, {} passes, {} shots, {} goals",
+                       steps, static_cast<double>(steps) * step_s(), match_.plays_started(),
+                       match_.passes(), match_.shots(), match_.goals());
+  }
+  const sim::SimulatedGameController* game_controller() const override {
+    return match_.game_controller();
+  }
+
+ private:
+  sim::MatchSimulation match_;
+};
+
+}  // namespace
+
+std::unique_ptr<SimulationSource> make_simulation_source(const ProducerOptions& options,
+                                                         bool with_referee) {
+  std::optional<sim::GameControllerConfig> game =
+      with_referee ? game_controller_config(options) : std::nullopt;
+  if (options.simulation == "paper") {
+    return std::make_unique<PaperSource>(options, std::move(game));
+  }
+  if (options.simulation == "match") {
+    sim::MatchSimulationConfig config = match_simulation_config(options);
+    config.game = std::move(game);
+    return std::make_unique<MatchSource>(std::move(config));
+  }
+  throw app::UsageError("--simulation must be paper or match, not '" + options.simulation + "'");
+}
+
+}  // namespace ssl_formation::producer
