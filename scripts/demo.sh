@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
-# Runs the whole system on this machine's loopback: ssl-producer sends the paper's simulated
-# opponent with a game controller's referee messages (or replays a recorded match with
-# --replay), ssl-trainer learns the table, ssl-predictor predicts and prints one line per
-# prediction (a prediction at every frame). Stops all three on Ctrl-C or after --duration seconds.
+# Runs the whole system on this machine's loopback: ssl-producer simulates a match (an
+# opponent running a playbook at 60 frames a second, our team marking it, a game controller's
+# referee messages), ssl-trainer learns the tables, ssl-predictor predicts and prints one line
+# per prediction (a prediction at every frame). Stops all three on Ctrl-C or after --duration
+# seconds.
 #
-#   scripts/demo.sh [--duration SECONDS] [--period SECONDS] [--grid LxW] [--horizon N]
-#                   [--cameras N] [--keep-table] [--http-port PORT] [--replay LOG] [--model M]
+#   scripts/demo.sh [--duration SECONDS] [--simulation match|paper] [--replay LOG] [--model M]
+#                   [--grid LxW] [--horizon N] [--cameras N] [--period SECONDS] [--keep-table]
+#                   [--http-port PORT]
 #
-# The paper's simulated opponent jumps from formation to formation every 2 s of data time, so
-# the demo runs the paper's model on it (--model paper). The daemons are told only our team's
-# name, as at a tournament: the referee gives the opponent's colour and side (the teams change
-# ends at half time, every 300 s of data time: 15 s of the demo) and learning happens in running
-# play only. --replay LOG (an official log of a real or simulated match, e.g.
-# ../shared/data/grsim-match-A-600s.log.gz, yellow attacking +x) loops the recording instead and
-# runs the motion model, the daemons' default.
+# The daemons are told only our team's name, as at a tournament: the referee gives the
+# opponent's colour and side (the teams change ends at half time, every 5 minutes) and learning
+# happens in running play only. The demo runs the motion model, the daemons' default.
+# --simulation paper sends the paper's simulated opponent instead, jumping from formation to
+# formation every 2 s of data time (one every --period s of wall time), with the paper's model.
+# --replay LOG (an official log of a real or simulated match, e.g.
+# ../shared/data/grsim-match-A-600s.log.gz, yellow attacking +x) loops the recording instead.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -26,7 +28,8 @@ keep_table=0
 http_port=8080
 replay=""
 model=""
-usage() { sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; }
+simulation=match
+usage() { sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --duration) duration="$2"; shift 2 ;;
@@ -38,6 +41,7 @@ while [ $# -gt 0 ]; do
     --http-port) http_port="$2"; shift 2 ;;
     --replay) replay="$2"; shift 2 ;;
     --model) model="$2"; shift 2 ;;
+    --simulation) simulation="$2"; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "demo.sh: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
@@ -47,8 +51,12 @@ if [ -n "$replay" ]; then
   [ -f "$replay" ] || { echo "demo.sh: no such log: $replay" >&2; exit 2; }
   replay="$(cd "$(dirname "$replay")" && pwd)/$(basename "$replay")"
   model="${model:-motion}"
-else
+elif [ "$simulation" = paper ]; then
   model="${model:-paper}"
+elif [ "$simulation" = match ]; then
+  model="${model:-motion}"
+else
+  echo "demo.sh: --simulation must be match or paper, not '$simulation'" >&2; exit 2
 fi
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
@@ -101,8 +109,11 @@ done
 if [ -n "$replay" ]; then
   "$build_dir/producer/ssl-producer" --vision-address "$vision" --replay "$replay" --loop \
     2>"$run_dir/producer.log" &
-else
+elif [ "$simulation" = paper ]; then
   "$build_dir/producer/ssl-producer" --vision-address "$vision" --period "$period" \
+    --cameras "$cameras" --our-team ssl-formation 2>"$run_dir/producer.log" &
+else
+  "$build_dir/producer/ssl-producer" --simulation match --vision-address "$vision" \
     --cameras "$cameras" --our-team ssl-formation 2>"$run_dir/producer.log" &
 fi
 pids+=($!)
@@ -110,8 +121,11 @@ pids+=($!)
 echo "Live field view: open http://127.0.0.1:$http_port/"
 if [ -n "$replay" ]; then
   source_line="Replaying $replay in a loop; the $model model, grid $grid."
+elif [ "$simulation" = paper ]; then
+  source_line="The paper's simulated opponent: one formation every $period s (2 s of data time each), grid $grid, $cameras cameras; the $model model.
+The referee (224.5.23.1:10003) names our team 'ssl-formation' and the opponent; the teams change ends at half time."
 else
-  source_line="One formation every $period s (2 s of data time each), grid $grid, $cameras cameras; the $model model.
+  source_line="A simulated match (Division A, the 'wings' playbook), 60 frames a second on $cameras cameras; the $model model, grid $grid.
 The referee (224.5.23.1:10003) names our team 'ssl-formation' and the opponent; the teams change ends at half time."
 fi
 cat <<EOT
