@@ -62,6 +62,7 @@ void PredictionPipeline::start_new_stream() {
   sampler_.start_new_stream();
   motion_history_.clear();
   online_calibration_.clear();
+  live_score_.clear();
   last_sample_ = nullptr;
   match_.reset();
   follow_opponent();
@@ -107,6 +108,7 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
     motion_history_.add(sample.formation);
     if (config_.recalibration) online_calibration_.observe(sample.formation);
   }
+  live_score_.observe(sample.formation);
   last_sample_ = &sample;
   // Holds the table for the handler's call even if the handler sets another one: the context
   // points into it.
@@ -120,6 +122,7 @@ void PredictionPipeline::on_sample(const FormationSample& sample) {
                                  sample.formation.opponent_attacks);
     online_calibration_.adjust(prediction_);
   }
+  live_score_.remember(prediction_, sample.formation, config_.sampler.step_s);
   ++predictions_;
   if (on_prediction_) on_prediction_(PredictedFormation{sample, prediction_, context_});
 }

@@ -211,6 +211,7 @@ class PredictorDaemon {
     status.opponent = describe(pipeline_.match().opponent(), pipeline_.sampler().attacks());
     status.game_state = std::string(to_string(pipeline_.match().game_state()));
     status.referee = describe(pipeline_.match().referee());
+    status.live_score = pipeline_.live_score().horizons();
     web_->broadcast(web::MessageKind::status, web::status_json(status));
   }
 
@@ -275,11 +276,11 @@ class PredictorDaemon {
   void log_status() {
     const auto& c = pipeline_.sampler().counters();
     spdlog::info(
-        "status: {}{} formations={} predictions={} sent={} warm_ups={} table_reloads={} attacks={} "
-        "{} | {}",
+        "status: {}{} formations={} predictions={} sent={} warm_ups={} table_reloads={}{} "
+        "attacks={} {} | {}",
         app::describe_reception(receiver_), app::describe_tracked(tracked_ ? &*tracked_ : nullptr),
-        c.samples, pipeline_.predictions(), sender_.sent(),
-        warm_ups_, watcher_.reloads(),
+        c.samples, pipeline_.predictions(), sender_.sent(), warm_ups_, watcher_.reloads(),
+        describe_for_status(pipeline_.live_score()),
         app::describe_attacks(pipeline_.sampler().attacks(),
                               pipeline_.match().opponent().attacks_because),
         app::describe_referee_counts(pipeline_.match()), describe_rejections(c));

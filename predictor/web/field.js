@@ -361,6 +361,16 @@
       $('status-game').textContent = s.match.referee === 'no referee heard'
         ? 'no referee heard' : `${s.match.game_state.replace(/_/g, ' ')} · ${s.match.referee}`;
     }
+    if (Array.isArray(s.live_score)) {
+      // How far the predictions lately were, against everyone staying where they were.
+      $('status-live-score').textContent = s.live_score.length ?
+          s.live_score
+              .map(
+                  (h) => `${fmt(h.horizon_s, 1)} s ahead: ${Math.round(h.model_mm)} mm ` +
+                      `(everyone stays: ${Math.round(h.persistence_mm)} mm)`)
+              .join(' · ') :
+          'nothing checked yet';
+    }
     $('status-packets').textContent = `${fmt(s.packets_per_s, 1)} packets/s (${s.packets} in all)`;
     $('status-last-packet').textContent = since === null ? 'never' : `${since.toFixed(1)} s ago`;
     $('status-parse-errors').textContent = `${s.parse_errors}` + (s.kernel_drops ? ` · ${s.kernel_drops} kernel drops` : '');

@@ -248,6 +248,13 @@ std::string status_json(const FieldViewStatus& status) {
   write_ours(json, status.ours);
   json.key("match").open('{').key("opponent").string(status.opponent);
   json.key("game_state").string(status.game_state).key("referee").string(status.referee).close('}');
+  json.key("live_score").open('[');
+  for (const LiveScore::Horizon& h : status.live_score) {
+    if (h.robots <= 0.0) continue;
+    json.open('{').key("horizon_s").number(h.horizon_s).key("model_mm").number(h.model_mm);
+    json.key("persistence_mm").number(h.persistence_mm).key("robots").number(h.robots).close('}');
+  }
+  json.close(']');
   json.close('}');
   return json.take();
 }

@@ -11,6 +11,7 @@
 #include "formation_prediction.pb.h"
 #include "ssl_formation/formation.hpp"
 #include "ssl_formation/grid.hpp"
+#include "ssl_formation/live_score.hpp"
 #include "team_robots.hpp"
 
 namespace ssl_formation::predictor::web {
@@ -68,6 +69,8 @@ struct FieldViewStatus {
   // Who the opponent is and why, and the game state (MatchFollower).
   std::string opponent;  // describe(Opponent, side in use): "'Them' blue (referee), attacks ..."
   std::string game_state = "unknown";
+  // How far the predictions have lately been, against everyone staying (LiveScore), per step.
+  std::vector<LiveScore::Horizon> live_score;
   std::string referee = "no referee heard";  // describe(RefereeFollower)
 };
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 
+#include "ssl_formation/live_score.hpp"
 #include "ssl_formation/match.hpp"
 #include "ssl_formation/motion_predictor.hpp"
 #include "ssl_formation/online_calibration.hpp"
@@ -82,6 +83,8 @@ class PredictionPipeline {
   const MatchFollower& match() const { return match_; }
   std::uint64_t predictions() const { return predictions_; }
   std::uint64_t samples_without_table() const { return samples_without_table_; }
+  // How far the predictions have lately been, against "everyone stays" (LiveScore).
+  const LiveScore& live_score() const { return live_score_; }
 
  private:
   void on_sample(const FormationSample& sample);
@@ -98,6 +101,7 @@ class PredictionPipeline {
   MotionModel::Cache motion_cache_;
   MotionHistory motion_history_;
   OnlineCalibration online_calibration_;
+  LiveScore live_score_;
   FormationSampler sampler_;
   MatchFollower match_;
   // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
