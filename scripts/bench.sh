@@ -89,6 +89,18 @@ if [ -n "${SSLF_BENCH_RECORDING:-}" ]; then
     "$(items BM_OfflineTrainingRecordedAsOneCameraHalves "$work/log.csv")" ">= 1000000"
 fi
 
+# The match simulation written as fast as it goes: 600 simulated seconds of Division A (22
+# robots, 4 cameras, 60 Hz), simulated seconds per wall second, median of three seeds.
+match_rates=()
+for seed in 1 2 3; do
+  started=$(date +%s.%N)
+  "$build_dir/producer/ssl-producer" --simulation match --write-log "$work/match.log" \
+    --duration 600 --cameras 4 --seed "$seed" 2>/dev/null
+  match_rates+=("$(awk -v s="$started" -v e="$(date +%s.%N)" 'BEGIN { printf "%.0f", 600 / (e - s) }')")
+done
+row "match simulation written, simulated s per wall s" \
+  "$(printf '%s\n' "${match_rates[@]}" | sort -n | sed -n 2p)" ">= 50"
+
 # The paper table's memory per grid, on the paper's simulated opponent.
 "$build_dir/predictor/ssl-evaluate" grid-sweep --model paper --output-dir "$work" 2>/dev/null >/dev/null
 while IFS=, read -r grid states transitions memory prediction _; do
