@@ -116,7 +116,7 @@ MatchSimulation::MatchSimulation(MatchSimulationConfig config)
       team_size_(team_size_of(config_.division)),
       random_(config_.seed),
       robots_(within_boundary(config_.limits, field_), line_up(field_, team_size_)),
-      next_geometry_s_(config_.start_time_s) {
+      geometry_(config_.geometry_interval_s) {
   if (config_.playbook.plays.empty()) throw std::invalid_argument("the playbook has no plays");
   if (!(config_.frame_rate_hz > 0.0) || !std::isfinite(config_.frame_rate_hz)) {
     throw std::invalid_argument("the frame rate must be positive");
@@ -614,11 +614,7 @@ MatchFrame MatchSimulation::next() {
 }
 
 void MatchSimulation::build_packets(MatchFrame& frame) {
-  if (!geometry_sent_ || frame.t_capture >= next_geometry_s_) {
-    frame.packets.push_back(make_geometry_packet(field_));
-    geometry_sent_ = true;
-    next_geometry_s_ = frame.t_capture + config_.geometry_interval_s;
-  }
+  if (geometry_.due(frame.t_capture)) frame.packets.push_back(make_geometry_packet(field_));
   std::normal_distribution<double> jitter(0.0, config_.jitter_mm > 0 ? config_.jitter_mm : 1.0);
   const auto observe = [&](Point normalised) {
     Point feed = normalise(normalised, attacks_);
@@ -634,40 +630,19 @@ void MatchSimulation::build_packets(MatchFrame& frame) {
     opponent_feed.push_back(observe(frame.opponent[static_cast<std::size_t>(id)]));
     ours_feed.push_back(observe(frame.ours[static_cast<std::size_t>(id)]));
   }
-  const Point ball = observe(frame.ball);
+  SeenInstant instant;
+  instant.frame_number = frame.frame_number;
+  instant.t_capture = frame.t_capture;
+  instant.opponent_color = config_.opponent_color;
+  instant.opponent = opponent_feed;
+  instant.ours = ours_feed;
+  instant.ball = observe(frame.ball);
   // Each team faces the goal it attacks.
-  const float opponent_facing =
+  instant.opponent_facing =
       attacks_ == AttackDirection::positive_x ? 0.0F : static_cast<float>(kPi);
-  const float our_facing = opponent_facing == 0.0F ? static_cast<float>(kPi) : 0.0F;
-
-  std::bernoulli_distribution dropped(config_.drop_rate);
-  for (int camera = 0; camera < config_.cameras; ++camera) {
-    const SimulatedVision::Area area =
-        SimulatedVision::camera_area(camera, config_.cameras, field_, config_.camera_overlap_mm);
-    DetectionFrameSpec spec;
-    spec.camera_id = static_cast<std::uint32_t>(camera);
-    spec.frame_number = frame.frame_number;
-    spec.t_capture = frame.t_capture;
-    spec.t_sent = frame.t_capture + 0.004;  // processing latency, as SSL-Vision reports
-    std::vector<RobotDetection>& opponent =
-        config_.opponent_color == TeamColor::yellow ? spec.yellow : spec.blue;
-    std::vector<RobotDetection>& ours =
-        config_.opponent_color == TeamColor::yellow ? spec.blue : spec.yellow;
-    for (int id = 0; id < team_size_; ++id) {
-      const auto i = static_cast<std::size_t>(id);
-      const auto robot_id = static_cast<std::uint32_t>(id);
-      if (area.contains(opponent_feed[i])) {
-        opponent.push_back({robot_id, opponent_feed[i], opponent_facing, 0.92F});
-      }
-      if (area.contains(ours_feed[i])) ours.push_back({robot_id, ours_feed[i], our_facing, 0.92F});
-    }
-    if (area.contains(ball)) spec.balls.push_back(ball);
-    if (config_.drop_rate > 0 && dropped(random_)) {
-      ++frame.dropped_packets;
-      continue;
-    }
-    frame.packets.push_back(make_detection_packet(spec));
-  }
+  instant.our_facing = instant.opponent_facing == 0.0F ? static_cast<float>(kPi) : 0.0F;
+  const CameraLayout layout{config_.cameras, field_, config_.camera_overlap_mm, config_.drop_rate};
+  frame.dropped_packets += append_camera_packets(layout, instant, random_, frame.packets);
 }
 
 }  // namespace ssl_formation::sim

@@ -49,7 +49,7 @@ const TeamPositions& play_formation(int play, int formation) {
 const char* play_name(int play) { return play_names.at(static_cast<std::size_t>(play)); }
 
 SimulatedVision::SimulatedVision(SimulationConfig config)
-    : config_(config), random_(config.seed), next_geometry_s_(config.start_time_s) {
+    : config_(config), random_(config.seed), geometry_(config.geometry_interval_s) {
   if (config_.cameras < 1 || config_.cameras > 8) {
     throw std::invalid_argument("cameras must be between 1 and 8");
   }
@@ -132,10 +132,8 @@ SimulatedFormation SimulatedVision::next() {
 }
 
 void SimulatedVision::build_packets(SimulatedFormation& formation) {
-  if (!geometry_sent_ || formation.t_capture >= next_geometry_s_) {
+  if (geometry_.due(formation.t_capture)) {
     formation.packets.push_back(make_geometry_packet(config_.field));
-    geometry_sent_ = true;
-    next_geometry_s_ = formation.t_capture + config_.geometry_interval_s;
   }
 
   std::normal_distribution<double> jitter(0.0, config_.jitter_mm > 0 ? config_.jitter_mm : 1.0);
@@ -159,33 +157,56 @@ void SimulatedVision::build_packets(SimulatedFormation& formation) {
   // The ball is at the feet of the opponent's most advanced robot.
   const auto leader = std::max_element(formation.opponent.begin(), formation.opponent.end(),
                                        [](const Point& a, const Point& b) { return a.x < b.x; });
-  const Point ball = normalise(Point{leader->x + 100.0, leader->y}, config_.opponent_attacks);
+  SeenInstant instant;
+  instant.frame_number = formation.frame_number;
+  instant.t_capture = formation.t_capture;
+  instant.opponent_color = config_.opponent_color;
+  instant.opponent = opponent_feed;
+  instant.ours = ours_feed;
+  instant.opponent_facing = 0.0F;
+  instant.our_facing = 3.14F;
+  instant.ball = normalise(Point{leader->x + 100.0, leader->y}, config_.opponent_attacks);
+  const CameraLayout layout{config_.cameras, config_.field, config_.camera_overlap_mm,
+                            config_.drop_rate};
+  formation.dropped_packets += append_camera_packets(layout, instant, random_, formation.packets);
+}
 
-  std::bernoulli_distribution dropped(config_.drop_rate);
-  for (int camera = 0; camera < config_.cameras; ++camera) {
-    const Area area =
-        camera_area(camera, config_.cameras, config_.field, config_.camera_overlap_mm);
+int append_camera_packets(const CameraLayout& layout, const SeenInstant& instant,
+                          std::mt19937_64& random, std::vector<SSL_WrapperPacket>& packets) {
+  int dropped = 0;
+  std::bernoulli_distribution lost(layout.drop_rate);
+  for (int camera = 0; camera < layout.cameras; ++camera) {
+    const SimulatedVision::Area area =
+        SimulatedVision::camera_area(camera, layout.cameras, layout.field, layout.overlap_mm);
     DetectionFrameSpec spec;
     spec.camera_id = static_cast<std::uint32_t>(camera);
-    spec.frame_number = formation.frame_number;
-    spec.t_capture = formation.t_capture;
-    spec.t_sent = formation.t_capture + 0.004;  // processing latency, as SSL-Vision reports
+    spec.frame_number = instant.frame_number;
+    spec.t_capture = instant.t_capture;
+    spec.t_sent = instant.t_capture + 0.004;  // processing latency, as SSL-Vision reports
     std::vector<RobotDetection>& opponent =
-        config_.opponent_color == TeamColor::yellow ? spec.yellow : spec.blue;
+        instant.opponent_color == TeamColor::yellow ? spec.yellow : spec.blue;
     std::vector<RobotDetection>& ours =
-        config_.opponent_color == TeamColor::yellow ? spec.blue : spec.yellow;
-    for (std::uint32_t id = 0; id < robots_per_team; ++id) {
-      if (area.contains(opponent_feed[id]))
-        opponent.push_back({id, opponent_feed[id], 0.0F, 0.92F});
-      if (area.contains(ours_feed[id])) ours.push_back({id, ours_feed[id], 3.14F, 0.92F});
+        instant.opponent_color == TeamColor::yellow ? spec.blue : spec.yellow;
+    for (std::size_t i = 0; i < instant.opponent.size(); ++i) {
+      const auto id = static_cast<std::uint32_t>(i);
+      if (area.contains(instant.opponent[i])) {
+        opponent.push_back({id, instant.opponent[i], instant.opponent_facing, 0.92F});
+      }
     }
-    if (area.contains(ball)) spec.balls.push_back(ball);
-    if (config_.drop_rate > 0 && dropped(random_)) {
-      ++formation.dropped_packets;
+    for (std::size_t i = 0; i < instant.ours.size(); ++i) {
+      const auto id = static_cast<std::uint32_t>(i);
+      if (area.contains(instant.ours[i])) {
+        ours.push_back({id, instant.ours[i], instant.our_facing, 0.92F});
+      }
+    }
+    if (area.contains(instant.ball)) spec.balls.push_back(instant.ball);
+    if (layout.drop_rate > 0 && lost(random)) {
+      ++dropped;
       continue;
     }
-    formation.packets.push_back(make_detection_packet(spec));
+    packets.push_back(make_detection_packet(spec));
   }
+  return dropped;
 }
 
 }  // namespace ssl_formation::sim

@@ -42,6 +42,18 @@ FeedSettings feed_settings(const ProducerOptions& options) {
   return feed;
 }
 
+// Both simulations' configs name these settings alike.
+template <class Config>
+void apply_feed_settings(const ProducerOptions& options, Config& config) {
+  const FeedSettings feed = feed_settings(options);
+  config.cameras = feed.cameras;
+  config.camera_overlap_mm = feed.camera_overlap_mm;
+  config.jitter_mm = feed.jitter_mm;
+  config.drop_rate = feed.drop_rate;
+  config.opponent_color = feed.opponent_color;
+  config.opponent_attacks = feed.opponent_attacks;
+}
+
 }  // namespace
 
 sim::SimulationConfig simulation_config(const ProducerOptions& options) {
@@ -50,13 +62,7 @@ sim::SimulationConfig simulation_config(const ProducerOptions& options) {
   if (!(options.step_s > 0.0)) throw app::UsageError("--step must be a positive number of seconds");
   config.step_s = options.step_s;
   config.start_time_s = options.start_time_s;
-  const FeedSettings feed = feed_settings(options);
-  config.cameras = feed.cameras;
-  config.camera_overlap_mm = feed.camera_overlap_mm;
-  config.jitter_mm = feed.jitter_mm;
-  config.drop_rate = feed.drop_rate;
-  config.opponent_color = feed.opponent_color;
-  config.opponent_attacks = feed.opponent_attacks;
+  apply_feed_settings(options, config);
   config.field = FieldSize{options.field_length_mm, options.field_width_mm};
   if (!config.field.valid())
     throw app::UsageError("--field-length and --field-width must be positive");
@@ -78,13 +84,7 @@ sim::MatchSimulationConfig match_simulation_config(const ProducerOptions& option
   }
   config.frame_rate_hz = options.frame_rate_hz;
   config.start_time_s = options.start_time_s;
-  const FeedSettings feed = feed_settings(options);
-  config.cameras = feed.cameras;
-  config.camera_overlap_mm = feed.camera_overlap_mm;
-  config.jitter_mm = feed.jitter_mm;
-  config.drop_rate = feed.drop_rate;
-  config.opponent_color = feed.opponent_color;
-  config.opponent_attacks = feed.opponent_attacks;
+  apply_feed_settings(options, config);
   // A built-in playbook by name, else a file.
   Result<sim::Playbook> playbook =
       sim::builtin_playbook_text(options.playbook)

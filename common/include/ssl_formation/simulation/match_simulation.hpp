@@ -23,6 +23,7 @@
 #include "ssl_formation/simulation/playbook.hpp"
 #include "ssl_formation/simulation/robot_motion.hpp"
 #include "ssl_formation/simulation/simulated_game_controller.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::sim {
@@ -162,8 +163,7 @@ class MatchSimulation {
 
   std::uint64_t frames_ = 0;
   std::uint32_t frame_number_ = 0;
-  double next_geometry_s_ = 0.0;
-  bool geometry_sent_ = false;
+  GeometrySchedule geometry_;
   std::uint64_t plays_started_ = 0;
   std::uint64_t passes_ = 0;
   std::uint64_t shots_ = 0;

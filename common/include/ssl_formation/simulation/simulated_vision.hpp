@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "ssl_formation/formation.hpp"
@@ -57,6 +58,51 @@ struct SimulatedFormation {
   int dropped_packets = 0;
 };
 
+// What a simulation's instant looks like to SSL-Vision's cameras, in the feed's coordinates.
+struct SeenInstant {
+  std::uint32_t frame_number = 0;
+  double t_capture = 0.0;
+  TeamColor opponent_color = TeamColor::yellow;
+  std::span<const Point> opponent;  // by robot id
+  std::span<const Point> ours;      // by robot id
+  float opponent_facing = 0.0F;
+  float our_facing = 0.0F;
+  Point ball;
+};
+
+struct CameraLayout {
+  int cameras = 1;
+  FieldSize field{9000.0, 6000.0};
+  double overlap_mm = 200.0;
+  double drop_rate = 0.0;  // probability that a camera's packet is lost
+};
+
+// Appends one detection packet per camera of `layout` to `packets`: the robots and the ball in
+// its area (overlaps seen twice), each packet lost with the drop rate (drawn from `random` once
+// a packet is built, camera by camera). Returns how many were lost. Both simulations' packets
+// come from here.
+int append_camera_packets(const CameraLayout& layout, const SeenInstant& instant,
+                          std::mt19937_64& random, std::vector<SSL_WrapperPacket>& packets);
+
+// SSL-Vision sends its geometry now and then: at the first instant, then once `interval_s` has
+// passed since the last.
+class GeometrySchedule {
+ public:
+  explicit GeometrySchedule(double interval_s) : interval_s_(interval_s) {}
+  // Whether a geometry packet goes with the instant at `t_s` (and, if so, it counts as sent).
+  bool due(double t_s) {
+    if (sent_ && t_s < next_s_) return false;
+    sent_ = true;
+    next_s_ = t_s + interval_s_;
+    return true;
+  }
+
+ private:
+  double interval_s_;
+  double next_s_ = 0.0;
+  bool sent_ = false;
+};
+
 class SimulatedVision {
  public:
   explicit SimulatedVision(SimulationConfig config);
@@ -90,8 +136,7 @@ class SimulatedVision {
   std::mt19937_64 random_;
   std::uint64_t formations_ = 0;
   std::uint32_t frame_number_ = 0;
-  double next_geometry_s_ = 0.0;
-  bool geometry_sent_ = false;
+  GeometrySchedule geometry_;
   int current_play_ = -1;  // -1: the next formation starts a new cycle
   int current_step_ = 0;
 };
