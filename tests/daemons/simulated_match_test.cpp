@@ -156,8 +156,9 @@ std::map<std::string, double> mean_errors(const std::filesystem::path& csv, doub
 
 TEST(SimulatedMatch, TheMotionModelTrainedOnOneMatchBeatsTheBaselinesOnAnotherAtOneSecond) {
   TempDir dir;
+  // Ten simulated minutes to train on, as the issue asks; Division B keeps the test short.
   write_match(dir, "train.log",
-              {"--duration", "300", "--division", "B", "--cameras", "2", "--seed", "1"});
+              {"--duration", "600", "--division", "B", "--cameras", "2", "--seed", "1"});
   write_match(dir, "test.log",
               {"--duration", "120", "--division", "B", "--cameras", "2", "--seed", "2"});
   const auto evaluated =
@@ -169,7 +170,7 @@ TEST(SimulatedMatch, TheMotionModelTrainedOnOneMatchBeatsTheBaselinesOnAnotherAt
   ASSERT_EQ(evaluated.exit_code, 0) << evaluated.err;
   const auto errors = mean_errors(dir / "holdout-accuracy.csv", 1.0);
   ASSERT_EQ(errors.size(), 4u) << evaluated.out;
-  // Generous margins: 168 mm against 300 (persistence) and 192 (constant velocity) when written.
+  // Generous margins: 165 mm against 300 (persistence) and 192 (constant velocity) when written.
   EXPECT_LT(errors.at("model"), 0.8 * errors.at("persistence")) << evaluated.out;
   EXPECT_LT(errors.at("model"), 0.97 * errors.at("constant velocity")) << evaluated.out;
 }
