@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
     general.add_options()
         ("status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
          "seconds between status lines on stderr")
-        ("verbose", po::bool_switch(&o.verbose), "log every formation sent");
+        ("verbose", po::bool_switch(&o.verbose), "log every formation or frame sent");
     // clang-format on
     sf::app::add_daemon_options(general, o.daemon);
     general.add(network).add(simulation).add(game).add(logs);

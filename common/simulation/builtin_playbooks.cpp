@@ -1,7 +1,8 @@
 // The playbooks ssl-producer has built in, in the same format a team writes its own in (see
-// playbook.hpp). Roles by robot id, so that Division B's six (ids 0 to 5) still make a team:
+// playbook.hpp). Roles by robot id, the first six making Division B's team:
 //   0 goalkeeper, 1 and 2 centre backs, 3 midfielder, 4 left wing, 5 striker,
 //   6 right wing, 7 right back, 8 left back, 9 second striker, 10 holding midfielder.
+// In Division B a pass to robots 6 to 10 goes to the robot whose target is nearest to theirs.
 
 #include <array>
 #include <utility>

@@ -115,6 +115,9 @@ MatchSimulation::MatchSimulation(MatchSimulationConfig config)
       field_(field_of(config_.division)),
       team_size_(team_size_of(config_.division)),
       random_(config_.seed),
+      // The vision's noise and drops draw from a stream of their own: with and without them,
+      // a seed plays the same match.
+      noise_random_(config_.seed ^ 0x5bd1e995a5a5a5a5ULL),
       robots_(within_boundary(config_.limits, field_), line_up(field_, team_size_)),
       geometry_(config_.geometry_interval_s) {
   if (config_.playbook.plays.empty()) throw std::invalid_argument("the playbook has no plays");
@@ -129,6 +132,10 @@ MatchSimulation::MatchSimulation(MatchSimulationConfig config)
   }
   if (!(config_.jitter_mm >= 0.0) || !std::isfinite(config_.jitter_mm)) {
     throw std::invalid_argument("jitter must be a finite, non-negative number of millimetres");
+  }
+  if (!(config_.position_variation >= 0.0 && config_.position_variation <= 0.5) ||
+      !(config_.timing_variation >= 0.0 && config_.timing_variation < 1.0)) {
+    throw std::invalid_argument("play variation: positions 0 to 0.5, timing 0 to under 1");
   }
   if (!(config_.loose_play_min_s >= 0.0) ||
       !(config_.loose_play_max_s >= config_.loose_play_min_s)) {
@@ -216,9 +223,8 @@ void MatchSimulation::aim_at_step() {
     ball_.receiver = -1;
     ball_.shot = true;
     ++shots_;
-  } else if (step.ball_robot && *step.ball_robot < static_cast<std::uint32_t>(team_size_) &&
-             static_cast<int>(*step.ball_robot) != ball_.holder) {
-    const int receiver = static_cast<int>(*step.ball_robot);
+  } else if (step.ball_robot && receiver_for(step) != ball_.holder) {
+    const int receiver = receiver_for(step);
     if (ball_.holder >= 0) {
       ball_.holder = -1;
       ball_.rolling = true;
@@ -228,6 +234,27 @@ void MatchSimulation::aim_at_step() {
     // to fetch.
     ball_.receiver = receiver;
   }
+}
+
+int MatchSimulation::receiver_for(const PlayStep& step) const {
+  const auto id = *step.ball_robot;
+  if (id < static_cast<std::uint32_t>(team_size_)) return static_cast<int>(id);
+  // A robot the division does not field (Division B has ids 0 to 5): the pass goes to the
+  // field player whose target is nearest to where it would have been.
+  Point meant = play_targets_[1];
+  for (const PlayTarget& target : step.targets) {
+    if (target.robot_id == id) meant = on_field(target.position);
+  }
+  int nearest = 1;
+  double best = 1e18;
+  for (int i = 1; i < team_size_; ++i) {
+    const double d = length(minus(play_targets_[static_cast<std::size_t>(i)], meant));
+    if (d < best) {
+      best = d;
+      nearest = i;
+    }
+  }
+  return nearest;
 }
 
 void MatchSimulation::advance_play(double now_s) {
@@ -258,8 +285,8 @@ void MatchSimulation::restart(double now_s) {
   // Wide: a free kick, the ball placed where the play's taker starts.
   start_play(now_s, PlayRestart::free_kick);
   const PlayStep& first = config_.playbook.plays[play_].steps.front();
-  if (first.ball_robot && *first.ball_robot < static_cast<std::uint32_t>(team_size_)) {
-    const Point taker = play_targets_[*first.ball_robot];
+  if (first.ball_robot) {
+    const Point taker = play_targets_[static_cast<std::size_t>(receiver_for(first))];
     ball_.position = Point{taker.x + kBallAheadMm, taker.y};
   } else {
     ball_.position = on_field(Point{0.9, 0.9});
@@ -319,9 +346,9 @@ void MatchSimulation::update_targets() {
       }
       if (kickoff_by_opponent_) {
         const PlayStep& first = config_.playbook.plays[play_].steps.front();
-        if (first.ball_robot && *first.ball_robot > 0 &&
-            *first.ball_robot < static_cast<std::uint32_t>(team_size_)) {
-          targets_[*first.ball_robot] = Point{-kBallAheadMm - 100.0, 0.0};
+        if (first.ball_robot) {
+          targets_[static_cast<std::size_t>(receiver_for(first))] =
+              Point{-kBallAheadMm - 100.0, 0.0};
         }
       } else {
         targets_[static_cast<std::size_t>(2 * team_size_ - 1)] = Point{kBallAheadMm + 100.0, 0.0};
@@ -424,8 +451,8 @@ void MatchSimulation::call_stoppage(double now_s) {
     holding_play_ = true;
     const PlayStep& first = config_.playbook.plays[play_].steps.front();
     Point spot = on_field(Point{0.9, ball_.position.y < 0 ? -0.9 : 0.9});
-    if (first.ball_robot && *first.ball_robot < static_cast<std::uint32_t>(team_size_)) {
-      const Point taker = play_targets_[*first.ball_robot];
+    if (first.ball_robot) {
+      const Point taker = play_targets_[static_cast<std::size_t>(receiver_for(first))];
       spot = inside_field(Point{taker.x + kBallAheadMm, taker.y});
     }
     game_->stop_for_ball_out(config_.opponent_color, now_s, normalise(spot, attacks_));
@@ -543,6 +570,9 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
     }
     case GameState::running:
     case GameState::free_kick: {
+      // A placement cut short (the game controller waits 30 s at most): the free kick is taken
+      // where the ball was to be placed, as a referee would put it there.
+      if (mode_ == Mode::ball_placement) ball_.position = placement_;
       const bool ours_to_take = *state == GameState::free_kick
                                     ? !for_opponent
                                     : message.command() == Referee::NORMAL_START &&
@@ -619,8 +649,8 @@ void MatchSimulation::build_packets(MatchFrame& frame) {
   const auto observe = [&](Point normalised) {
     Point feed = normalise(normalised, attacks_);
     if (config_.jitter_mm > 0) {
-      feed.x += jitter(random_);
-      feed.y += jitter(random_);
+      feed.x += jitter(noise_random_);
+      feed.y += jitter(noise_random_);
     }
     return feed;
   };
@@ -642,7 +672,7 @@ void MatchSimulation::build_packets(MatchFrame& frame) {
       attacks_ == AttackDirection::positive_x ? 0.0F : static_cast<float>(kPi);
   instant.our_facing = instant.opponent_facing == 0.0F ? static_cast<float>(kPi) : 0.0F;
   const CameraLayout layout{config_.cameras, field_, config_.camera_overlap_mm, config_.drop_rate};
-  frame.dropped_packets += append_camera_packets(layout, instant, random_, frame.packets);
+  frame.dropped_packets += append_camera_packets(layout, instant, noise_random_, frame.packets);
 }
 
 }  // namespace ssl_formation::sim

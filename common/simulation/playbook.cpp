@@ -94,7 +94,9 @@ class PlaybookParser {
   std::string take(const std::vector<std::string>& w) {
     const std::string& keyword = w[0];
     if (keyword == "playbook") {
-      if (named_ || !playbook_.plays.empty()) return "'playbook' names the playbook once, first";
+      if (named_ || play_ || !playbook_.plays.empty()) {
+        return "'playbook' names the playbook once, first";
+      }
       if (w.size() != 2 || w[1].empty()) return "expected: playbook \"NAME\"";
       playbook_.name = w[1];
       named_ = true;
@@ -169,8 +171,8 @@ class PlaybookParser {
         step.shot = true;
       } else {
         const auto id = robot_id(w[3]);
-        if (!id || *id > playbook_max_robot_id) {
-          return "ball '" + w[3] + "': expected a robot id from 0 to 10, or goal";
+        if (!id || *id == 0 || *id > playbook_max_robot_id) {
+          return "ball '" + w[3] + "': expected a robot id from 1 to 10 (0 keeps goal), or goal";
         }
         step.ball_robot = *id;
       }

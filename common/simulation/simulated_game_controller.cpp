@@ -40,8 +40,10 @@ std::uint64_t microseconds(double t_s) {
 
 // A running phase lasts until the game controller plans the next stoppage (negative duration).
 constexpr double kUntilStoppage = -1.0;
-// A ball placement the match carries out lasts until it says the ball is placed.
+// A ball placement the match carries out lasts until it says the ball is placed, or at most
+// this long.
 constexpr double kUntilPlaced = -2.0;
+constexpr double kLongestPlacementS = 30.0;
 
 }  // namespace
 
@@ -209,7 +211,8 @@ void SimulatedGameController::advance(double from_s) {
       }
       phase_.until_s = from_s + std::max(kShortestPlayS, std::min(drawn, half_ends_s_ - from_s));
     } else if (next.duration_s == kUntilPlaced) {
-      phase_.until_s = std::numeric_limits<double>::infinity();
+      // The rules give a placement 30 s; then the game controller goes on regardless.
+      phase_.until_s = from_s + kLongestPlacementS;
     } else {
       phase_.until_s = from_s + next.duration_s;
     }

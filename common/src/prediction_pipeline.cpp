@@ -73,6 +73,7 @@ void PredictionPipeline::follow_opponent() {
   if (opponent.color != sampler_.config().opponent_color) {
     motion_history_.clear();
     online_calibration_.clear();
+    live_score_.clear();  // predictions of the old team's robots would meet the new one's ids
     last_sample_ = nullptr;
   }
   sampler_.set_opponent(opponent.color, opponent.attacks);

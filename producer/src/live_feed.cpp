@@ -115,8 +115,9 @@ int run_simulation(const ProducerOptions& options) {
   const std::optional<net::MulticastEndpoint> referee_group =
       options.referee ? app::parse_referee_option(options.referee_address) : std::nullopt;
   // Checked before any socket opens, so a bad option is a usage error and nothing else.
-  std::unique_ptr<SimulationSource> simulation =
-      make_simulation_source(options, referee_group.has_value());
+  // The game controller runs whatever --referee-address says: the simulation is the same as
+  // --write-log's for the same options, and `none` only keeps its messages off the network.
+  std::unique_ptr<SimulationSource> simulation = make_simulation_source(options, true);
   const sim::SimulatedGameController* game = simulation->game_controller();
 
   boost::asio::io_context io;

@@ -23,11 +23,13 @@ FeedSettings feed_settings(const ProducerOptions& options) {
   FeedSettings feed;
   if (options.cameras < 1 || options.cameras > 8) throw app::UsageError("--cameras must be 1 to 8");
   feed.cameras = options.cameras;
-  if (!(options.camera_overlap_mm >= 0.0)) {
+  if (!(options.camera_overlap_mm >= 0.0) || !std::isfinite(options.camera_overlap_mm)) {
     throw app::UsageError("--camera-overlap must be >= 0 mm");
   }
   feed.camera_overlap_mm = options.camera_overlap_mm;
-  if (!(options.jitter_mm >= 0.0)) throw app::UsageError("--jitter-mm must be >= 0");
+  if (!(options.jitter_mm >= 0.0) || !std::isfinite(options.jitter_mm)) {
+    throw app::UsageError("--jitter-mm must be a finite number >= 0");
+  }
   feed.jitter_mm = options.jitter_mm;
   if (!(options.drop_rate >= 0.0 && options.drop_rate <= 1.0)) {
     throw app::UsageError("--drop-rate must be between 0 and 1");

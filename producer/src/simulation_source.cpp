@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace ssl_formation::producer {
 
 namespace {
@@ -77,6 +79,9 @@ class MatchSource final : public SimulationSource {
 
 std::unique_ptr<SimulationSource> make_simulation_source(const ProducerOptions& options,
                                                          bool with_referee) {
+  if (!(options.duration_s >= 0.0) || !std::isfinite(options.duration_s)) {
+    throw app::UsageError("--duration must be a number of seconds >= 0 (0: no limit)");
+  }
   std::optional<sim::GameControllerConfig> game =
       with_referee ? game_controller_config(options) : std::nullopt;
   if (options.simulation == "paper") {

@@ -121,6 +121,9 @@ class MatchSimulation {
   void advance_play(double now_s);
   // Sets the opponent's targets for the current step, with this run's variation.
   void aim_at_step();
+  // Who has the ball after `step` (it names one): its robot, or for one the division does not
+  // field, the robot nearest to that robot's target.
+  int receiver_for(const PlayStep& step) const;
   void update_targets();
   void move_ball(double dt_s, double now_s);
   // A shot over the goal line: a goal and a kick-off, or wide and a free kick.
@@ -150,6 +153,7 @@ class MatchSimulation {
   FieldSize field_;
   int team_size_ = 0;
   std::mt19937_64 random_;
+  std::mt19937_64 noise_random_;
   TeamMotion robots_;
   std::vector<Point> targets_;       // every robot's target, normalised mm
   std::vector<Point> play_targets_;  // the opponent's targets from the play, by robot id

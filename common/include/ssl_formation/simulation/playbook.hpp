@@ -19,7 +19,8 @@
 // Coordinates are fractions of the field, so one playbook serves both divisions: x from -1 (the
 // opponent's own goal line) to 1 (the goal line it attacks), y from -1 (its right touch line as
 // it attacks) to 1 (its left). Robots a step does not list keep their targets. Robots beyond a
-// division's team size (ids 6 to 10 in Division B) are left out.
+// division's team size (ids 6 to 10 in Division B) are left out, and a pass to one of them goes
+// to the robot whose target is nearest to where it would have been.
 
 #include <cstdint>
 #include <optional>

@@ -1,9 +1,11 @@
 #pragma once
-// The game controller of a simulated match: the referee messages (DESIGN.md §6) that go with the
-// paper's simulated opponent, so the daemons, the demo and the tests run with a referee as they
-// do at a tournament. It names the teams, runs two halves with the ends changed at half time,
-// and stops the play now and then as a real match does: a ball out of the field (STOP, ball
-// placement, a free kick), a foul (STOP, a free kick) and a goal (STOP, a kick-off).
+// The game controller of a simulation: the referee messages (DESIGN.md §6) that go with the
+// paper's simulated opponent or a simulated match, so the daemons, the demo and the tests run
+// with a referee as they do at a tournament. It names the teams, runs two halves with the ends
+// changed at half time, and stops the play as a real match does: a ball out of the field (STOP,
+// ball placement, a free kick), a foul (STOP, a free kick) and a goal (STOP, a kick-off). For
+// the paper's opponent, which has no ball, it stops the play at random; a match calls the
+// stoppages its ball makes.
 //
 // Time is the simulation's data time (t_capture). The game controller decides at each formation
 // what holds from that formation on, so every command starts at a formation and no formation
