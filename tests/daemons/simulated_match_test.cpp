@@ -170,7 +170,7 @@ TEST(SimulatedMatch, TheMotionModelTrainedOnOneMatchBeatsTheBaselinesOnAnotherAt
   ASSERT_EQ(evaluated.exit_code, 0) << evaluated.err;
   const auto errors = mean_errors(dir / "holdout-accuracy.csv", 1.0);
   ASSERT_EQ(errors.size(), 4u) << evaluated.out;
-  // Generous margins: 165 mm against 300 (persistence) and 192 (constant velocity) when written.
+  // Generous margins: 168 mm against 306 (persistence) and 200 (constant velocity) when written.
   EXPECT_LT(errors.at("model"), 0.8 * errors.at("persistence")) << evaluated.out;
   EXPECT_LT(errors.at("model"), 0.97 * errors.at("constant velocity")) << evaluated.out;
 }
