@@ -124,15 +124,7 @@ MatchSimulation::MatchSimulation(MatchSimulationConfig config)
   if (!(config_.frame_rate_hz > 0.0) || !std::isfinite(config_.frame_rate_hz)) {
     throw std::invalid_argument("the frame rate must be positive");
   }
-  if (config_.cameras < 1 || config_.cameras > 8) {
-    throw std::invalid_argument("cameras must be between 1 and 8");
-  }
-  if (!(config_.drop_rate >= 0.0 && config_.drop_rate <= 1.0)) {
-    throw std::invalid_argument("drop rate must be between 0 and 1");
-  }
-  if (!(config_.jitter_mm >= 0.0) || !std::isfinite(config_.jitter_mm)) {
-    throw std::invalid_argument("jitter must be a finite, non-negative number of millimetres");
-  }
+  check_camera_settings(config_.cameras, config_.drop_rate, config_.jitter_mm);
   if (!(config_.position_variation >= 0.0 && config_.position_variation <= 0.5) ||
       !(config_.timing_variation >= 0.0 && config_.timing_variation < 1.0)) {
     throw std::invalid_argument("play variation: positions 0 to 0.5, timing 0 to under 1");

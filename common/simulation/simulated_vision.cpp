@@ -48,17 +48,19 @@ const TeamPositions& play_formation(int play, int formation) {
 
 const char* play_name(int play) { return play_names.at(static_cast<std::size_t>(play)); }
 
-SimulatedVision::SimulatedVision(SimulationConfig config)
-    : config_(config), random_(config.seed), geometry_(config.geometry_interval_s) {
-  if (config_.cameras < 1 || config_.cameras > 8) {
-    throw std::invalid_argument("cameras must be between 1 and 8");
-  }
-  if (!(config_.drop_rate >= 0.0 && config_.drop_rate <= 1.0)) {
+void check_camera_settings(int cameras, double drop_rate, double jitter_mm) {
+  if (cameras < 1 || cameras > 8) throw std::invalid_argument("cameras must be between 1 and 8");
+  if (!(drop_rate >= 0.0 && drop_rate <= 1.0)) {
     throw std::invalid_argument("drop rate must be between 0 and 1");
   }
-  if (!(config_.jitter_mm >= 0.0) || !std::isfinite(config_.jitter_mm)) {
+  if (!(jitter_mm >= 0.0) || !std::isfinite(jitter_mm)) {
     throw std::invalid_argument("jitter must be a finite, non-negative number of millimetres");
   }
+}
+
+SimulatedVision::SimulatedVision(SimulationConfig config)
+    : config_(config), random_(config.seed), geometry_(config.geometry_interval_s) {
+  check_camera_settings(config_.cameras, config_.drop_rate, config_.jitter_mm);
   if (!(config_.step_s > 0.0) || !std::isfinite(config_.step_s)) {
     throw std::invalid_argument("step must be positive");
   }

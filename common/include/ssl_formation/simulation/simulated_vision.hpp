@@ -84,6 +84,10 @@ struct CameraLayout {
 int append_camera_packets(const CameraLayout& layout, const SeenInstant& instant,
                           std::mt19937_64& random, std::vector<SSL_WrapperPacket>& packets);
 
+// Throws std::invalid_argument unless there are 1 to 8 cameras, the drop rate is a probability
+// and the jitter a finite, non-negative number of millimetres: what both simulations check.
+void check_camera_settings(int cameras, double drop_rate, double jitter_mm);
+
 // SSL-Vision sends its geometry now and then: at the first instant, then once `interval_s` has
 // passed since the last.
 class GeometrySchedule {
