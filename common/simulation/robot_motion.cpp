@@ -76,6 +76,17 @@ Point TeamMotion::wanted_velocity(std::size_t i, Point target, double dt_s,
 }
 
 template <class Visit>
+void TeamMotion::for_each_neighbour(std::size_t i, Visit visit) const {
+  for (std::size_t j = 0; j < positions_.size(); ++j) {
+    if (j == i) continue;
+    const Point between = minus(positions_[j], positions_[i]);
+    const double distance = length(between);
+    const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
+    visit(towards, distance - closest_allowed_mm());
+  }
+}
+
+template <class Visit>
 void TeamMotion::for_each_wall(std::size_t i, Visit visit) const {
   const Point p = positions_[i];
   if (limits_.area_half_length_mm > 0.0) {
@@ -114,18 +125,13 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double spe
     // Towards each neighbour no faster than the gap allows. What is taken off the approach is
     // turned to the robot's right, so two robots meeting head on pass each other rather than
     // stand nose to nose.
-    for (std::size_t j = 0; j < positions_.size(); ++j) {
-      if (j == i) continue;
-      const Point between = minus(positions_[j], positions_[i]);
-      const double distance = length(between);
-      const double gap = distance - closest_allowed_mm();
-      const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
+    for_each_neighbour(i, [&](Point towards, double gap) {
       const double excess = dot(wanted, towards) - approach_bound(gap);
       if (excess > 0.0) {
         const Point right{towards.y, -towards.x};
         wanted = plus(minus(wanted, scaled(towards, excess)), scaled(right, 0.5 * excess));
       }
-    }
+    });
     for_each_wall(i, [&](Point towards, double gap) {
       const double excess = dot(wanted, towards) - approach_bound(gap);
       if (excess > 0.0) wanted = minus(wanted, scaled(towards, excess));
@@ -134,12 +140,7 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double spe
     Point next = plus(velocities_[i], at_most(minus(wanted, velocities_[i]), most_change));
     // The turn to the right may point at another neighbour: within the acceleration still left,
     // take off any approach beyond a bound.
-    for (std::size_t j = 0; j < positions_.size(); ++j) {
-      if (j == i) continue;
-      const Point between = minus(positions_[j], positions_[i]);
-      const double distance = length(between);
-      const double gap = distance - closest_allowed_mm();
-      const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
+    for_each_neighbour(i, [&](Point towards, double gap) {
       const double excess = dot(next, towards) - approach_bound(gap);
       if (excess > 0.0) next = minus(next, scaled(towards, excess));
       // Close by, a neighbour passing sideways turns the line between the two fast, and with it
@@ -149,7 +150,7 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double spe
         next = at_most(next,
                        std::max(kCreepMmS, kSpeedNearFactor * approach_bound(std::max(0.0, gap))));
       }
-    }
+    });
     for_each_wall(i, [&](Point towards, double gap) {
       const double excess = dot(next, towards) - approach_bound(gap);
       if (excess > 0.0) next = minus(next, scaled(towards, excess));

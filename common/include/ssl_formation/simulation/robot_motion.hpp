@@ -65,6 +65,9 @@ class TeamMotion {
   // The velocity robot `i` wants: straight at its target, as fast as it can still brake for in
   // steps of `dt_s`.
   Point wanted_velocity(std::size_t i, Point target, double dt_s, double top_speed) const;
+  // visit(direction to it, free space beyond the closest allowed) for each other robot.
+  template <class Visit>
+  void for_each_neighbour(std::size_t i, Visit visit) const;
   // visit(direction out, free space) for each wall of the area around robot `i`.
   template <class Visit>
   void for_each_wall(std::size_t i, Visit visit) const;
