@@ -71,6 +71,22 @@ Point towards(Point from, Point to, double distance) {
   return Point{from.x + d.x * distance / l, from.y + d.y * distance / l};
 }
 
+// The index in [first, last) whose position (position_of(index)) is nearest to `p`; the first
+// such on a tie.
+template <class PositionOf>
+int nearest_of(int first, int last, Point p, PositionOf position_of) {
+  int nearest = first;
+  double best = 1e18;
+  for (int i = first; i < last; ++i) {
+    const double d = length(minus(position_of(i), p));
+    if (d < best) {
+      best = d;
+      nearest = i;
+    }
+  }
+  return nearest;
+}
+
 // A kick-off line-up: the opponent in its half (-x), ours in the other, in rows, keepers on
 // their lines. Far enough apart for TeamMotion.
 std::vector<Point> line_up(const FieldSize& field, int team_size) {
@@ -237,16 +253,8 @@ int MatchSimulation::receiver_for(const PlayStep& step) const {
   for (const PlayTarget& target : step.targets) {
     if (target.robot_id == id) meant = on_field(target.position);
   }
-  int nearest = 1;
-  double best = 1e18;
-  for (int i = 1; i < team_size_; ++i) {
-    const double d = length(minus(play_targets_[static_cast<std::size_t>(i)], meant));
-    if (d < best) {
-      best = d;
-      nearest = i;
-    }
-  }
-  return nearest;
+  return nearest_of(1, team_size_, meant,
+                    [&](int i) { return play_targets_[static_cast<std::size_t>(i)]; });
 }
 
 void MatchSimulation::advance_play(double now_s) {
@@ -290,7 +298,7 @@ void MatchSimulation::update_targets() {
   const auto keeper_y = [&](double ball_y) {
     return std::clamp(ball_y * kKeeperFollow, -kKeeperRangeMm, kKeeperRangeMm);
   };
-  const auto robot = [&](int i) { return robots_.position(static_cast<std::size_t>(i)); };
+  const auto robot = [this](int i) { return robot_position(i); };
   if (mode_ == Mode::half_time) {
     // The teams walk to the other end, to where the next kick-off lines them up.
     const std::vector<Point> shape = line_up(field_, team_size_);
@@ -316,16 +324,7 @@ void MatchSimulation::update_targets() {
         const Point p = robot(ball_.holder);
         targets_[ball_.holder] = inside_field(Point{p.x - 1500.0, p.y * 0.8});
       }
-      int presser = 1;
-      double best = 1e18;
-      for (int id = 1; id < team_size_; ++id) {
-        const double d = length(minus(robot(id), ball_.position));
-        if (d < best) {
-          best = d;
-          presser = id;
-        }
-      }
-      targets_[presser] = ball_.position;
+      targets_[nearest_of(1, team_size_, ball_.position, robot)] = ball_.position;
       break;
     }
     case Mode::kickoff_preparation:
@@ -459,15 +458,8 @@ void MatchSimulation::start_our_possession(double now_s) {
   mode_ = Mode::our_possession;
   holding_play_ = false;
   // Our robot nearest to the ball fetches it; the opponent falls back and presses.
-  int nearest = team_size_ + 1;
-  double best = 1e18;
-  for (int i = team_size_ + 1; i < 2 * team_size_; ++i) {
-    const double d = length(minus(robots_.position(static_cast<std::size_t>(i)), ball_.position));
-    if (d < best) {
-      best = d;
-      nearest = i;
-    }
-  }
+  const int nearest = nearest_of(team_size_ + 1, 2 * team_size_, ball_.position,
+                                 [this](int i) { return robot_position(i); });
   ball_.holder = -1;
   ball_.rolling = false;
   ball_.shot = false;
@@ -547,17 +539,8 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
                        : ball_.position;
       // The placing team's robot nearest to the ball carries it (keepers stay home).
       const int first = for_opponent ? 1 : team_size_ + 1;
-      int nearest = first;
-      double best = 1e18;
-      for (int i = first; i < first + team_size_ - 1; ++i) {
-        const double d =
-            length(minus(robots_.position(static_cast<std::size_t>(i)), ball_.position));
-        if (d < best) {
-          best = d;
-          nearest = i;
-        }
-      }
-      ball_.receiver = nearest;
+      ball_.receiver = nearest_of(first, first + team_size_ - 1, ball_.position,
+                                  [this](int i) { return robot_position(i); });
       return;
     }
     case GameState::running:

@@ -41,11 +41,7 @@ class SimulatedFeed {
     stopped_ = true;
     timer_.cancel();
   }
-  bool finished() const {
-    return (options_.count != 0 && steps_ >= options_.count) ||
-           (options_.duration_s > 0.0 &&
-            static_cast<double>(steps_) * simulation_->step_s() >= options_.duration_s - 1e-9);
-  }
+  bool finished() const { return simulation_done(options_, steps_, simulation_->step_s()); }
 
   void log_summary(const char* what) const {
     const sim::SimulatedGameController* game = simulation_->game_controller();

@@ -45,9 +45,7 @@ int run_write_log(const ProducerOptions& options) {
         "nanosecond receive times can hold");
   }
   const auto done = [&](std::uint64_t steps) {
-    return (options.count != 0 && steps >= options.count) ||
-           (options.duration_s > 0.0 &&
-            static_cast<double>(steps) * simulation->step_s() >= options.duration_s - 1e-9);
+    return simulation_done(options, steps, simulation->step_s());
   };
 
   Result<LogWriter> writer = LogWriter::create(options.write_log);

@@ -77,6 +77,12 @@ class MatchSource final : public SimulationSource {
 
 }  // namespace
 
+bool simulation_done(const ProducerOptions& options, std::uint64_t steps, double step_s) {
+  return (options.count != 0 && steps >= options.count) ||
+         (options.duration_s > 0.0 &&
+          static_cast<double>(steps) * step_s >= options.duration_s - 1e-9);
+}
+
 std::unique_ptr<SimulationSource> make_simulation_source(const ProducerOptions& options,
                                                          bool with_referee) {
   if (!(options.duration_s >= 0.0) || !std::isfinite(options.duration_s)) {

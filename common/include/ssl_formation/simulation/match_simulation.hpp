@@ -136,6 +136,9 @@ class MatchSimulation {
   // Our side wins the ball (a goal kick, our kick-off): it keeps it for a while.
   void start_our_possession(double now_s);
   bool ours(int robot) const { return robot >= team_size_; }
+  Point robot_position(int robot) const {
+    return robots_.position(static_cast<std::size_t>(robot));
+  }
   void build_packets(MatchFrame& frame);
   Point on_field(Point fraction) const;  // a playbook point in normalised mm
   Point inside_field(Point p) const;

@@ -38,6 +38,9 @@ class SimulationSource {
   virtual const sim::SimulatedGameController* game_controller() const = 0;
 };
 
+// Whether `steps` steps of `step_s` each are all that --count or --duration ask for.
+bool simulation_done(const ProducerOptions& options, std::uint64_t steps, double step_s);
+
 // The simulation the options choose, with its game controller when `with_referee` (and the
 // options ask for one). Throws app::UsageError naming a bad option; a playbook file with an
 // error is one, its message naming the file and line.
