@@ -7,13 +7,13 @@
 #include <memory>
 #include <random>
 
-#include "ssl_formation/prediction_pipeline.hpp"
-#include "ssl_formation/predictor.hpp"
-#include "ssl_formation/training.hpp"
-#include "ssl_formation/vision_frame.hpp"
-#include "ssl_formation/sampler.hpp"
-#include "ssl_formation/transition_table.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
+#include "ssl_formation/paper_model/predictor.hpp"
+#include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/vision_frame.hpp"
+#include "ssl_formation/vision/sampler.hpp"
+#include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 
 namespace sf = ssl_formation;
 

@@ -46,12 +46,12 @@
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
-#include "ssl_formation/prediction_message.hpp"
-#include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/pipeline/prediction_message.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
-#include "ssl_formation/vision_frame.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace sf = ssl_formation;

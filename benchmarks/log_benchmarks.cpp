@@ -9,10 +9,10 @@
 #include <filesystem>
 #include <random>
 
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/real_log_shape.hpp"
-#include "ssl_formation/training.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/files/real_log_shape.hpp"
+#include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 
 namespace sf = ssl_formation;
 
@@ -203,7 +203,7 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
 }
 
 // The recording reshaped as recorded Division A matches come (DESIGN.md section 7,
-// common/include/ssl_formation/real_log_shape.hpp): every packet with camera id 0, 90 packets a
+// common/files/include/ssl_formation/files/real_log_shape.hpp): every packet with camera id 0, 90 packets a
 // second, each holding the robots of one half of the field. Each such packet completes an
 // instant with every opponent robot, so this is the costliest shape per packet. Written once per
 // process, when first asked for, in the temp folder.

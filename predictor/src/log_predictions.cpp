@@ -11,11 +11,11 @@
 #include <optional>
 
 #include "ssl_formation/app/progress.hpp"
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/prediction_csv.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/pipeline/prediction_csv.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/tracked_vision.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/match/tracked_vision.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::predictor {

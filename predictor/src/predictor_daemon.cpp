@@ -16,10 +16,10 @@
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/vision_receiver.hpp"
-#include "ssl_formation/prediction_message.hpp"
+#include "ssl_formation/pipeline/prediction_message.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
 #include "ssl_formation/predictor/table_watcher.hpp"
-#include "ssl_formation/state.hpp"
+#include "ssl_formation/base/state.hpp"
 #include "team_robots.hpp"
 
 namespace ssl_formation::predictor {

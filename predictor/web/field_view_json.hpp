@@ -9,9 +9,9 @@
 #include <string>
 
 #include "formation_prediction.pb.h"
-#include "ssl_formation/formation.hpp"
-#include "ssl_formation/grid.hpp"
-#include "ssl_formation/live_score.hpp"
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/pipeline/live_score.hpp"
 #include "team_robots.hpp"
 
 namespace ssl_formation::predictor::web {

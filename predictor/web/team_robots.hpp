@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "ssl_formation/formation.hpp"
-#include "ssl_formation/vision_frame.hpp"
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/vision/vision_frame.hpp"
 
 namespace ssl_formation::predictor::web {
 

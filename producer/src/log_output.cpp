@@ -10,7 +10,7 @@
 #include <cmath>
 
 #include "ssl_formation/app/daemon.hpp"
-#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/producer/simulation_source.hpp"
 #include "ssl_gc_referee_message.pb.h"

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "ssl_formation/app/daemon.hpp"
-#include "ssl_formation/match.hpp"
+#include "ssl_formation/match/match.hpp"
 
 namespace ssl_formation::producer {
 

@@ -12,7 +12,7 @@
 #include <deque>
 
 #include "ssl_formation/app/daemon.hpp"
-#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/producer/replay_clock.hpp"

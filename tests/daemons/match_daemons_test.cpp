@@ -12,7 +12,7 @@
 #include "match_logs.hpp"
 #include "moving_robots.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation {

@@ -11,8 +11,8 @@
 #include "match_logs.hpp"
 #include "moving_robots.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/motion_model.hpp"
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/motion_model/motion_model.hpp"
+#include "ssl_formation/files/table_file.hpp"
 
 namespace ssl_formation {
 namespace {

@@ -8,10 +8,10 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation {

@@ -12,7 +12,7 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/log_file.hpp"
+#include "ssl_formation/files/log_file.hpp"
 #include "ssl_gc_referee_message.pb.h"
 #include "status_lines.hpp"
 

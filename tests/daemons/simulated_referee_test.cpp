@@ -9,9 +9,9 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/referee.hpp"
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/match/referee.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation {

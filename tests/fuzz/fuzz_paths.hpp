@@ -31,12 +31,12 @@
 #include <system_error>
 #include <vector>
 
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/predictor.hpp"
-#include "ssl_formation/sampler.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/transition_table.hpp"
-#include "ssl_formation/vision_frame.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/paper_model/predictor.hpp"
+#include "ssl_formation/vision/sampler.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::fuzz {

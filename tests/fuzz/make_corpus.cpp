@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "fuzz_paths.hpp"
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 
 namespace fs = std::filesystem;
 using namespace ssl_formation;

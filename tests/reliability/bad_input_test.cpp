@@ -12,7 +12,7 @@
 #include <random>
 
 #include "reliability_support.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::reliability {
 namespace {

@@ -22,11 +22,11 @@
 #include "pipeline_support.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
-#include "ssl_formation/prediction_message.hpp"
-#include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/pipeline/prediction_message.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation::reliability {

@@ -6,7 +6,7 @@
 #include <set>
 #include <vector>
 
-#include "ssl_formation/referee.hpp"
+#include "ssl_formation/match/referee.hpp"
 
 namespace ssl_formation::sim {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ssl_formation/sampler.hpp"
+#include "ssl_formation/vision/sampler.hpp"
 
 namespace ssl_formation::sim {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::testing {

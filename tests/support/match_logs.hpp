@@ -10,8 +10,8 @@
 #include <optional>
 #include <string>
 
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation::testing {

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::testing {
 

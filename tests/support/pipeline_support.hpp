@@ -17,7 +17,7 @@
 #include "child_process.hpp"
 #include "formation_prediction.pb.h"
 #include "ssl_formation/net/proto_multicast.hpp"
-#include "ssl_formation/transition_table.hpp"
+#include "ssl_formation/paper_model/transition_table.hpp"
 
 namespace ssl_formation::testing {
 

@@ -19,11 +19,11 @@
 
 #include "circling_robots.hpp"
 #include "scratch_dir.hpp"
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::trainer {

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "scratch_dir.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/vision_packet.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::trainer {

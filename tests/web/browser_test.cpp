@@ -18,8 +18,8 @@
 
 #include "child_process.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 #include "web_test_support.hpp"
 
 namespace ssl_formation {

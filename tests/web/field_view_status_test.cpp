@@ -15,7 +15,7 @@
 
 #include "child_process.hpp"
 #include "raw_client.hpp"
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "web_test_support.hpp"
 
 namespace ssl_formation {

@@ -20,8 +20,8 @@
 #include "formation_prediction.pb.h"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::web_testing {

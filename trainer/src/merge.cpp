@@ -5,7 +5,7 @@
 
 #include <stdexcept>
 
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
 namespace ssl_formation::trainer {

@@ -20,9 +20,9 @@
 #include <thread>
 
 #include "ssl_formation/app/progress.hpp"
-#include "ssl_formation/log_file.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/tracked_vision.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/match/tracked_vision.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <stdexcept>
 
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 
 namespace ssl_formation::trainer {

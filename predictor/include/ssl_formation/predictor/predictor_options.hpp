@@ -8,7 +8,7 @@
 
 #include "ssl_formation/app/options.hpp"
 #include "ssl_formation/net/multicast.hpp"
-#include "ssl_formation/prediction_pipeline.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
 
 namespace ssl_formation::predictor {
 

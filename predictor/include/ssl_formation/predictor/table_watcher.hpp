@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "ssl_formation/grid.hpp"
-#include "ssl_formation/table_file.hpp"
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/files/table_file.hpp"
 
 namespace ssl_formation::predictor {
 

@@ -11,7 +11,7 @@
 #include <string_view>
 
 #include "ssl_formation/trainer/trainer.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 
 namespace ssl_formation::trainer {
 

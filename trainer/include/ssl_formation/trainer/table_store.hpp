@@ -6,9 +6,9 @@
 #include <memory>
 #include <optional>
 
-#include "ssl_formation/sampler.hpp"
-#include "ssl_formation/table_file.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/vision/sampler.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 
 namespace ssl_formation::trainer {
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
-#include "ssl_formation/motion_model.hpp"
+#include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/net/multicast.hpp"
-#include "ssl_formation/training.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 
 namespace ssl_formation::trainer {
 

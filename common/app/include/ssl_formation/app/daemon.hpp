@@ -1,0 +1,139 @@
+#pragma once
+// What the three daemons share around the core: logging, parsing the network options into
+// endpoints, clean shutdown on SIGINT/SIGTERM through Asio's signal_set (no work inside a signal
+// handler), and repeating timers.
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/match/match.hpp"
+#include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/net/tracked_vision_receiver.hpp"
+#include "ssl_formation/net/vision_receiver.hpp"
+
+namespace ssl_formation::app {
+
+// All log lines go to stderr through spdlog: "[23:14:05.123] ssl-trainer info: ...".
+void init_logging(const std::string& program, bool verbose = false);
+
+// Both throw UsageError naming the option.
+net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text);
+net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_all);
+
+// --referee-address, --tracker-address: the group, or none for "none". Throw UsageError.
+std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& text);
+std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& text);
+
+// --vision-source tracked: the geometry of a raw vision frame alone, into `out`; false for a frame
+// without geometry. The tracker's frames carry no field size, the raw feed's geometry does.
+bool geometry_only(const VisionFrame& frame, VisionFrame& out);
+
+// Seconds on the steady clock: the receive time the referee follower takes from a live feed.
+double steady_seconds();
+
+// Logs who the opponent is and the game state whenever either changes, and a warning when a
+// second game controller appears or referee messages arrive that cannot be used.
+class MatchLog {
+ public:
+  // Cheap when nothing changed; call it after every referee message (and after frames with
+  // --opponent-attacks auto, whose side the sampler infers). `attacks_now`: the side in use.
+  void update(const MatchFollower& match, std::optional<AttackDirection> attacks_now,
+              const RefereeChange& change = {});
+
+ private:
+  // What was logged last, compared before anything is formatted: update() runs for every frame
+  // while the side is inferred.
+  std::optional<Opponent> logged_opponent_;
+  std::optional<AttackDirection> logged_attacks_;
+  std::optional<GameState> logged_state_;
+  RefereeCounters reported_;
+};
+
+// "opponent=blue (referee) game=running referee_messages=N referee_unused=N", for status lines:
+// the opponent's colour and why, the game state, and the referee messages not followed (another
+// game controller, unknown commands, undecodable).
+std::string describe_referee_counts(const MatchFollower& match);
+
+// Calls `on_stop` once on the first SIGINT or SIGTERM, from the io_context's thread. From then on
+// the signals have their default action again, so a second Ctrl-C (or SIGTERM) ends the process
+// at once, even while `on_stop` is still busy (a slow save): the user always has a way out, and
+// the table file is never half-written because saves replace it atomically.
+class StopSignals {
+ public:
+  StopSignals(boost::asio::io_context& io, std::function<void(int signal)> on_stop);
+
+ private:
+  boost::asio::signal_set signals_;
+};
+
+// Calls `tick` every `period` on the io_context's thread until cancel() or destruction.
+class RepeatingTimer {
+ public:
+  RepeatingTimer(boost::asio::io_context& io, std::chrono::steady_clock::duration period,
+                 std::function<void()> tick);
+  // No tick runs after this, also when called from inside a tick or while a tick is queued.
+  void cancel();
+
+ private:
+  void arm();
+  bool cancelled_ = false;
+  boost::asio::steady_timer timer_;
+  std::chrono::steady_clock::duration period_;
+  std::function<void()> tick_;
+};
+
+// The daemon's readiness, for whoever started it: once the sockets are open and joined (and, for
+// the predictor, the table there at start-up is loaded), `mark_ready` writes the file atomically
+// (a reader never sees part of it) as "key=value" lines, starting with "program=" and "pid=".
+// The destructor removes it, so a file left behind names a process that died.
+class ReadyFile {
+ public:
+  explicit ReadyFile(std::string path) : path_(std::move(path)) {}
+  ReadyFile(const ReadyFile&) = delete;
+  ReadyFile& operator=(const ReadyFile&) = delete;
+  ~ReadyFile();
+  // Does nothing without a path. Throws std::runtime_error if the file cannot be written: a
+  // supervisor waiting for it would wait forever.
+  void mark_ready(const std::string& program,
+                  const std::vector<std::pair<std::string, std::string>>& facts);
+
+ private:
+  std::string path_;
+  bool written_ = false;
+};
+
+// "packets=N parse_errors=N kernel_drops=N fast_path=99.9%": the receiving side of a status
+// line, the same in every daemon. fast_path is the share of datagrams decoded without protobuf,
+// so a change in SSL-Vision's packets that moves everything to the slow path is visible.
+std::string describe_reception(const net::VisionReceiver& receiver);
+// " tracker_packets=N tracker_frames=N tracker_other_source=N tracker_undecodable=N" with
+// --vision-source tracked (none: empty), for status lines.
+std::string describe_tracked(const net::TrackedVisionReceiver* tracked);
+
+// Logs the field size sampling uses, once at start and once per change (geometry packets), with
+// the division it implies: a wrong field size silently moves every robot to other cells.
+class FieldSizeLog {
+ public:
+  // `from_options`: the size the options give, used until a geometry packet says otherwise.
+  FieldSizeLog(const FieldSize& from_options, bool geometry_used);
+  // Cheap when nothing changed; call it after every packet that carries geometry.
+  void update(const FieldSize& field);
+
+ private:
+  FieldSize logged_;
+};
+
+// "+x (option)", "-x (referee)", "unknown-yet (inferred)": for status lines.
+std::string describe_attacks(std::optional<AttackDirection> now, Because because);
+
+std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds);
+
+}  // namespace ssl_formation::app

@@ -1,0 +1,105 @@
+#pragma once
+// One option parser for every program (Boost.Program_options), so the same thing has the same
+// name everywhere: --vision-address, --interface, --table, --grid, --step, --opponent-color,
+// --opponent-attacks, --field-length, --field-width.
+
+#include <boost/program_options.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/match/match.hpp"
+#include "ssl_formation/motion_model/motion_model.hpp"
+#include "ssl_formation/motion_model/online_calibration.hpp"
+#include "ssl_formation/vision/sampler.hpp"
+
+namespace ssl_formation::app {
+
+namespace po = boost::program_options;
+
+// Thrown for a bad option value; main() prints it as one line and exits with 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr const char* default_vision_address = "224.5.23.2:10006";
+inline constexpr const char* default_referee_address = "224.5.23.1:10003";
+inline constexpr const char* default_tracker_address = "224.5.23.2:10010";
+inline constexpr const char* default_prediction_address = "224.5.23.4:10040";
+inline constexpr const char* default_interface = "127.0.0.1";
+inline constexpr const char* default_table = "formation-table.bin";
+
+// The model's options: what the sampler and the table need to agree on.
+struct ModelOptions {
+  std::string grid = "3x2";
+  // 0: the model's own, motion_step_s for the motion model and the paper's 2 s for paper.
+  double step_s = 0.0;
+  static constexpr double motion_step_s = 0.5;
+  static constexpr double paper_step_s = 2.0;
+  double step() const;  // the effective step; throws UsageError
+  // "referee": from the referee feed (the colour by the team names and --our-team or
+  // --opponent-team, the side by blue_team_on_positive_half); yellow attacking +x until it says.
+  std::string opponent_color = "referee";
+  std::string opponent_attacks = "referee";
+  std::string our_team;
+  std::string opponent_team;
+  double field_length_mm = 9000.0;
+  double field_width_mm = 6000.0;
+  bool ignore_geometry = false;
+  std::string model = "motion";
+  // "auto": what the model needs, frame for motion and step (the paper's protocol) for paper.
+  std::string sampling = "auto";
+
+  Grid parsed_grid() const;              // throws UsageError
+  ModelKind parsed_model() const;        // throws UsageError
+  SamplerConfig sampler_config() const;  // validates everything; throws UsageError
+  // Who the opponent is by these options (the referee fills in what they leave open).
+  OpponentChoice opponent_choice() const;  // throws UsageError
+};
+void add_model_options(po::options_description& options, ModelOptions& model);
+
+// --recalibration-half-life, for the programs that predict (ssl-predictor, ssl-evaluate): how
+// fast the motion model's stated probabilities follow what the play lately did
+// (OnlineCalibration); 0 turns that off.
+void add_recalibration_option(po::options_description& options, double& half_life_s);
+// The settings a --recalibration-half-life asks for; none for 0. Throws UsageError for a
+// negative or non-finite one.
+std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s);
+
+// --learn-during, for the program that trains from the referee (ssl-trainer).
+void add_learn_during_option(po::options_description& options, std::string& learn_during);
+LearnDuring parsed_learn_during(const std::string& learn_during);  // throws UsageError
+
+struct NetworkOptions {
+  std::string vision_address = default_vision_address;
+  // The game controller's group, joined on the same interface; "none": no referee feed.
+  std::string referee_address = default_referee_address;
+  // "raw": SSL-Vision's detections on vision_address; "tracked": a tracker's frames
+  // (TrackerWrapperPacket) on tracker_address instead.
+  std::string vision_source = "raw";
+  std::string tracker_address = default_tracker_address;
+  std::string interface = default_interface;
+  bool tracked() const;  // throws UsageError for a --vision-source other than raw or tracked
+};
+void add_vision_options(po::options_description& options, NetworkOptions& network);
+
+// What every long-running program offers its supervisor (a script, a test, systemd).
+struct DaemonOptions {
+  // Written once the program is ready (see app::ReadyFile); empty: none.
+  std::string ready_file;
+};
+void add_daemon_options(po::options_description& options, DaemonOptions& daemon);
+
+// Parses argv. Prints --help (with defaults) and returns false when the program should exit 0.
+// Throws UsageError for anything wrong, with one line of explanation.
+bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,
+                        const std::string& usage_line, const std::string& description,
+                        const po::positional_options_description* positional = nullptr);
+
+// Runs `body` and turns UsageError into "PROGRAM: error: ..." on stderr and exit code 2, and
+// any other exception into "PROGRAM: ..." and exit code 1.
+int run_main(const char* program, const std::function<int()>& body);
+
+}  // namespace ssl_formation::app

@@ -1,0 +1,47 @@
+#pragma once
+// A prediction as every model states it: for each step ahead, the predicted centroid cell and,
+// for each robot, its predicted cell and state, its position in millimetres, the radii that hold
+// it with 50% and 90% probability and the probability that its cell is right. The paper's model,
+// the motion model and the baselines all fill this; the wire message, the CSV, the field view and
+// the evaluation all read it.
+
+#include <cstdint>
+#include <vector>
+
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/base/state.hpp"
+
+namespace ssl_formation {
+
+struct RobotPrediction {
+  std::uint32_t robot_id = 0;
+  StateIndex state = 0;
+  Cell position;
+  Cell previous;
+  double probability = 0.0;
+  bool unseen = false;  // no candidate was ever counted: the robot holds its cell
+  // The predicted position in the feed's coordinates (mm): the motion model's estimate, or for
+  // the paper's model the centre of the predicted cell (filled by the PredictionPipeline).
+  Point feed_position;
+  Point normalised_position;
+  // Radii (mm) around feed_position holding the robot with 50% and 90% probability, and the
+  // expected squared error; 0 when the model states none (the paper's).
+  double radius50_mm = 0.0;
+  double radius90_mm = 0.0;
+  double mean_square_mm2 = 0.0;
+};
+
+struct PredictedStep {
+  Cell centroid;
+  double centroid_probability = 0.0;
+  bool centroid_unseen = false;  // the centroid row is empty: the centroid stays
+  std::vector<RobotPrediction> robots;
+  double formation_probability = 0.0;
+  double confidence = 0.0;  // product of formation probabilities up to this step
+};
+
+struct Prediction {
+  std::vector<PredictedStep> steps;  // steps[0] is the next formation
+};
+
+}  // namespace ssl_formation

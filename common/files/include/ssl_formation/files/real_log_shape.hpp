@@ -1,0 +1,60 @@
+#pragma once
+// A clean recording rewritten the way recorded Division A matches come (DESIGN.md section 7), to
+// measure training and prediction on what users will feed rather than on grSim's tidy frames:
+// every packet with camera id 0 holding the robots of one half of the field (as last seen in the
+// recording), 90 packets a second, no geometry packets; and, each on request, the mess of real
+// logs. The benchmarks time training on it, `ssl-evaluate as-real-log` writes it for held-out
+// evaluations.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "ssl_formation/base/result.hpp"
+
+namespace ssl_formation {
+
+// Each part of real logs' mess, placed at fixed fractions of the recording so that a held-out
+// split (the first two thirds to train) has some of each on both sides.
+struct RealLogMess {
+  // About one every 4 s for 3-8 packets: half of them a new id (11-15) somewhere on the field,
+  // half a robot's own id elsewhere and more confident than the robot (it wins the frame).
+  bool ghosts = false;
+  // Robot 4 of each team plays on as id 12 from a third of the recording, robot 7 as id 14 from
+  // 63% (a substitution: one id leaves, another appears where it was).
+  bool substitutions = false;
+  // Three stoppages of 25 s (from 10%, 40% and 83%) in which every robot stands where it was.
+  bool stoppages = false;
+  // Two stretches missing (15 s from 25%, 20 s from 70%): recordings cut into pieces.
+  bool cuts = false;
+  // From half of the recording on, every position mirrored: the teams changed ends.
+  bool change_of_ends = false;
+  // Gaussian noise on every reported position (SSL-Vision's is a few millimetres), mm.
+  double noise_mm = 0.0;
+  std::uint64_t seed = 11;
+  friend bool operator==(const RealLogMess&, const RealLogMess&) = default;
+};
+
+// Every part of the mess by name, for messages: what parse_real_log_mess takes in a list.
+inline constexpr std::string_view real_log_mess_names =
+    "ghosts, substitutions, stoppages, cuts, ends, noise";
+// "none", "all" (every part; noise 3 mm) or a comma-separated list (no spaces) of
+// real_log_mess_names; nothing for anything else.
+std::optional<RealLogMess> parse_real_log_mess(std::string_view text);
+
+struct RealLogCounts {
+  std::uint64_t packets_read = 0;     // vision packets with a detection in the recording
+  std::uint64_t packets_written = 0;  // half-field packets written
+  std::uint64_t ghost_detections = 0;
+  double recording_s = 0.0;  // the recording's first to last capture time
+};
+
+// Writes `recording`'s vision reshaped (and messed up) to `out` (gzip if its name ends in .gz).
+// Errors: the recording cannot be read or holds no detection, `out` is the recording itself or
+// cannot be written.
+Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
+                                        const std::filesystem::path& out, const RealLogMess& mess);
+
+}  // namespace ssl_formation

@@ -1,0 +1,154 @@
+#include "ssl_formation/match/referee.hpp"
+
+#include <array>
+#include <utility>
+
+#include "ssl_gc_referee_message.pb.h"
+
+namespace ssl_formation {
+
+namespace {
+constexpr std::array<std::string_view, game_state_count> game_state_names{
+    "unknown",
+    "halt",
+    "stop",
+    "running",
+    "free_kick",
+    "kickoff_preparation",
+    "penalty_preparation",
+    "ball_placement",
+    "timeout",
+};
+}  // namespace
+
+std::string_view to_string(GameState state) {
+  return game_state_names[static_cast<std::size_t>(state)];
+}
+
+std::optional<GameState> parse_game_state(std::string_view text) {
+  for (std::size_t i = 0; i < game_state_names.size(); ++i) {
+    if (game_state_names[i] == text) return static_cast<GameState>(i);
+  }
+  return std::nullopt;
+}
+
+std::optional<GameState> game_state_of_command(int command) {
+  switch (command) {
+    case Referee::HALT:
+      return GameState::halt;
+    case Referee::STOP:
+    case Referee::GOAL_YELLOW:
+    case Referee::GOAL_BLUE:
+      return GameState::stop;
+    case Referee::NORMAL_START:
+    case Referee::FORCE_START:
+      return GameState::running;
+    case Referee::PREPARE_KICKOFF_YELLOW:
+    case Referee::PREPARE_KICKOFF_BLUE:
+      return GameState::kickoff_preparation;
+    case Referee::PREPARE_PENALTY_YELLOW:
+    case Referee::PREPARE_PENALTY_BLUE:
+      return GameState::penalty_preparation;
+    case Referee::DIRECT_FREE_YELLOW:
+    case Referee::DIRECT_FREE_BLUE:
+    case Referee::INDIRECT_FREE_YELLOW:
+    case Referee::INDIRECT_FREE_BLUE:
+      return GameState::free_kick;
+    case Referee::TIMEOUT_YELLOW:
+    case Referee::TIMEOUT_BLUE:
+      return GameState::timeout;
+    case Referee::BALL_PLACEMENT_YELLOW:
+    case Referee::BALL_PLACEMENT_BLUE:
+      return GameState::ball_placement;
+    default:
+      return std::nullopt;
+  }
+}
+
+bool is_running_play(GameState state) {
+  return state == GameState::running || state == GameState::free_kick;
+}
+
+RefereeFollower::RefereeFollower(double source_timeout_s) : source_timeout_s_(source_timeout_s) {}
+
+RefereeChange RefereeFollower::add(std::string_view payload, double receive_s) {
+  Referee message;
+  // Partial: a message whose command is a number this schema does not know lacks its (required)
+  // command afterwards, and is counted as that rather than as undecodable.
+  if (!message.ParsePartialFromArray(payload.data(), static_cast<int>(payload.size()))) {
+    ++counters_.messages;
+    ++counters_.undecodable;
+    return {};
+  }
+  return add(message, receive_s);
+}
+
+RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
+  ++counters_.messages;
+  // A command this schema does not know says nothing usable, whoever sent it.
+  const std::optional<GameState> state =
+      message.has_command() ? game_state_of_command(message.command()) : std::nullopt;
+  if (!state) {
+    ++counters_.unknown_command;
+    return {};
+  }
+  RefereeChange change;
+  const std::string& source = message.source_identifier();  // "" when not given
+  if (heard_ && source != view_.source) {
+    // A second game controller (a test instance, a backup) while the first still speaks: the
+    // first keeps the match, the way the game controller's own clients follow one source.
+    if (!(receive_s - last_used_s_ > source_timeout_s_ || receive_s < last_used_s_)) {
+      ++counters_.other_source;
+      change.conflict = source != conflicting_source_;
+      conflicting_source_ = source;
+      return change;
+    }
+    ++counters_.source_switches;
+    change.source = true;
+  }
+  ++counters_.used;
+  last_used_s_ = receive_s;
+  if (!heard_ || change.source || message.command() != view_.command ||
+      message.command_counter() != view_.command_counter) {
+    change.command = true;
+    ++counters_.commands;
+  }
+  heard_ = true;
+  view_.source = source;
+  view_.state = *state;
+  view_.command = message.command();
+  view_.command_counter = message.command_counter();
+  view_.stage = message.has_stage() ? message.stage() : view_.stage;
+  const std::string& yellow = message.yellow().name();
+  const std::string& blue = message.blue().name();
+  if (yellow.empty() && blue.empty()) ++counters_.unnamed_teams;
+  if (yellow != view_.yellow_name || blue != view_.blue_name) {
+    change.teams = true;
+    view_.yellow_name = yellow;
+    view_.blue_name = blue;
+  }
+  if (message.has_blue_team_on_positive_half() &&
+      view_.blue_on_positive_half != message.blue_team_on_positive_half()) {
+    change.sides = true;
+    view_.blue_on_positive_half = message.blue_team_on_positive_half();
+  }
+  return change;
+}
+
+std::string describe(const RefereeFollower& referee) {
+  if (!referee.heard()) return "no referee heard";
+  const RefereeView& view = referee.view();
+  std::string out = "game ";
+  out += to_string(view.state);
+  if (view.stage >= 0 && Referee::Stage_IsValid(view.stage)) {
+    out += ", stage ";
+    out += Referee::Stage_Name(static_cast<Referee::Stage>(view.stage));
+  }
+  out += ", yellow '" + view.yellow_name + "', blue '" + view.blue_name + "'";
+  if (view.blue_on_positive_half) {
+    out += *view.blue_on_positive_half ? ", blue's goal on +x" : ", blue's goal on -x";
+  }
+  return out;
+}
+
+}  // namespace ssl_formation

@@ -1,0 +1,165 @@
+#pragma once
+// Prediction with the motion model (motion_model.hpp): a MotionTable turned into shrunk
+// estimates at every back-off level and a calibration fitted on the table's held-out sample,
+// then, for each robot and step, a position in mm, the radii holding it with 50% and 90%
+// probability and the calibrated probability that its predicted cell is right.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/motion_model/motion_model.hpp"
+#include "ssl_formation/base/prediction.hpp"
+#include "ssl_formation/base/probed_memory.hpp"
+#include "ssl_formation/base/state.hpp"
+
+namespace ssl_formation {
+
+struct MotionModelSettings {
+  // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
+  // are far from independent, so this is a few seconds of one robot's frames.
+  double shrinkage = 60.0;
+  // The damping of constant velocity before any data, as robots that brake with this time
+  // constant (s): k(h) = tau / h x (1 - exp(-h / tau)).
+  double prior_time_constant_s = 0.7;
+  // The spread before any data: sqrt(mean squared error) = base + per_second x horizon.
+  double prior_error_mm = 100.0;
+  double prior_error_mm_per_s = 450.0;
+  // Fewer held-out instances than this: Gaussian radii and uncalibrated probabilities.
+  std::size_t min_calibration_instances = 100;
+};
+
+// One robot as the motion model sees it: normalised position and velocity (mm/s).
+struct MotionRobot {
+  std::uint32_t robot_id = 0;
+  Point position;
+  MotionKinematics kinematics;  // valid if has_velocity; otherwise the robot counts as standing
+  bool has_velocity = false;
+  std::uint32_t context = 0;  // MotionHistory::Entry::context
+};
+
+// Where one robot will be `horizon_index + 1` steps ahead, normalised.
+struct MotionForecast {
+  Point position;
+  double mean_square_mm2 = 0.0;  // the expected squared distance to the truth
+  double radius50_mm = 0.0;
+  double radius90_mm = 0.0;
+  MotionLevel level = MotionLevel::all;  // the finest level with counts
+  bool from_counts = false;              // false: the empty table's prior
+};
+
+class MotionModel {
+  // One robot's estimate at one horizon, found by its keys (72 bytes with five regressors: not
+  // aligned to a line, so a robot's horizons lie back to back). No initialisers: predict() keeps
+  // a scratch array of them per robot.
+  struct Resolved {
+    double mean_x, mean_y;  // residual against damped constant velocity, mm
+    double mean_square;
+    std::array<double, motion_regressors> coefficients;
+    MotionLevel level;
+  };
+
+ public:
+  // The estimates predict() found for each robot slot at its last frame, by the robot's finest
+  // key. A real robot keeps its keys (cell, velocity class, standing context) for many frames in
+  // a row, so a frame mostly reads these few contiguous lines instead of probing the index: the
+  // daemon sleeps 16 ms between frames, and after that every line it touches is a cache miss and
+  // every page a TLB miss. (The simulated opponent of the end-to-end benchmark jumps to a new
+  // formation every frame: there it misses every time.) The caller owns it, so predict() stays
+  // const; it holds copies of the model's estimates, so predictions are the same without it.
+  class Cache {
+   public:
+    void clear();
+
+   private:
+    friend class MotionModel;
+    std::uint64_t model_id_ = 0;  // the model the entries are from; 0: none
+    std::size_t horizons_ = 0;    // resolved per robot: those predict() reaches
+    std::array<MotionKey, MotionFeatures::robot_slots> keys_{};  // per slot, at horizon 0
+    std::vector<Resolved> estimates_;                            // slot-major, `horizons_` each
+  };
+
+  // `grid` and `field` are those the cell probabilities are calibrated for.
+  MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
+              MotionModelSettings settings = {});
+
+  const MotionConfig& config() const { return config_; }
+  int horizons() const { return config_.horizons; }
+
+  MotionForecast forecast(int horizon_index, const MotionRobot& robot) const;
+  // The same with the robot's keys at horizon 0, finest first (motion_keys), computed once for
+  // every horizon: the hot path of predict().
+  using RobotKeys = std::array<MotionKey, motion_levels - 1>;
+  static RobotKeys motion_keys(const MotionRobot& robot);
+  MotionForecast forecast(int horizon_index, const MotionRobot& robot, const RobotKeys& keys) const;
+  // The calibrated probability that the robot is in `cell` when it is forecast `forecast`.
+  double cell_probability(int horizon_index, const MotionForecast& forecast, const Grid& grid,
+                          const FieldSize& field, Cell cell) const;
+  // The uncalibrated Gaussian mass of the cell (what the calibration maps).
+  static double gaussian_cell_mass(const MotionForecast& forecast, const Grid& grid,
+                                   const FieldSize& field, Cell cell);
+
+  // Predicts `horizon` steps for every robot into `out` (reusing its storage), the states in
+  // `codec`'s cells; positions are turned back into the feed's coordinates with `attacks`.
+  // Steps beyond the table's horizons extrapolate the last two learned steps.
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out) const;
+  // The same, looking the robots' estimates up through `cache` (see Cache).
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out,
+               Cache& cache) const;
+
+ private:
+  // A slot is the key and the estimate rounded to floats, padded to a cache line so that a
+  // probe reads one line: unpadded (40 bytes), half the slots straddled two.
+  struct alignas(64) Slot {
+    MotionKey key;
+    float mean_x, mean_y, mean_square;
+    std::array<float, motion_regressors> coefficients;
+  };
+  struct Estimate {
+    double mean_x = 0.0, mean_y = 0.0;  // residual against damped constant velocity, mm
+    double mean_square = 0.0;           // of the truth about the estimate, mm^2
+    double n = 0.0;
+    // Of the regressors (motion_regressors_of): e's is the damping of constant velocity.
+    std::array<double, motion_regressors> coefficients{1.0};
+  };
+  struct Horizon {
+    double damping = 1.0;
+    Estimate root;
+    double z50 = 0.0, z90 = 0.0;  // radius / sqrt(mean square)
+    // Isotonic map from the Gaussian mass to the observed hit rate: block upper bounds and
+    // their rates, increasing. Empty: identity.
+    std::vector<double> mass_upper;
+    std::vector<double> hit_rate;
+  };
+  Estimate shrink(const MotionRow& row, const Estimate& parent) const;
+  const Slot* find(MotionKey key) const;
+  // The finest estimate with counts among the robot's keys, else the horizon's root.
+  Resolved resolve(int horizon_index, const RobotKeys& keys) const;
+  // The robot's estimates for the first `horizons` learned horizons, through `cache` if there
+  // is one (else in `scratch`).
+  const Resolved* resolve_all(const MotionRobot& robot, std::size_t horizons, Cache* cache,
+                              std::array<Resolved, MotionConfig::max_horizons>& scratch) const;
+  MotionForecast forecast(int horizon_index, const MotionRobot& robot, const Resolved& e) const;
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out,
+               Cache* cache) const;
+  void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
+  void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
+                 const FieldSize& field);
+  double calibrated(int horizon_index, double mass) const;
+
+  MotionConfig config_;
+  MotionModelSettings settings_;
+  std::vector<Horizon> horizon_;
+  // Every level's estimates in one open-addressing table (linear probing, power-of-two size):
+  // a lookup is one or two cache lines, where a node map costs a pointer chase per probe.
+  std::vector<Slot, ProbedAllocator<Slot>> index_;
+  std::size_t index_mask_ = 0;
+  std::uint64_t id_;  // unique per model built: what a Cache's entries are checked against
+};
+
+}  // namespace ssl_formation

@@ -1,0 +1,117 @@
+#pragma once
+// Keeps the motion model's stated cell probabilities honest while the play changes. The table's
+// calibration (MotionModel) was fitted on held-out seconds of the play it learned from, and a
+// match departs from that for stretches at a time: in a long stoppage every robot stands, and a
+// probability fitted on running play says 0.3 where the robot is sure to stay in its cell. So
+// every prediction is checked when its instant comes (the robot's cell then), and each stated
+// probability is moved towards the hit rate lately seen for probabilities like it (per step and
+// tenth of probability), by a weight that grows with that evidence. Only what has already
+// happened is used: the correction at time t comes from predictions whose instant is before t.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/base/interval_gate.hpp"
+#include "ssl_formation/base/prediction.hpp"
+
+namespace ssl_formation {
+
+struct OnlineCalibrationSettings {
+  // How fast old evidence fades, in seconds of the data clock. On the inner splits (the first
+  // two thirds of each recording, clean and reshaped as real logs with their mess), 60 s and
+  // 120 s kept the 2 s ECE at or below 0.041 everywhere; 20 s let it reach 0.045.
+  double half_life_s = 60.0;
+  // The (faded) number of checked robot predictions at which a bin's observed rate weighs as
+  // much as the table's calibration. On the same inner splits 30 and 200 did about as well (2 s
+  // ECE at most 0.039 and 0.042); 30 is what 200 was when every frame was checked.
+  double prior_weight = 30.0;
+  // Predictions are remembered (to be checked) at most this often, in seconds of the data clock:
+  // frames 16 ms apart say almost the same thing, and checking every one of them cost a daemon
+  // a tenth of its prediction time.
+  double remember_interval_s = 0.1;
+  // How long after its instant a prediction may still be checked (a robot may be missing from
+  // the frame that reaches it; a later one within this may see it).
+  double tolerance_s = 0.05;
+  // Every value finite, the half-life positive and the others not negative.
+  bool valid() const;
+};
+
+class OnlineCalibration {
+ public:
+  static constexpr int bin_count = 10;
+  // Stated probabilities are kept within these bounds: a robot is never certain to be in or out
+  // of a cell, and a formation's probability is their product.
+  static constexpr double min_probability = 0.001;
+  static constexpr double max_probability = 0.999;
+
+  explicit OnlineCalibration(OnlineCalibrationSettings settings = {});
+
+  // Checks every remembered prediction whose instant has come against `formation` (the cell of
+  // each robot seen in it) and forgets those whose instant passed without the robot seen. Call
+  // with every formation in time order; a clock going back starts over.
+  void observe(const Formation& formation);
+  // Remembers the robot probabilities of `prediction`, made at `time_s` with `step_s` between
+  // its steps from a formation normalised towards `attacks`, as stated before adjust(); unless
+  // one was remembered less than the remember interval before.
+  void remember(const Prediction& prediction, double time_s, double step_s,
+                AttackDirection attacks);
+  // Moves every robot probability of `prediction` towards its bin's recent hit rate, and the
+  // steps' formation probabilities and confidences with them.
+  void adjust(Prediction& prediction) const;
+  // Forgets everything. A new table does not call for it: the live trainer replaces the table
+  // every few seconds and it changes little each time, while the evidence of the last minute
+  // stays true of the play; a table of another opponent is outweighed within a minute or two.
+  void clear();
+
+  // What has been checked so far (since the last clear), for status lines and tests.
+  std::uint64_t checked() const { return checked_; }
+  std::size_t pending() const;
+  // The probability a bin would move `stated` to at step `step` (0-based); `stated` itself
+  // before any evidence.
+  double adjusted(std::size_t step, double stated) const;
+
+ private:
+  struct Pending {
+    double due_s = 0.0;
+    std::uint32_t robot_id = 0;
+    float probability = 0.0f;  // as stated, for the bin's sum (its bin is kept exactly apart)
+    std::int16_t cell_x = 0, cell_y = 0;  // grids have at most a few hundred cells
+    std::uint8_t bin = 0;                 // bin_of the stated probability, as a double
+    AttackDirection attacks = AttackDirection::positive_x;
+  };
+  // Faded sums over the checked predictions of one bin.
+  struct Bin {
+    double weight = 0.0;
+    double hits = 0.0;
+    double stated = 0.0;
+  };
+  struct Step {
+    // The predictions waiting for their instant, in due order (predictions come in time order),
+    // in a ring of a power-of-two size: a daemon remembers and checks a few dozen every frame,
+    // and a ring does that without allocating once it has grown.
+    std::vector<Pending> ring;
+    std::size_t head = 0, size = 0;
+    Pending& at(std::size_t i) { return ring[(head + i) & (ring.size() - 1)]; }
+    const Pending& at(std::size_t i) const { return ring[(head + i) & (ring.size() - 1)]; }
+    void push(const Pending& pending);
+    std::array<Bin, bin_count> bins{};
+    // Per bin, what adjust() adds: the evidence's weight times the rate's departure from the
+    // stated probabilities. Worked out by observe() (every tenth of a second of the data clock),
+    // so that adjust() only looks it up.
+    std::array<double, bin_count> correction{};
+  };
+  static std::size_t bin_of(double probability);
+
+  OnlineCalibrationSettings settings_;
+  std::vector<Step> steps_;
+  std::optional<double> last_time_s_;
+  IntervalGate correcting_;    // when the corrections are worked out
+  IntervalGate remembering_;  // when predictions are remembered
+  std::uint64_t checked_ = 0;
+};
+
+}  // namespace ssl_formation

@@ -1,0 +1,500 @@
+#include "ssl_formation/motion_model/motion_predictor.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace ssl_formation {
+
+namespace {
+
+constexpr double damping_weight_mm2 = 500.0 * 500.0;
+
+// A 2-D isotropic Gaussian holds fraction p within sqrt(-ln(1 - p)) x its rms distance.
+const double gaussian_z50 = std::sqrt(std::log(2.0));
+const double gaussian_z90 = std::sqrt(std::log(10.0));
+
+// The standard normal CDF, tabulated over [-8, 8] and interpolated linearly (error below 2e-6,
+// far under what the calibration resolves): erfc for every cell edge of every robot and step
+// was a third of the prediction time.
+class NormalCdfTable {
+ public:
+  NormalCdfTable() {
+    for (std::size_t i = 0; i < values_.size(); ++i) {
+      const double z = -limit + static_cast<double>(i) / per_unit;
+      values_[i] = 0.5 * std::erfc(-z / std::sqrt(2.0));
+    }
+  }
+  double operator()(double z) const {
+    if (!(z > -limit)) return 0.0;  // also NaN
+    if (z >= limit) return 1.0;
+    const double position = (z + limit) * per_unit;
+    const auto i = static_cast<std::size_t>(position);
+    const double fraction = position - static_cast<double>(i);
+    return values_[i] + fraction * (values_[i + 1] - values_[i]);
+  }
+
+ private:
+  static constexpr double limit = 8.0;
+  static constexpr double per_unit = 128.0;  // 16 KiB: it stays in cache between frames
+  std::array<double, static_cast<std::size_t>(2 * limit * per_unit) + 2> values_{};
+};
+const NormalCdfTable normal_cdf;
+
+double quantile(std::vector<double>& values, double p) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double rank = p * static_cast<double>(values.size() - 1);
+  const auto low = static_cast<std::size_t>(std::floor(rank));
+  const std::size_t high = std::min(low + 1, values.size() - 1);
+  return values[low] + (rank - static_cast<double>(low)) * (values[high] - values[low]);
+}
+
+std::uint64_t next_model_id() {
+  static std::atomic<std::uint64_t> last{0};
+  return ++last;
+}
+
+}  // namespace
+
+MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
+                         MotionModelSettings settings)
+    : config_(table.config()), settings_(settings), id_(next_model_id()) {
+  const int horizons = config_.horizons;
+  horizon_.resize(static_cast<std::size_t>(horizons));
+
+  // The coarser levels are sums of the finest rows.
+  std::vector<MotionRow> roots(static_cast<std::size_t>(horizons));
+  std::unordered_map<MotionKey, MotionRow> coarse;
+  std::unordered_map<MotionKey, MotionRow> rows;
+  table.row_map().for_each([&](MotionKey key, const MotionRow& row) {
+    rows.emplace(key, row);
+    roots[static_cast<std::size_t>(decode_motion_key(key).horizon_index)].add(row);
+    for (MotionKey parent = coarser_motion_key(key);
+         decode_motion_key(parent).level != MotionLevel::all; parent = coarser_motion_key(parent)) {
+      coarse[parent].add(row);
+    }
+  });
+
+  for (int h = 0; h < horizons; ++h) {
+    Horizon& horizon = horizon_[static_cast<std::size_t>(h)];
+    const double horizon_s = (h + 1) * config_.step_s;
+    const double tau = settings_.prior_time_constant_s;
+    const double prior_damping = tau / horizon_s * (1.0 - std::exp(-horizon_s / tau));
+    const MotionRow& root = roots[static_cast<std::size_t>(h)];
+    // The damping is the least-squares factor, held towards the prior by `shrinkage`
+    // instances of a 500 mm extrapolation.
+    const double weight = settings_.shrinkage * 500.0 * 500.0;
+    horizon.damping = (static_cast<double>(root.dx(0)) + weight * prior_damping) /
+                      (static_cast<double>(root.xx(0, 0)) + weight);
+    const double prior_rms = settings_.prior_error_mm + settings_.prior_error_mm_per_s * horizon_s;
+    Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0, {}};
+    prior.coefficients[0] = horizon.damping;
+    horizon.root = shrink(root, prior);
+    horizon.z50 = gaussian_z50;
+    horizon.z90 = gaussian_z90;
+  }
+  // Coarse to fine, each level shrunk towards its parent.
+  std::unordered_map<MotionKey, Estimate> estimates;
+  for (int level = motion_levels - 2; level >= 0; --level) {
+    const auto shrink_level = [&](const std::unordered_map<MotionKey, MotionRow>& source) {
+      for (const auto& [key, row] : source) {
+        const MotionKeyParts parts = decode_motion_key(key);
+        if (static_cast<int>(parts.level) != level) continue;
+        const Horizon& horizon = horizon_[static_cast<std::size_t>(parts.horizon_index)];
+        const MotionKey parent_key = coarser_motion_key(key);
+        const Estimate& parent = decode_motion_key(parent_key).level == MotionLevel::all
+                                     ? horizon.root
+                                     : estimates.at(parent_key);
+        estimates[key] = shrink(row, parent);
+      }
+    };
+    shrink_level(level == 0 ? rows : coarse);
+  }
+  index_estimates(estimates);
+  for (int h = 0; h < horizons; ++h) calibrate(table, h, grid, field);
+}
+
+MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& parent) const {
+  if (row.n() == 0) return parent;
+  constexpr int r = motion_regressors;
+  const double n = static_cast<double>(row.n());
+  const double k = settings_.shrinkage;
+  const auto f = [](std::int64_t value) { return static_cast<double>(value); };
+  const double sd_x = f(row.d(0)), sd_y = f(row.d(1));
+  std::array<double, r> sx_x{}, sx_y{}, dx{};
+  std::array<std::array<double, r>, r> xx{};
+  for (int i = 0; i < r; ++i) {
+    sx_x[i] = f(row.x(i, 0));
+    sx_y[i] = f(row.x(i, 1));
+    dx[i] = f(row.dx(i));
+    for (int j = 0; j < r; ++j) xx[i][j] = f(row.xx(i, j));
+  }
+  // The row's least-squares fit d = a + sum c_i x_i on centred sums, each coefficient held
+  // towards the parent's by `shrinkage` instances of a 500 mm regressor (ridge towards the
+  // parent): r normal equations, solved by elimination.
+  const double weight = k * damping_weight_mm2;
+  std::array<std::array<double, r + 1>, r> system{};
+  for (int i = 0; i < r; ++i) {
+    for (int j = 0; j < r; ++j) {
+      system[i][j] = xx[i][j] - (sx_x[i] * sx_x[j] + sx_y[i] * sx_y[j]) / n;
+    }
+    system[i][i] = std::max(system[i][i], 0.0) + weight;
+    system[i][r] = dx[i] - (sd_x * sx_x[i] + sd_y * sx_y[i]) / n + weight * parent.coefficients[i];
+  }
+  for (int i = 0; i < r; ++i) {  // the matrix is positive definite: no pivoting needed
+    for (int row_below = i + 1; row_below < r; ++row_below) {
+      const double factor = system[row_below][i] / system[i][i];
+      for (int j = i; j <= r; ++j) system[row_below][j] -= factor * system[i][j];
+    }
+  }
+  Estimate e;
+  e.n = n;
+  for (int i = r - 1; i >= 0; --i) {
+    double value = system[i][r];
+    for (int j = i + 1; j < r; ++j) value -= system[i][j] * e.coefficients[j];
+    e.coefficients[i] = value / system[i][i];
+  }
+  const std::array<double, r>& c = e.coefficients;
+  // The intercept, held towards what the parent predicts at the row's mean regressors.
+  double target_x = parent.mean_x, target_y = parent.mean_y;
+  double r_x = sd_x, r_y = sd_y;  // sums of d - sum c_i x_i
+  for (int i = 0; i < r; ++i) {
+    target_x += (parent.coefficients[i] - c[i]) * sx_x[i] / n;
+    target_y += (parent.coefficients[i] - c[i]) * sx_y[i] / n;
+    r_x -= c[i] * sx_x[i];
+    r_y -= c[i] * sx_y[i];
+  }
+  e.mean_x = (r_x + k * target_x) / (n + k);
+  e.mean_y = (r_y + k * target_y) / (n + k);
+  // Sum of |d - sum c_i x_i|^2, then about the intercept.
+  double rr = f(row.dd());
+  for (int i = 0; i < r; ++i) {
+    rr -= 2.0 * c[i] * dx[i];
+    for (int j = 0; j < r; ++j) rr += c[i] * c[j] * xx[i][j];
+  }
+  const double about_fit = std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
+                                          n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) /
+                                             n);
+  e.mean_square = (n * about_fit + k * parent.mean_square) / (n + k);
+  return e;
+}
+
+namespace {
+constexpr MotionKey empty_slot = ~MotionKey{0};  // no key has every bit set
+std::size_t slot_of(MotionKey key, std::size_t mask) {
+  key ^= key >> 31;
+  key *= 0x7fb5d329728ea185ULL;
+  key ^= key >> 27;
+  return static_cast<std::size_t>(key) & mask;
+}
+}  // namespace
+
+void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates) {
+  std::size_t size = 16;
+  while (size < 2 * estimates.size()) size *= 2;
+  index_mask_ = size - 1;
+  index_.assign(size, Slot{empty_slot, 0, 0, 0, {}});
+  for (const auto& [key, e] : estimates) {
+    std::size_t slot = slot_of(key, index_mask_);
+    while (index_[slot].key != empty_slot) slot = (slot + 1) & index_mask_;
+    index_[slot] = Slot{key,
+                        static_cast<float>(e.mean_x),
+                        static_cast<float>(e.mean_y),
+                        static_cast<float>(e.mean_square),
+                        {}};
+    for (int i = 0; i < motion_regressors; ++i) {
+      index_[slot].coefficients[static_cast<std::size_t>(i)] =
+          static_cast<float>(e.coefficients[static_cast<std::size_t>(i)]);
+    }
+  }
+}
+
+const MotionModel::Slot* MotionModel::find(MotionKey key) const {
+  for (std::size_t slot = slot_of(key, index_mask_);; slot = (slot + 1) & index_mask_) {
+    if (index_[slot].key == key) return &index_[slot];
+    if (index_[slot].key == empty_slot) return nullptr;
+  }
+}
+
+MotionModel::RobotKeys MotionModel::motion_keys(const MotionRobot& robot) {
+  const Point v = robot.has_velocity ? robot.kinematics.velocity : Point{};
+  MotionInstance instance;
+  instance.robot_id = robot.robot_id;
+  instance.x = whole_mm(robot.position.x);
+  instance.y = whole_mm(robot.position.y);
+  instance.v_x = whole_mm(v.x);
+  instance.v_y = whole_mm(v.y);
+  instance.context = robot.context;
+  RobotKeys keys{};
+  keys[0] = encode_motion_key(motion_key_parts(0, instance));
+  for (std::size_t level = 1; level < keys.size(); ++level) {
+    keys[level] = coarser_motion_key(keys[level - 1]);
+  }
+  return keys;
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot) const {
+  return forecast(horizon_index, robot, motion_keys(robot));
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot,
+                                     const RobotKeys& keys) const {
+  return forecast(horizon_index, robot, resolve(horizon_index, keys));
+}
+
+MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& keys) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  const MotionKey horizon_bits = encode_motion_key({horizon_index, MotionLevel::robot, 0, 0, 0, 0});
+  for (std::size_t level = 0; level < keys.size(); ++level) {
+    if (const Slot* found = find(keys[level] | horizon_bits)) {
+      Resolved e;
+      e.mean_x = found->mean_x;
+      e.mean_y = found->mean_y;
+      e.mean_square = found->mean_square;
+      for (int i = 0; i < motion_regressors; ++i) e.coefficients[i] = found->coefficients[i];
+      e.level = static_cast<MotionLevel>(level);
+      return e;
+    }
+  }
+  return Resolved{horizon.root.mean_x, horizon.root.mean_y, horizon.root.mean_square,
+                  horizon.root.coefficients, MotionLevel::all};
+}
+
+void MotionModel::Cache::clear() {
+  model_id_ = 0;
+  estimates_.clear();
+}
+
+const MotionModel::Resolved* MotionModel::resolve_all(
+    const MotionRobot& robot, std::size_t horizons, Cache* cache,
+    std::array<Resolved, MotionConfig::max_horizons>& scratch) const {
+  const RobotKeys keys = motion_keys(robot);
+  Resolved* out = scratch.data();
+  if (cache) {
+    if (cache->model_id_ != id_ || cache->horizons_ != horizons) {
+      cache->model_id_ = id_;
+      cache->horizons_ = horizons;
+      cache->keys_.fill(empty_slot);
+      cache->estimates_.assign(cache->keys_.size() * horizons, Resolved{});
+    }
+    const auto slot = static_cast<std::size_t>(MotionFeatures::robot_slot(robot.robot_id));
+    out = cache->estimates_.data() + slot * horizons;
+    // The key holds the robot slot, so an entry is only ever this slot's.
+    if (cache->keys_[slot] == keys[0]) return out;
+    cache->keys_[slot] = keys[0];
+  }
+  for (std::size_t h = 0; h < horizons; ++h) out[h] = resolve(static_cast<int>(h), keys);
+  return out;
+}
+
+MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot,
+                                     const Resolved& e) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  MotionForecast f;
+  f.level = e.level;
+  f.from_counts = horizon.root.n > 0.0;
+  const double horizon_s = (horizon_index + 1) * config_.step_s;
+  // Without a velocity the robot counts as standing: no regressor moves it.
+  f.position = {robot.position.x + e.mean_x, robot.position.y + e.mean_y};
+  if (robot.has_velocity) {
+    const MotionRegressors x = motion_regressors_of(robot.kinematics, horizon_s);
+    for (int i = 0; i < motion_regressors; ++i) {
+      f.position.x += e.coefficients[i] * x[i].x;
+      f.position.y += e.coefficients[i] * x[i].y;
+    }
+  }
+  f.mean_square_mm2 = e.mean_square;
+  const double rms = std::sqrt(f.mean_square_mm2);
+  f.radius50_mm = horizon.z50 * rms;
+  f.radius90_mm = horizon.z90 * rms;
+  return f;
+}
+
+double MotionModel::gaussian_cell_mass(const MotionForecast& forecast, const Grid& grid,
+                                       const FieldSize& field, Cell cell) {
+  // Per axis the variance is half the expected squared distance.
+  const double inverse_s = 1.0 / std::sqrt(std::max(forecast.mean_square_mm2, 1.0) / 2.0);
+  const auto axis = [inverse_s](double mean, int index, int cells, double extent) {
+    const double size = extent / cells;
+    const double low = -extent / 2.0 + index * size;
+    // Edge cells hold everything beyond the field (Grid::cell_of clamps).
+    const double below = index == 0 ? 0.0 : normal_cdf((low - mean) * inverse_s);
+    const double up_to = index == cells - 1 ? 1.0 : normal_cdf((low + size - mean) * inverse_s);
+    return up_to - below;
+  };
+  return axis(forecast.position.x, cell.x, grid.length(), field.length_mm) *
+         axis(forecast.position.y, cell.y, grid.width(), field.width_mm);
+}
+
+void MotionModel::calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
+                            const FieldSize& field) {
+  const std::vector<HeldOutInstance> sample = table.calibration(horizon_index);
+  if (sample.size() < settings_.min_calibration_instances) return;
+  std::vector<double> z;
+  std::vector<std::pair<double, bool>> masses;
+  z.reserve(sample.size());
+  masses.reserve(sample.size());
+  for (const HeldOutInstance& held_out : sample) {
+    const MotionInstance& i = held_out.instance;
+    const MotionRobot robot{i.robot_id,
+                            {static_cast<double>(i.x), static_cast<double>(i.y)},
+                            i.kinematics(),
+                            true,
+                            i.context};
+    const MotionForecast f = forecast(horizon_index, robot);
+    const Point truth{robot.position.x + i.d_x, robot.position.y + i.d_y};
+    z.push_back(std::hypot(truth.x - f.position.x, truth.y - f.position.y) /
+                std::sqrt(std::max(f.mean_square_mm2, 1.0)));
+    const Cell predicted = grid.cell_of(f.position, field);
+    masses.emplace_back(gaussian_cell_mass(f, grid, field, predicted),
+                        grid.cell_of(truth, field) == predicted);
+  }
+  Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  horizon.z50 = quantile(z, 0.5);
+  horizon.z90 = quantile(z, 0.9);
+
+  // Pool-adjacent-violators: the non-decreasing step function of the mass closest to the hits.
+  std::sort(masses.begin(), masses.end());
+  struct Block {
+    double hits = 0.0;
+    double count = 0.0;
+    double mass_sum = 0.0;
+    double upper = 0.0;
+  };
+  std::vector<Block> blocks;
+  for (const auto& [mass, hit] : masses) {
+    blocks.push_back({hit ? 1.0 : 0.0, 1.0, mass, mass});
+    while (blocks.size() >= 2) {
+      Block& last = blocks.back();
+      Block& before = blocks[blocks.size() - 2];
+      if (before.hits / before.count < last.hits / last.count) break;
+      before.hits += last.hits;
+      before.count += last.count;
+      before.mass_sum += last.mass_sum;
+      before.upper = last.upper;
+      blocks.pop_back();
+    }
+  }
+  for (const Block& block : blocks) {
+    horizon.mass_upper.push_back(block.upper);
+    // Two pseudo-instances at the block's own mean mass keep a small block off 0 and 1.
+    horizon.hit_rate.push_back((block.hits + 2.0 * block.mass_sum / block.count) /
+                               (block.count + 2.0));
+  }
+}
+
+double MotionModel::calibrated(int horizon_index, double mass) const {
+  const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
+  if (horizon.mass_upper.empty()) return mass;
+  const auto it = std::lower_bound(horizon.mass_upper.begin(), horizon.mass_upper.end(), mass);
+  if (it == horizon.mass_upper.end()) return horizon.hit_rate.back();
+  return horizon.hit_rate[static_cast<std::size_t>(it - horizon.mass_upper.begin())];
+}
+
+double MotionModel::cell_probability(int horizon_index, const MotionForecast& forecast,
+                                     const Grid& grid, const FieldSize& field, Cell cell) const {
+  return calibrated(horizon_index, gaussian_cell_mass(forecast, grid, field, cell));
+}
+
+void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
+                          const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
+                          Prediction& out) const {
+  predict(robots, horizon, codec, field, attacks, out, nullptr);
+}
+
+void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
+                          const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
+                          Prediction& out, Cache& cache) const {
+  predict(robots, horizon, codec, field, attacks, out, &cache);
+}
+
+void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
+                          const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
+                          Prediction& out, Cache* cache) const {
+  const Grid& grid = codec.grid();
+  const auto steps = static_cast<std::size_t>(horizon);
+  out.steps.resize(steps);
+  for (PredictedStep& step : out.steps) step.robots.resize(robots.size());
+  const int learned = config_.horizons;
+
+  // The learned horizons this prediction reaches.
+  const auto resolved = static_cast<std::size_t>(std::min(horizon, learned));
+  for (std::size_t r = 0; r < robots.size(); ++r) {
+    const MotionRobot& robot = robots[r];
+    // The two forecasts before the current step, for extrapolating beyond the learned ones.
+    MotionForecast before_last{robot.position, 0.0, 0.0, 0.0, MotionLevel::all, true};
+    MotionForecast last = before_last;
+    Cell previous = grid.cell_of(robot.position, field);
+    std::array<Resolved, MotionConfig::max_horizons> scratch;
+    const Resolved* estimates = resolve_all(robot, resolved, cache, scratch);
+    for (int k = 1; k <= horizon; ++k) {
+      MotionForecast f;
+      int calibration_index = k - 1;
+      if (k <= learned) {
+        f = forecast(k - 1, robot, estimates[k - 1]);
+      } else {
+        calibration_index = learned - 1;
+        f = last;
+        f.position = {2.0 * last.position.x - before_last.position.x,
+                      2.0 * last.position.y - before_last.position.y};
+        f.radius50_mm = 2.0 * last.radius50_mm - before_last.radius50_mm;
+        f.radius90_mm = 2.0 * last.radius90_mm - before_last.radius90_mm;
+        const double rms =
+            std::sqrt(last.mean_square_mm2) * 2.0 - std::sqrt(before_last.mean_square_mm2);
+        f.mean_square_mm2 = rms * rms;
+      }
+      const Cell cell = grid.cell_of(f.position, field);
+      RobotPrediction& p = out.steps[static_cast<std::size_t>(k - 1)].robots[r];
+      p.robot_id = robot.robot_id;
+      p.position = cell;
+      p.previous = previous;
+      p.probability = cell_probability(calibration_index, f, grid, field, cell);
+      p.unseen = !f.from_counts;
+      p.feed_position = normalise(f.position, attacks);
+      p.radius50_mm = f.radius50_mm;
+      p.radius90_mm = f.radius90_mm;
+      p.mean_square_mm2 = f.mean_square_mm2;
+      p.normalised_position = f.position;
+      previous = cell;
+      before_last = last;
+      last = f;
+    }
+  }
+
+  double confidence = 1.0;
+  for (PredictedStep& step : out.steps) {
+    Point centroid{};
+    double mean_square = 0.0;
+    double formation = 1.0;
+    bool unseen = false;
+    for (const RobotPrediction& p : step.robots) {
+      centroid.x += p.normalised_position.x;
+      centroid.y += p.normalised_position.y;
+      mean_square += p.mean_square_mm2;
+      formation *= p.probability;
+      unseen = unseen || p.unseen;
+    }
+    const double n = static_cast<double>(std::max<std::size_t>(step.robots.size(), 1));
+    centroid = {centroid.x / n, centroid.y / n};
+    step.centroid = grid.cell_of(centroid, field);
+    // The mean of n independent errors: the Gaussian mass of its cell, not calibrated.
+    MotionForecast mean_forecast;
+    mean_forecast.position = centroid;
+    mean_forecast.mean_square_mm2 = mean_square / (n * n);
+    step.centroid_probability = gaussian_cell_mass(mean_forecast, grid, field, step.centroid);
+    step.centroid_unseen = unseen;
+    const auto centroid_id = static_cast<StateIndex>(grid.cell_id(step.centroid));
+    for (RobotPrediction& p : step.robots) {
+      p.state = codec.compose(centroid_id, static_cast<StateIndex>(grid.cell_id(p.position)),
+                              static_cast<StateIndex>(grid.cell_id(p.previous)));
+    }
+    step.formation_probability = formation;
+    confidence *= formation;
+    step.confidence = confidence;
+  }
+}
+
+}  // namespace ssl_formation

@@ -1,0 +1,161 @@
+#include "ssl_formation/motion_model/online_calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ssl_formation {
+
+namespace {
+// Predictions remembered per step at most, the oldest going first: 16 robots remembered 10
+// times a second for 400 s. Only a step further ahead than that (or a caller that remembers
+// without observing) reaches it.
+constexpr std::size_t max_pending_per_step = 65536;
+constexpr std::size_t first_ring_size = 256;
+// How often the corrections adjust() adds are worked out again, in seconds of the data clock: a
+// division per bin, where the evidence behind them changes by a thousandth in this time.
+constexpr double correction_refresh_s = 0.1;
+}  // namespace
+
+void OnlineCalibration::Step::push(const Pending& pending) {
+  if (size == ring.size()) {
+    if (size >= max_pending_per_step) {
+      head = (head + 1) & (ring.size() - 1);  // the oldest goes
+      --size;
+    } else {
+      std::vector<Pending> grown(std::max(first_ring_size, 2 * ring.size()));
+      for (std::size_t i = 0; i < size; ++i) grown[i] = at(i);
+      ring = std::move(grown);
+      head = 0;
+    }
+  }
+  at(size++) = pending;
+}
+
+bool OnlineCalibrationSettings::valid() const {
+  const auto finite = [](double value) { return std::isfinite(value); };
+  return finite(half_life_s) && finite(prior_weight) && finite(tolerance_s) &&
+         finite(remember_interval_s) && half_life_s > 0.0 && prior_weight >= 0.0 &&
+         tolerance_s >= 0.0 && remember_interval_s >= 0.0;
+}
+
+OnlineCalibration::OnlineCalibration(OnlineCalibrationSettings settings) : settings_(settings) {}
+
+std::size_t OnlineCalibration::bin_of(double probability) {
+  const double scaled = std::clamp(probability, 0.0, 1.0) * bin_count;
+  return std::min(static_cast<std::size_t>(scaled), static_cast<std::size_t>(bin_count - 1));
+}
+
+void OnlineCalibration::clear() {
+  steps_.clear();
+  last_time_s_.reset();
+  correcting_.reset();
+  remembering_.reset();
+  checked_ = 0;
+}
+
+std::size_t OnlineCalibration::pending() const {
+  std::size_t total = 0;
+  for (const Step& step : steps_) total += step.size;
+  return total;
+}
+
+void OnlineCalibration::observe(const Formation& formation) {
+  const double t = formation.time_s;
+  if (last_time_s_ && t < *last_time_s_) clear();
+  const double fade =
+      last_time_s_ && t > *last_time_s_ ? std::exp2(-(t - *last_time_s_) / settings_.half_life_s)
+                                        : 1.0;
+  last_time_s_ = t;
+  for (Step& step : steps_) {
+    if (fade != 1.0) {
+      for (Bin& bin : step.bins) {
+        bin.weight *= fade;
+        bin.hits *= fade;
+        bin.stated *= fade;
+      }
+    }
+    // The predictions due by now, front first. Those waiting for their robot (not seen in this
+    // frame, still within the tolerance) are gathered at the front, in order, and stay.
+    std::size_t due = 0;
+    std::size_t kept = 0;
+    // One prediction's robots come in the formation's order (by id), so each is found by walking
+    // on from the last; a lower id starts the next prediction's.
+    const std::vector<FormationRobot>& robots = formation.robots;
+    std::size_t walk = 0;
+    for (; due < step.size && step.at(due).due_s <= t; ++due) {
+      const Pending& p = step.at(due);
+      if (p.attacks != formation.opponent_attacks) continue;  // its cells mean another side
+      if (t - p.due_s > settings_.tolerance_s) continue;       // passed unseen
+      if (walk > 0 && (walk == robots.size() || robots[walk].robot_id > p.robot_id)) walk = 0;
+      while (walk < robots.size() && robots[walk].robot_id < p.robot_id) ++walk;
+      const FormationRobot* robot =
+          walk < robots.size() && robots[walk].robot_id == p.robot_id ? &robots[walk] : nullptr;
+      if (robot && robot->observed) {
+        Bin& bin = step.bins[p.bin];
+        bin.weight += 1.0;
+        bin.hits += robot->cell.x == p.cell_x && robot->cell.y == p.cell_y ? 1.0 : 0.0;
+        bin.stated += p.probability;
+        ++checked_;
+      } else {
+        step.at(kept++) = p;
+      }
+    }
+    // Drops the `due - kept` handled ones: the kept move up against the not yet due.
+    const std::size_t handled = due - kept;
+    for (std::size_t i = kept; i-- > 0;) step.at(handled + i) = step.at(i);
+    if (!step.ring.empty()) step.head = (step.head + handled) & (step.ring.size() - 1);
+    step.size -= handled;
+  }
+  if (!correcting_.pass(t, correction_refresh_s)) return;
+  for (Step& step : steps_) {
+    for (std::size_t b = 0; b < step.bins.size(); ++b) {
+      const Bin& bin = step.bins[b];
+      step.correction[b] =
+          bin.weight > 0.0
+              ? (bin.hits - bin.stated) / (bin.weight + settings_.prior_weight)  // evidence x shift
+              : 0.0;
+    }
+  }
+}
+
+void OnlineCalibration::remember(const Prediction& prediction, double time_s, double step_s,
+                                 AttackDirection attacks) {
+  if (!remembering_.pass(time_s, settings_.remember_interval_s)) return;
+  if (steps_.size() < prediction.steps.size()) steps_.resize(prediction.steps.size());
+  for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
+    Step& step = steps_[s];
+    const double due_s = time_s + static_cast<double>(s + 1) * step_s;
+    for (const RobotPrediction& robot : prediction.steps[s].robots) {
+      if (!std::isfinite(robot.probability)) continue;  // nothing to learn of it
+      step.push({due_s, robot.robot_id, static_cast<float>(robot.probability),
+                 static_cast<std::int16_t>(robot.position.x),
+                 static_cast<std::int16_t>(robot.position.y),
+                 static_cast<std::uint8_t>(bin_of(robot.probability)), attacks});
+    }
+  }
+}
+
+double OnlineCalibration::adjusted(std::size_t step, double stated) const {
+  if (step >= steps_.size() || !std::isfinite(stated)) return stated;
+  const double correction = steps_[step].correction[bin_of(stated)];
+  if (correction == 0.0) return stated;
+  return std::clamp(stated + correction, min_probability, max_probability);
+}
+
+void OnlineCalibration::adjust(Prediction& prediction) const {
+  if (checked_ == 0) return;
+  double confidence = 1.0;
+  for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
+    PredictedStep& step = prediction.steps[s];
+    double formation = 1.0;
+    for (RobotPrediction& robot : step.robots) {
+      robot.probability = adjusted(s, robot.probability);
+      formation *= robot.probability;
+    }
+    step.formation_probability = formation;
+    confidence *= formation;
+    step.confidence = confidence;
+  }
+}
+
+}  // namespace ssl_formation

@@ -1,0 +1,79 @@
+#pragma once
+// How far the predictions have lately been from where the robots went, in millimetres, against
+// "every robot stays where it is", while the match runs: what the field view shows a team
+// deciding whether to trust the predictor today. Each prediction (at most one every
+// remember_interval_s) is kept until its instant comes; then every robot's predicted position
+// and its position at the time of the prediction are both measured against where it is, and
+// the two errors go into means that fade with a half-life of data time. Only the positions the
+// prediction states are scored, so this is the model's error as the tables stand, not a test on
+// held-out data (that is ssl-evaluate's).
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/base/prediction.hpp"
+
+namespace ssl_formation {
+
+struct LiveScoreSettings {
+  double half_life_s = 30.0;          // of the data clock
+  double remember_interval_s = 0.25;  // predictions kept at most this often
+  double tolerance_s = 0.05;          // a frame this soon after the instant checks it
+  bool valid() const;
+};
+
+class LiveScore {
+ public:
+  explicit LiveScore(LiveScoreSettings settings = {});
+
+  // Scores the kept predictions whose instant `formation` reaches (each robot seen in it) and
+  // forgets those whose instant passed. Formations in time order; a clock going back starts
+  // over.
+  void observe(const Formation& formation);
+  // Keeps `prediction`, made from `formation` with `step_s` between its steps, unless one was
+  // kept less than the remember interval before.
+  void remember(const Prediction& prediction, const Formation& formation, double step_s);
+  void clear();
+
+  struct Horizon {
+    double horizon_s = 0.0;
+    double model_mm = 0.0;        // faded mean error of the predicted positions
+    double persistence_mm = 0.0;  // the same robots, had they stayed where they were
+    double robots = 0.0;          // the faded number of robots behind the means
+  };
+  // One per step predicted so far, nearest first; empty before anything was scored.
+  const std::vector<Horizon>& horizons() const { return horizons_; }
+  // The horizon nearest `horizon_s`, if any was scored.
+  const Horizon* nearest(double horizon_s) const;
+  std::uint64_t scored() const { return scored_; }
+
+ private:
+  struct Pending {
+    double due_s = 0.0;
+    std::size_t step = 0;
+    std::uint32_t robot_id = 0;
+    Point predicted;  // feed coordinates
+    Point then;       // where it was when predicted
+  };
+  void fade_to(double time_s);
+
+  LiveScoreSettings settings_;
+  std::deque<Pending> pending_;  // in order of due time within a prediction; sorted on insert
+  std::vector<Horizon> horizons_;
+  std::vector<double> model_sum_;
+  std::vector<double> persistence_sum_;
+  double last_remembered_s_ = -1e300;
+  double last_seen_s_ = -1e300;
+  double faded_to_s_ = -1e300;
+  std::uint64_t scored_ = 0;
+};
+
+// For status lines, at the step nearest 1 s: " live_error_mm=140 stays_error_mm=307
+// live_horizon_s=1.0" (with its leading space), or "" before anything was scored.
+std::string describe_for_status(const LiveScore& score);
+
+}  // namespace ssl_formation

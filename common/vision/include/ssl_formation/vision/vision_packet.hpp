@@ -1,0 +1,37 @@
+#pragma once
+// Builds SSL-Vision packets with every field SSL-Vision marks required set: what the simulated
+// producer sends and what tests feed the sampler.
+
+#include <cstdint>
+#include <vector>
+
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_vision_wrapper.pb.h"
+
+namespace ssl_formation {
+
+struct RobotDetection {
+  std::uint32_t robot_id = 0;
+  Point position;  // millimetres, feed coordinates
+  float orientation = 0.0F;
+  float confidence = 0.9F;
+};
+
+struct DetectionFrameSpec {
+  std::uint32_t camera_id = 0;
+  std::uint32_t frame_number = 0;
+  double t_capture = 0.0;
+  double t_sent = 0.0;  // 0: same as t_capture
+  std::vector<RobotDetection> yellow;
+  std::vector<RobotDetection> blue;
+  std::vector<Point> balls;
+};
+
+SSL_WrapperPacket make_detection_packet(const DetectionFrameSpec& spec);
+
+// Field size with the markings-free minimum SSL-Vision requires (goal and boundary sizes are
+// Division A/B defaults scaled to the length).
+void fill_geometry(SSL_GeometryData& geometry, const FieldSize& field);
+SSL_WrapperPacket make_geometry_packet(const FieldSize& field);
+
+}  // namespace ssl_formation

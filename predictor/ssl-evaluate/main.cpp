@@ -1,0 +1,90 @@
+// ssl-evaluate: how good are the predictions? Options only: the work is in the evaluate
+// library (predictor/src/evaluate.cpp).
+
+#include "ssl_formation/app/daemon.hpp"
+#include "ssl_formation/app/options.hpp"
+#include "ssl_formation/evaluate/evaluate.hpp"
+#include "ssl_formation/files/real_log_shape.hpp"
+
+namespace sf = ssl_formation;
+namespace po = boost::program_options;
+
+int main(int argc, char** argv) {
+  return sf::app::run_main("ssl-evaluate", [&] {
+    sf::evaluate::EvaluateOptions o;
+    std::string horizons = "0.2,0.5,1,2";
+    const std::string mess_help = "as-real-log: none, all, or a comma-separated list of " +
+                                  std::string(sf::real_log_mess_names) +
+                                  ", written without spaces as in ghosts,cuts (ends: a change of "
+                                  "ends at half time; noise: 3 mm)";
+    po::options_description general("Options");
+    general.add_options()("mode", po::value(&o.mode)->required(),
+                          "paper, holdout, grid-sweep or as-real-log")(
+        "seed", po::value(&o.seed)->default_value(o.seed),
+        "seed of the simulated training stream; as-real-log: of the ghosts and the noise")(
+        "test-seed", po::value(&o.test_seed)->default_value(o.test_seed),
+        "seed of the simulated test stream (holdout) or of the random test formations (paper)")(
+        "train-formations", po::value(&o.train_formations)->default_value(o.train_formations),
+        "simulated training formations (one packet each with one camera; the paper used 15,000)")(
+        "test-formations", po::value(&o.test_formations)->default_value(o.test_formations),
+        "simulated test formations (holdout, grid-sweep)")(
+        "tests", po::value(&o.tests)->default_value(o.tests), "paper mode: number of tests")(
+        "train-log", po::value(&o.train_logs)->multitoken()->value_name("FILE..."),
+        "train on these official logs (each its own stream) instead of the simulation")(
+        "test-log", po::value(&o.test_logs)->multitoken()->value_name("FILE..."),
+        "test on these official logs (each its own stream) instead of the simulation")(
+        "split", po::value(&o.split)->default_value(o.split),
+        "train on this first fraction of every --train-log and test on the rest of each")(
+        "horizons", po::value(&horizons)->default_value(horizons),
+        "holdout: horizons in seconds, each evaluated as a model of its own (step = horizon)")(
+        "chain-steps", po::value(&o.chain_steps)->default_value(o.chain_steps),
+        "holdout: also chains of 1 to this many steps of --step")(
+        "velocity-window", po::value(&o.velocity_window_s)->default_value(o.velocity_window_s),
+        "seconds: a robot's velocity (from its tracker) counts once its track has run half this long")(
+        "jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm),
+        "noise of the simulated vision, mm")("cameras",
+                                             po::value(&o.cameras)->default_value(o.cameras),
+                                             "cameras of the simulated vision")(
+        "grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
+        "grid-sweep: the grids to compare")("output-dir",
+                                            po::value(&o.output_dir)->default_value(o.output_dir),
+                                            "where the CSV files go")(
+        "from-log", po::value(&o.from_log)->value_name("FILE"),
+        "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
+        "write-log", po::value(&o.write_log)->value_name("FILE"),
+        "as-real-log: the log to write (gzip if it ends in .gz)")(
+        "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str());
+    sf::app::add_model_options(general, o.model);
+    sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
+    po::positional_options_description positional;
+    positional.add("mode", 1);
+    if (!sf::app::parse_command_line(argc, argv, general,
+                                     "ssl-evaluate paper|holdout|grid-sweep|as-real-log [options]",
+                                     "Evaluates the predictions: the paper's protocol, held-out "
+                                     "accuracy against baselines, and a grid sweep; writes a "
+                                     "recording the way real match logs come, to evaluate on.",
+                                     &positional)) {
+      return 0;
+    }
+    if (o.tests < 1 || o.train_formations < 1 || o.test_formations < 1) {
+      throw sf::app::UsageError(
+          "--tests, --train-formations and --test-formations must be positive");
+    }
+    if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
+    if (!o.model.our_team.empty() || !o.model.opponent_team.empty()) {
+      // The evaluation reads vision only; it does not follow a log's referee yet.
+      throw sf::app::UsageError(
+          "ssl-evaluate does not follow a referee: give --opponent-color and --opponent-attacks, "
+          "not --our-team or --opponent-team");
+    }
+    o.horizons = sf::evaluate::parse_horizons(horizons);
+    (void)sf::app::recalibration_settings(o.recalibration_half_life_s);  // checked before any work
+    sf::app::init_logging("ssl-evaluate");
+    if (o.mode == "paper") return sf::evaluate::run_paper(o);
+    if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});
+    if (o.mode == "grid-sweep") return sf::evaluate::run_holdout(o, o.grids);
+    if (o.mode == "as-real-log") return sf::evaluate::run_as_real_log(o);
+    throw sf::app::UsageError("mode must be paper, holdout, grid-sweep or as-real-log, not '" +
+                              o.mode + "'");
+  });
+}
