@@ -494,17 +494,3 @@ TEST_F(TableFile, SaveRefusesMetadataThatCouldNotBeLoaded) {
 
 }  // namespace
 }  // namespace ssl_formation
-
-TEST(TeamTableFileName, SafeForAFileNameAndTheSameWhateverTheCase) {
-  EXPECT_EQ(ssl_formation::team_table_file_name("TIGERs Mannheim"), "tigers_mannheim.bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name("  tigers mannheim "), "tigers_mannheim.bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name("ER-Force"), "er-force.bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name(""), "unknown.bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name("   "), "unknown.bin");
-  // Nothing that leaves the folder, hides the file or confuses a shell.
-  EXPECT_EQ(ssl_formation::team_table_file_name("../etc/passwd"), "_._etc_passwd.bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name(".."), "_..bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name("a/b\\c:d*e?f"), "a_b_c_d_e_f.bin");
-  EXPECT_EQ(ssl_formation::team_table_file_name("Équipe"), "__quipe.bin");  // UTF-8 bytes
-  EXPECT_EQ(ssl_formation::team_table_file_name(std::string(300, 'x')).size(), 104u);
-}

@@ -1,7 +1,8 @@
 #pragma once
 // The table file of DESIGN.md §4: a transition table with what its counts mean (grid, field
 // size, step, totals), and optionally the motion model's table, saved atomically and loaded with
-// every field checked.
+// every field checked. In src/: table_format (the header and the counts), motion_table_format
+// (the motion section), byte_codec (the encodings and the CRC), durable_file (the atomic write).
 //
 // Two format versions are read. Version 1 holds the paper's counts only; a table without a
 // motion table is still saved as version 1, byte for byte as before motion tables existed.
@@ -67,8 +68,9 @@
 #include <string_view>
 
 #include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/base/result.hpp"
+#include "ssl_formation/files/team_file_name.hpp"  // team_table_file_name, kept here for callers
+#include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/paper_model/transition_table.hpp"
 
 namespace ssl_formation {
@@ -166,11 +168,5 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const Transitio
 // `stored` as it is: version 3 if it has a motion table, else version 1.
 Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
                               const SaveHooks& hooks = {});
-
-// The file a team's table is kept in under --table-dir: the name as the game controller spells
-// it, trimmed and lower-cased (team names compare without case), every character outside
-// [a-z0-9._-] made '_' and a leading '.' too (no hidden files, no ".."), at most 100 characters,
-// then ".bin"; "unknown.bin" for an unnamed team.
-std::string team_table_file_name(std::string_view team);
 
 }  // namespace ssl_formation

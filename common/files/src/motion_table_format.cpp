@@ -1,0 +1,272 @@
+#include "motion_table_format.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace ssl_formation::detail {
+
+namespace {
+
+constexpr std::uint64_t motion_row_size = 8 + 8 * MotionRow::size;
+// hash, robot_id, the values, context
+constexpr std::uint64_t held_out_size = 8 + 4 + 4 * motion_instance_values.size() + 4;
+constexpr std::uint64_t motion_horizons_offset = 8;                    // in the configuration
+constexpr std::uint64_t motion_rows_offset = motion_config_size + 16;  // the row count
+
+void write_motion_config(FileWriter& writer, const MotionConfig& config) {
+  writer.write_f64(config.step_s);
+  writer.write_u32(static_cast<std::uint32_t>(config.horizons));
+  writer.write_f64(config.velocity_window_s);
+  writer.write_f64(config.tolerance_s);
+  writer.write_f64(config.calibration_block_s);
+  writer.write_u32(config.calibration_one_in);
+  writer.write_u32(config.calibration_capacity);
+  writer.write_f64(config.settle_window_s);
+  writer.write_f64(config.long_settle_window_s);
+  writer.write_f64(config.learn_interval_s);
+}
+
+// The configuration at `in`; `horizons` as stored, config.horizons clamped to one past the
+// largest valid value so that a huge count stays invalid without overflowing an int.
+MotionConfig decode_motion_config(const std::uint8_t* in, std::uint32_t& horizons) {
+  MotionConfig config;
+  config.step_s = get_f64(&in[0]);
+  horizons = get_u32(&in[8]);
+  config.horizons = static_cast<int>(std::min<std::uint32_t>(
+      horizons, static_cast<std::uint32_t>(MotionConfig::max_horizons) + 1));
+  config.velocity_window_s = get_f64(&in[12]);
+  config.tolerance_s = get_f64(&in[20]);
+  config.calibration_block_s = get_f64(&in[28]);
+  config.calibration_one_in = get_u32(&in[36]);
+  config.calibration_capacity = get_u32(&in[40]);
+  config.settle_window_s = get_f64(&in[44]);
+  config.long_settle_window_s = get_f64(&in[52]);
+  config.learn_interval_s = get_f64(&in[60]);
+  return config;
+}
+
+// MotionConfig::valid(), and what it leaves to the model but a file must not hold.
+bool valid_motion_config(const MotionConfig& config) {
+  return config.valid() && std::isfinite(config.learn_interval_s) && config.learn_interval_s >= 0.0;
+}
+
+MotionRow decode_motion_row(const std::uint8_t* in) {
+  MotionRow row;
+  for (std::size_t i = 0; i < MotionRow::size; ++i) {
+    row.sums[i] = static_cast<std::int64_t>(get_u64(&in[8 * i]));
+  }
+  return row;
+}
+
+void write_held_out(FileWriter& writer, const HeldOutInstance& held) {
+  const MotionInstance& i = held.instance;
+  writer.write_u64(held.hash);
+  writer.write_u32(i.robot_id);
+  for (const auto value : motion_instance_values) {
+    writer.write_u32(static_cast<std::uint32_t>(i.*value));
+  }
+  writer.write_u32(i.context);
+}
+
+HeldOutInstance decode_held_out(const std::uint8_t* in) {
+  HeldOutInstance held;
+  held.hash = get_u64(&in[0]);
+  held.instance.robot_id = get_u32(&in[8]);
+  for (std::size_t i = 0; i < motion_instance_values.size(); ++i) {
+    held.instance.*motion_instance_values[i] = static_cast<std::int32_t>(get_u32(&in[12 + 4 * i]));
+  }
+  held.instance.context = get_u32(&in[12 + 4 * motion_instance_values.size()]);
+  return held;
+}
+
+// What a stored row must satisfy (the same check keeps save_table from writing a row that
+// load_table would reject); a reason if it does not.
+std::optional<std::string> motion_row_problem(MotionKey key, const MotionRow& row,
+                                              const MotionConfig& config) {
+  const MotionKeyParts parts = decode_motion_key(key);
+  if (parts.level != MotionLevel::robot) return std::string("not a robot-level key");
+  if (parts.horizon_index >= config.horizons) return std::string("horizon out of range");
+  if (parts.robot_slot >= MotionFeatures::robot_slots || parts.cell >= MotionFeatures::cell_count ||
+      parts.velocity_class >= MotionFeatures::velocity_classes ||
+      parts.context >= MotionFeatures::context_count) {
+    return std::string("feature out of range");
+  }
+  if (row.n() < 1) return "count " + std::to_string(row.n());
+  if (row.dd() < 0) return std::string("negative sum of squares");
+  for (int i = 0; i < MotionRow::r; ++i) {
+    if (row.xx(i, i) < 0) return std::string("negative sum of squares");
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+Result<MotionRows> motion_rows_to_save(const MotionTable& motion, double step_s) {
+  const MotionConfig& config = motion.config();
+  if (!valid_motion_config(config)) return fail("invalid motion model configuration");
+  if (config.step_s != step_s) return fail("the motion model's step differs from the table's");
+  MotionRows rows = motion.sorted_rows();
+  std::uint64_t sum = 0;
+  for (const auto& [key, row] : rows) {
+    if (const auto problem = motion_row_problem(key, row, config)) {
+      return fail("invalid motion row: " + *problem);
+    }
+    sum += static_cast<std::uint64_t>(row.n());
+  }
+  if (sum != motion.instances()) {
+    return fail("the motion rows do not add up to the motion table's instances");
+  }
+  return rows;
+}
+
+void write_motion_section(FileWriter& writer, const MotionTable& motion, const MotionRows& rows) {
+  const MotionConfig& config = motion.config();
+  write_motion_config(writer, config);
+  writer.write_u64(motion.instances());
+  writer.write_u64(motion.held_out());
+  writer.write_u64(rows.size());
+  for (const auto& [key, row] : rows) {
+    writer.write_u64(key);
+    for (const std::int64_t sum : row.sums) writer.write_u64(static_cast<std::uint64_t>(sum));
+  }
+  for (int h = 0; h < config.horizons; ++h) {
+    const std::vector<HeldOutInstance> sample = motion.calibration(h);
+    writer.write_u32(static_cast<std::uint32_t>(sample.size()));
+    for (const HeldOutInstance& held : sample) write_held_out(writer, held);
+  }
+}
+
+MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit) {
+  MotionExtent extent;
+  std::array<std::uint8_t, motion_fixed_size> fixed{};
+  {
+    ChunkReader reader(fd, begin, begin + motion_fixed_size);
+    if ((extent.read_error = reader.read(fixed.data(), fixed.size())) != 0) return extent;
+  }
+  const std::uint32_t horizons = get_u32(&fixed[motion_horizons_offset]);
+  if (horizons < 1 || horizons > static_cast<std::uint32_t>(MotionConfig::max_horizons)) {
+    return extent;
+  }
+  std::uint64_t pos = begin + motion_fixed_size;
+  const auto past = [&](std::uint64_t needed) {
+    extent.past_end = true;
+    extent.at_least = pos + needed;
+    return extent;
+  };
+  const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
+  if (rows > (limit - pos) / motion_row_size) {
+    // at_least saturates rather than overflows for an absurd row count.
+    return past(rows > (UINT64_MAX / 2) / motion_row_size ? UINT64_MAX / 2
+                                                          : rows * motion_row_size);
+  }
+  pos += rows * motion_row_size;
+  for (std::uint32_t h = 0; h < horizons; ++h) {
+    if (limit - pos < 4) return past(4);
+    std::uint8_t bytes[4];
+    {
+      ChunkReader reader(fd, pos, pos + 4);
+      if ((extent.read_error = reader.read(bytes, 4)) != 0) return extent;
+    }
+    pos += 4;
+    const std::uint64_t count = get_u32(bytes);
+    if (count > (limit - pos) / held_out_size) return past(count * held_out_size);
+    pos += count * held_out_size;
+  }
+  extent.end = pos;
+  extent.known = true;
+  return extent;
+}
+
+ReadProblem read_motion_section(ChunkReader& reader, double header_step_s,
+                                std::optional<MotionTable>& out) {
+  std::array<std::uint8_t, motion_fixed_size> fixed{};
+  if (const int error = reader.read(fixed.data(), fixed.size()); error != 0) {
+    return {std::nullopt, error};
+  }
+  std::uint32_t horizons = 0;
+  const MotionConfig config = decode_motion_config(fixed.data(), horizons);
+  if (horizons > static_cast<std::uint32_t>(MotionConfig::max_horizons) ||
+      !valid_motion_config(config)) {
+    return {std::string("invalid motion model configuration"), 0};
+  }
+  if (config.step_s != header_step_s) {
+    return {"the motion model's step " + std::to_string(config.step_s) +
+                " s differs from the header's " + std::to_string(header_step_s) + " s",
+            0};
+  }
+  const std::uint64_t instances = get_u64(&fixed[motion_config_size]);
+  const std::uint64_t seen = get_u64(&fixed[motion_config_size + 8]);
+  const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
+
+  MotionTable table(config);
+  std::uint64_t sum = 0;
+  std::optional<MotionKey> previous_key;
+  std::array<std::uint8_t, motion_row_size> row_bytes{};
+  for (std::uint64_t i = 0; i < rows; ++i) {
+    if (const int error = reader.read(row_bytes.data(), row_bytes.size()); error != 0) {
+      return {std::nullopt, error};
+    }
+    const MotionKey key = get_u64(&row_bytes[0]);
+    const MotionRow row = decode_motion_row(&row_bytes[8]);
+    const std::string where = "motion row " + std::to_string(i);
+    if (previous_key && key <= *previous_key) return {where + ": rows out of order", 0};
+    previous_key = key;
+    if (const auto problem = motion_row_problem(key, row, config)) {
+      return {where + ": " + *problem, 0};
+    }
+    if (static_cast<std::uint64_t>(row.n()) > instances - sum) {
+      return {"the motion rows hold more than the " + std::to_string(instances) +
+                  " instances the section says",
+              0};
+    }
+    sum += static_cast<std::uint64_t>(row.n());
+    table.add_row(key, row);
+  }
+  if (sum != instances) {
+    return {"the motion rows hold " + std::to_string(sum) + " instances, the section says " +
+                std::to_string(instances),
+            0};
+  }
+
+  std::uint64_t held_out = 0;
+  std::array<std::uint8_t, held_out_size> held_bytes{};
+  for (int h = 0; h < config.horizons; ++h) {
+    std::uint32_t count = 0;
+    if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+    const std::string where = "calibration sample of horizon " + std::to_string(h + 1);
+    if (count > config.calibration_capacity) {
+      return {where + ": " + std::to_string(count) + " instances, more than its capacity " +
+                  std::to_string(config.calibration_capacity),
+              0};
+    }
+    std::vector<HeldOutInstance> sample;
+    sample.reserve(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (const int error = reader.read(held_bytes.data(), held_bytes.size()); error != 0) {
+        return {std::nullopt, error};
+      }
+      sample.push_back(decode_held_out(held_bytes.data()));
+      if (sample.back().instance.context >= MotionFeatures::context_count) {
+        return {where + ": instance " + std::to_string(i) + ": context " +
+                    std::to_string(sample.back().instance.context) + " out of range",
+                0};
+      }
+      table.add_held_out(h, sample.back());
+    }
+    // Within its capacity every instance is kept, so the file's order must be the table's
+    // (equal neighbours are allowed: merging tables trained on the same stream keeps both).
+    if (table.calibration(h) != sample) return {where + ": instances out of order", 0};
+    held_out += count;
+  }
+  if (held_out > seen) {
+    return {"the calibration samples hold " + std::to_string(held_out) +
+                " instances, more than the " + std::to_string(seen) + " held out",
+            0};
+  }
+  table.restore_held_out_seen(seen);
+  out.emplace(std::move(table));
+  return {};
+}
+
+}  // namespace ssl_formation::detail
