@@ -1,13 +1,19 @@
 #!/usr/bin/env bash
 # Runs the whole system on this machine's loopback: ssl-producer simulates a match (an
 # opponent running a playbook at 60 frames a second, our team marking it, a game controller's
-# referee messages), ssl-trainer learns the tables, ssl-predictor predicts and prints one line
-# per prediction (a prediction at every frame). Stops all three on Ctrl-C or after --duration
-# seconds.
+# referee messages), ssl-trainer learns the tables, ssl-predictor predicts (a prediction at every
+# frame). Stops all three on Ctrl-C or after --duration seconds.
 #
 #   scripts/demo.sh [--duration SECONDS] [--simulation match|paper] [--replay LOG] [--model M]
 #                   [--grid LxW] [--horizon N] [--cameras N] [--period SECONDS] [--keep-table]
 #                   [--http-port PORT]
+#
+# The terminal shows the newest prediction once a second, short (the robots' lists left out) and
+# cut to the terminal's width, and the trainer's and predictor's status lines and every warning
+# or error of the three programs as they come. The full prediction stream, one line per
+# prediction with every robot, goes to build/demo/predictions.txt (rewritten at each start); the
+# programs' logs to build/demo/producer.log, trainer.log and predictor.log; the live field view
+# is at http://127.0.0.1:8080/ (--http-port). (build/ is $SSLF_BUILD_DIR when that is set.)
 #
 # The daemons are told only our team's name, as at a tournament: the referee gives the
 # opponent's colour and side (the teams change ends at half time, every 5 minutes) and learning
@@ -29,7 +35,7 @@ http_port=8080
 replay=""
 model=""
 simulation=match
-usage() { sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,/^[^#]/s/^# \{0,1\}//p' "$0"; }  # the comment at the top
 while [ $# -gt 0 ]; do
   case "$1" in
     --duration) duration="$2"; shift 2 ;;
@@ -72,18 +78,83 @@ table="$run_dir/formation-table.bin"
 # Everything on loopback: the programs' default interface is 127.0.0.1.
 vision=224.5.23.2:10006
 predictions=224.5.23.4:10040
-pids=()
+predictions_file="$run_dir/predictions.txt"
+pids=()      # the three programs
+watchers=()  # what shows their output on the terminal
+interrupted=0
+stop=0
+timer=""  # the --duration sleep
 cleanup() {
   trap - EXIT INT TERM
+  [ -z "$timer" ] || kill -TERM "$timer" 2>/dev/null || true
+  # The prediction ticker first, then the programs; the log watcher last, so that the programs'
+  # last status lines (they log one as they stop) still show.
+  kill -TERM "${watchers[0]:-}" 2>/dev/null || true
+  if [ "$interrupted" = 1 ]; then
+    # Ctrl-C reached the programs too (the terminal signals its whole foreground group), and a
+    # second signal would stop the trainer before it saves: give them a few seconds first.
+    for _ in $(seq 50); do
+      alive=0
+      for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+      [ "$alive" = 1 ] || break
+      sleep 0.1
+    done
+  fi
   for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
   for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+  [ "${#watchers[@]}" -lt 2 ] || sleep 0.5
+  for pid in "${watchers[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${watchers[@]}"; do wait "$pid" 2>/dev/null || true; done
   echo
-  echo "Stopped. Logs and the learned table are in $run_dir"
+  echo "Stopped. The predictions are in $predictions_file; the logs and the learned table in $run_dir"
 }
 trap cleanup EXIT
-trap 'exit 0' INT TERM
+trap 'interrupted=1; exit 0' INT
+trap 'exit 0' TERM
+
+# The last complete line of file $1 (the predictor may be halfway through writing the next).
+newest_line() {
+  local chunk=""
+  IFS= read -r -d '' chunk < <(tail -n 2 "$1" 2>/dev/null) || true
+  if [[ $chunk == *$'\n' ]]; then
+    chunk=${chunk%$'\n'}
+  elif [[ $chunk == *$'\n'* ]]; then
+    chunk=${chunk%$'\n'*}
+  else
+    return 0
+  fi
+  printf '%s\n' "${chunk##*$'\n'}"
+}
+
+# Once a second, the newest prediction without the robots' lists ("[...]"), cut to the
+# terminal's width; nothing when no new one came. Runs in the background until killed, or until
+# this script is gone.
+show_predictions() {
+  set +e
+  ticker_sleep=""
+  trap 'kill "$ticker_sleep" 2>/dev/null; exit 0' TERM
+  exec 3>&1  # the terminal, for stty inside $(...)
+  local shown="" line width
+  while kill -0 "$$" 2>/dev/null; do
+    sleep 1 &
+    ticker_sleep=$!
+    wait "$ticker_sleep"
+    line=$(newest_line "$predictions_file")
+    if [ -z "$line" ] || [ "$line" = "$shown" ]; then continue; fi
+    shown=$line
+    width=${COLUMNS:-}
+    if [ -z "$width" ] && [ -t 3 ]; then width=$(stty size <&3 2>/dev/null); fi
+    width=${width##* }  # stty says "ROWS COLUMNS"
+    [[ $width =~ ^[1-9][0-9]*$ ]] || width=100
+    line=$(sed 's/ \[[^]]*\]//g' <<<"$line")
+    printf '%s\n' "${line:0:width}"
+  done
+}
 
 rm -f "$run_dir"/*.ready
+# Emptied now, so that the log watcher shows nothing of an earlier run.
+: >"$predictions_file"
+for log in producer trainer predictor; do : >"$run_dir/$log.log"; done
 # The simulation's game controller names our team; a recorded match may carry no referee at all,
 # and then the opponent is the default one (yellow attacking +x, as the shared recordings play).
 match_options=()
@@ -96,7 +167,7 @@ pids+=($!)
   --table "$table" --grid "$grid" --model "$model" --horizon "$horizon" --sampling frame \
   --reload-interval 0.5 \
   --http-port "$http_port" --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
-  "${match_options[@]}" 2>"$run_dir/predictor.log" &
+  "${match_options[@]}" >"$predictions_file" 2>"$run_dir/predictor.log" &
 pids+=($!)
 # The producer starts once both daemons have joined the group (they write their ready files).
 for _ in $(seq 100); do
@@ -131,18 +202,40 @@ fi
 cat <<EOT
 ssl-producer -> $vision -> ssl-trainer + ssl-predictor -> predictions on $predictions
 $source_line
-Each line: the sample time, the opponent's centroid cell and robot cells now, then for each
-predicted step (+ its horizon) the centroid, its probability and the robots' predictions (the
-paper's model: cells, '?' = a state never seen; the motion model: each robot's cell, position in
-mm and 90% radius) and the confidence. Ctrl-C stops everything.
+Once a second, the newest prediction: the sample time and frame, the opponent's centroid cell now,
+then for each predicted step (+ its horizon) the centroid, its probability and the confidence.
+The full lines, with every robot's prediction (the paper's model: cells, '?' = a state never
+seen; the motion model: position in mm, 90% radius), one per prediction, go to
+$predictions_file.
+The trainer's and predictor's status lines, and every warning or error, come as they are logged
+(all of it in $run_dir/*.log). Ctrl-C stops everything.
 EOT
 sleep 0.2
 for pid in "${pids[@]}"; do
   kill -0 "$pid" 2>/dev/null || { echo "a daemon failed to start; see $run_dir/*.log" >&2; tail -5 "$run_dir"/*.log >&2; exit 1; }
 done
 
+show_predictions &
+watchers+=($!)
+# From the logs' first lines, so what was logged before this started shows too. $! is tail's
+# pid: grep ends when tail does. --pid: tail ends by itself once this script is gone, however it
+# ended. Both ignore Ctrl-C, so the programs' last status lines show as they stop.
+tail -q -n +1 -F --pid=$$ "$run_dir/trainer.log" "$run_dir/predictor.log" \
+  "$run_dir/producer.log" 2>/dev/null \
+  > >(trap '' INT; exec grep --line-buffered -E \
+    'ssl-(trainer|predictor) [a-z]+: status: | (warning|error|critical): ') &
+watchers+=($!)
+
+# Until --duration has passed or, without one, until the trainer stops. From here on Ctrl-C and
+# TERM only raise a flag, and the stop (cleanup) runs once this loop ends: run from a trap that
+# interrupted the `wait` builtin, bash's own waits for the programs could hang.
+trap 'interrupted=1; stop=1' INT
+trap 'stop=1' TERM
 if [ "$duration" != 0 ]; then
-  sleep "$duration"
-else
-  wait "${pids[0]}"
+  sleep "$duration" &
+  timer=$!
 fi
+while [ "$stop" = 0 ]; do
+  sleep 0.2 || true
+  kill -0 "${timer:-${pids[0]}}" 2>/dev/null || break
+done
