@@ -199,7 +199,7 @@ void BM_RollingPrediction(benchmark::State& state) {
   metadata.step_s = config.sampler.step_s;
   metadata.field = training.sampler().field();
   pipeline.set_table(std::make_shared<const sf::StoredTable>(
-      sf::StoredTable{training.table(), metadata, training.motion()}));
+      training.stored_table(metadata)));
   std::size_t i = 0;
   double offset_s = 1000.0;
   for (auto _ : state) {

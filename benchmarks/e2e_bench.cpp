@@ -119,7 +119,7 @@ int make_table(const std::string& path, std::uint64_t formations, std::uint64_t 
   simulation.step_s = motion ? 1.0 / 60.0 : step_s;
   sf::sim::SimulatedVision vision(simulation);
   sf::SamplerConfig config;
-  config.step_s = motion ? sf::app::ModelOptions::motion_step_s : step_s;
+  config.step_s = motion ? sf::describe(sf::ModelKind::motion).default_step_s : step_s;
   config.field = simulation.field;
   std::optional<sf::MotionTable> motion_table;
   if (motion) {
@@ -428,10 +428,8 @@ int run_pipeline(const std::string& table_path, std::size_t count, double step_s
   sf::PredictionConfig config;
   config.sampler.grid = stored.table.grid();
   config.sampler.step_s = stored.metadata.step_s;
-  if (stored.motion) {
-    config.model = sf::ModelKind::motion;
-    config.sampler.sampling = sf::Sampling::frame;
-  }
+  config.model = stored.motion ? sf::ModelKind::motion : sf::ModelKind::paper;
+  config.sampler.sampling = stored.motion ? sf::Sampling::frame : sf::Sampling::step;
   std::string encoded;
   encoded.reserve(2048);
   std::uint64_t predictions = 0;

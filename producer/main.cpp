@@ -1,7 +1,8 @@
-// ssl-producer: SSL-Vision-style packets on multicast. By default the paper's simulated vision
-// (three plays and random formations), one formation every --period seconds; --simulation match
-// a team running a playbook at 60 frames a second. Either with a simulated game controller's
-// referee messages on the referee group. With --write-log
+// ssl-producer: SSL-Vision-style packets on multicast. By default a simulated match: a team
+// running a playbook at 60 frames a second, what the default motion model learns from;
+// --simulation paper the paper's simulated vision (three plays and random formations), one
+// formation every --period seconds. Either with a simulated game controller's referee messages
+// on the referee group. With --write-log
 // it writes the same packets to an official SSL log instead; with --replay it sends a log's
 // vision packets with their recorded timing.
 
@@ -118,7 +119,7 @@ int main(int argc, char** argv) {
     if (!sf::app::parse_command_line(
             argc, argv, general,
             "ssl-producer [options]\n"
-            "       ssl-producer --simulation match [--division A|B] [--playbook NAME|FILE]\n"
+            "       ssl-producer --simulation paper [--period S] [--step S]\n"
             "       ssl-producer --write-log FILE --count N|--duration S [simulation options]\n"
             "       ssl-producer --replay FILE [--speed X] [--loop] [--start S] [--end S] "
             "[--vision-address G:P]",

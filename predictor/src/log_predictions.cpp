@@ -15,8 +15,7 @@
 #include "ssl_formation/pipeline/prediction_csv.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
 #include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/match/tracked_vision.hpp"
-#include "ssl_vision_wrapper.pb.h"
+#include "ssl_formation/files/log_events.hpp"
 
 namespace ssl_formation::predictor {
 
@@ -31,11 +30,15 @@ int run_from_log(const PredictorOptions& options) {
     throw app::UsageError("--from-log predicts from one table: give --table, not --table-dir");
   }
   const PredictionConfig config = prediction_config(options);
-  auto loaded = load_table(options.table, config.sampler.grid);
-  if (!loaded) throw std::runtime_error(loaded.error().message);
-  if (loaded->metadata.step_s != config.sampler.step_s) {
-    spdlog::warn("the table was trained with --step {} but the logs are sampled every {} s",
-                 loaded->metadata.step_s, config.sampler.step_s);
+  std::shared_ptr<const StoredTable> table;
+  if (describe(config.model).keeps_table) {
+    auto loaded = load_table(options.table, config.sampler.grid);
+    if (!loaded) throw std::runtime_error(loaded.error().message);
+    if (loaded->metadata.step_s != config.sampler.step_s) {
+      spdlog::warn("the table was trained with --step {} but the logs are sampled every {} s",
+                   loaded->metadata.step_s, config.sampler.step_s);
+    }
+    table = std::make_shared<const StoredTable>(std::move(*loaded));
   }
 
   const bool to_stdout = options.output.empty() || options.output == "-";
@@ -56,14 +59,12 @@ int run_from_log(const PredictorOptions& options) {
     if (text.size() >= flush_bytes) flush();
   });
   try {
-    pipeline.set_table(std::make_shared<const StoredTable>(std::move(*loaded)));
+    if (table) pipeline.set_table(table);
   } catch (const std::invalid_argument& error) {
     throw std::runtime_error(options.table + ": " + error.what());
   }
 
   bool every_file_whole = true;
-  const bool tracked = options.network.tracked();
-  VisionFrame frame;
   for (const std::string& path : options.from_logs) {
     Result<LogReader> reader = LogReader::open(path);
     if (!reader) {
@@ -77,27 +78,9 @@ int run_from_log(const PredictorOptions& options) {
     std::optional<app::ProgressBar> bar;
     if (reader->compressed_size() > progress_bar_bytes && !to_stdout)
       bar.emplace("predicting from " + path, reader->compressed_size());
-    std::uint64_t frames = 0;
-    LogReader::MatchInput kind{};
-    std::string_view payload;
-    std::int64_t receive_ns = 0;
-    TrackedVision tracked_vision;  // --vision-source tracked: the log's type-5 frames instead
-    while (reader->next_match_input(kind, frame, payload, &receive_ns)) {
-      const double receive_s = static_cast<double>(receive_ns) * 1e-9;
-      if (kind == LogReader::MatchInput::referee) {
-        pipeline.add_referee(payload, receive_s);
-        continue;
-      }
-      if (kind == LogReader::MatchInput::tracker) {
-        if (!tracked || !tracked_vision.add(payload, receive_s, frame)) continue;
-      } else if (tracked) {
-        // The raw vision's geometry still gives the field size: the tracker's frames have none.
-        if (!frame.has_geometry) continue;
-        frame.has_detection = false;
-      }
-      pipeline.add(frame);
-      if ((++frames & 4095) == 0 && bar) bar->update(reader->compressed_offset(), frames);
-    }
+    const std::uint64_t frames = replay_log(*reader, pipeline, [&](std::uint64_t vision) {
+      if (bar) bar->update(reader->compressed_offset(), vision);
+    });
     if (bar) bar->finish(frames);
     spdlog::info("{}: {} vision packets ({} parse errors), {} predictions", path, frames,
                  reader->counters().parse_errors, pipeline.predictions() - predictions_before);
@@ -111,6 +94,7 @@ int run_from_log(const PredictorOptions& options) {
           reader->error(), frames);
     }
   }
+  if (const auto problem = pipeline.feed_problem()) spdlog::warn("{}", *problem);
   flush();
   out.flush();
   if (!out)

@@ -46,15 +46,29 @@ int main(int argc, char** argv) {
                                              po::value(&o.cameras)->default_value(o.cameras),
                                              "cameras of the simulated vision")(
         "grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
-        "grid-sweep: the grids to compare")("output-dir",
-                                            po::value(&o.output_dir)->default_value(o.output_dir),
-                                            "where the CSV files go")(
+        "grid-sweep: the grids to compare")(
+        "output-dir", po::value(&o.output_dir)->value_name("DIR"),
+        "write the tables as CSV files into DIR too (none without it)")(
+        "simulation", po::value(&o.simulation)->default_value(o.simulation),
+        "holdout without logs: match (a simulated match with its referee, --train-seconds of "
+        "--seed against --test-seconds of --test-seed), paper (the paper's simulated opponent, "
+        "--train-formations and --test-formations) or auto (paper for --model paper, else match)")(
+        "train-seconds", po::value(&o.train_seconds)->default_value(o.train_seconds),
+        "holdout --simulation match: seconds of simulated match to train on")(
+        "test-seconds", po::value(&o.test_seconds)->default_value(o.test_seconds),
+        "holdout --simulation match: seconds of simulated match to test on")(
+        "playbook", po::value(&o.playbook)->default_value(o.playbook),
+        "holdout --simulation match: the opponent's playbook (a built-in name or a file)")(
         "from-log", po::value(&o.from_log)->value_name("FILE"),
         "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
         "write-log", po::value(&o.write_log)->value_name("FILE"),
         "as-real-log: the log to write (gzip if it ends in .gz)")(
         "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str());
     sf::app::add_model_options(general, o.model);
+    sf::app::add_learn_during_option(general, o.learn_during);
+    general.add_options()(
+        "vision-source", po::value(&o.network.vision_source)->default_value(o.network.vision_source),
+        "raw: the logs' SSL-Vision packets; tracked: their tracked vision (type 5) instead");
     sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
     po::positional_options_description positional;
     positional.add("mode", 1);
@@ -71,12 +85,11 @@ int main(int argc, char** argv) {
           "--tests, --train-formations and --test-formations must be positive");
     }
     if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
-    if (!o.model.our_team.empty() || !o.model.opponent_team.empty()) {
-      // The evaluation reads vision only; it does not follow a log's referee yet.
-      throw sf::app::UsageError(
-          "ssl-evaluate does not follow a referee: give --opponent-color and --opponent-attacks, "
-          "not --our-team or --opponent-team");
+    if (o.model.opponent_team == "all") {
+      throw sf::app::UsageError("--opponent-team all is for ssl-trainer --from-log: name the "
+                                "opponent");
     }
+    (void)o.network.tracked();  // checked before any work
     o.horizons = sf::evaluate::parse_horizons(horizons);
     (void)sf::app::recalibration_settings(o.recalibration_half_life_s);  // checked before any work
     sf::app::init_logging("ssl-evaluate");

@@ -101,9 +101,6 @@ class Json {
   bool first_ = true;
 };
 
-TeamColor other(TeamColor color) {
-  return color == TeamColor::yellow ? TeamColor::blue : TeamColor::yellow;
-}
 
 void write_setup(Json& json, const FieldViewSetup& setup) {
   json.key("field").open('{').key("length").number(setup.field.length_mm);
@@ -111,7 +108,7 @@ void write_setup(Json& json, const FieldViewSetup& setup) {
   json.key("grid").open('{').key("length").integer(static_cast<std::uint64_t>(setup.grid.length()));
   json.key("width").integer(static_cast<std::uint64_t>(setup.grid.width())).close('}');
   json.key("opponent_color").string(to_string(setup.opponent_color));
-  json.key("our_color").string(to_string(other(setup.opponent_color)));
+  json.key("our_color").string(to_string(opposite(setup.opponent_color)));
   json.key("opponent_attacks").string(to_string(setup.opponent_attacks));
 }
 

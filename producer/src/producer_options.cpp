@@ -87,11 +87,7 @@ sim::MatchSimulationConfig match_simulation_config(const ProducerOptions& option
   config.frame_rate_hz = options.frame_rate_hz;
   config.start_time_s = options.start_time_s;
   apply_feed_settings(options, config);
-  // A built-in playbook by name, else a file.
-  Result<sim::Playbook> playbook =
-      sim::builtin_playbook_text(options.playbook)
-          ? sim::parse_playbook(*sim::builtin_playbook_text(options.playbook), options.playbook)
-          : sim::load_playbook(options.playbook);
+  Result<sim::Playbook> playbook = sim::builtin_or_file_playbook(options.playbook);
   if (!playbook) throw app::UsageError("--playbook: " + playbook.error().message);
   config.playbook = std::move(*playbook);
   return config;

@@ -28,7 +28,7 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
 testing::RunResult write_log(const TempDir& dir, const std::string& name,
                              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{"--referee", "off", "--write-log", (dir / name).string(),
+  std::vector<std::string> args{"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(),
                                 "--count",   "120", "--seed",      "3",
                                 "--cameras", "2"};
   args.insert(args.end(), extra.begin(), extra.end());

@@ -63,7 +63,7 @@ std::vector<std::string> trainer_args(const std::string& group,
 // Runs the producer to the end on `group`.
 void produce(const TempDir& dir, const std::string& group, std::uint64_t seed, int count,
              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{"--vision-address", group, "--seed", std::to_string(seed),
+  std::vector<std::string> args{"--simulation", "paper", "--vision-address", group, "--seed", std::to_string(seed),
                                 "--count", std::to_string(count), "--period", "0.002",
                                 "--status-interval", "100",
                                 // The paper's protocol: vision only, as reference_table() trains.
@@ -140,6 +140,7 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   PredictionConfig config;
   config.horizon = 3;
   config.model = ModelKind::paper;  // the daemon's --model
+  config.sampler = sampler_config_for(ModelKind::paper);
   PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
     proto::FormationPrediction message;
     fill_prediction_message(predicted.formation(), predicted.prediction, predicted.context,
@@ -166,7 +167,7 @@ TEST(Daemons, ProducerSendsNinetyPercentPlaysOverTenThousandCycles) {
   TempDir dir;
   // 10,000 cycles are about 25,000 formations; nobody needs to listen for the proportions.
   const auto result = testing::run_to_end(producer_program,
-                                          {"--referee", "off", "--vision-address", new_group(),
+                                          {"--simulation", "paper", "--referee", "off", "--vision-address", new_group(),
                                            "--period", "0", "--count", "25000", "--seed", "99"},
                                           dir.path(), "producer");
   ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -428,7 +429,7 @@ TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
         dir.path(), "predictor", Readiness::ready_file));
     daemons.push_back(std::make_unique<ChildProcess>(
         producer_program,
-        std::vector<std::string>{"--referee", "off", "--vision-address", group, "--period", "0.05"},
+        std::vector<std::string>{"--simulation", "paper", "--referee", "off", "--vision-address", group, "--period", "0.05"},
         dir.path(), "producer", Readiness::ready_file));
     for (auto& d : daemons) {
       ASSERT_TRUE(d->wait_until_ready(10s)) << d->stderr_text();

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 
@@ -98,7 +99,8 @@ std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
 void expect_every_method(const std::string& out, const std::string& horizon,
                          const std::string& steps) {
   for (const std::string method :
-       {"model", "persistence", "constant velocity", "damped constant velocity"}) {
+       {"model", "persistence", "constant velocity", "damped constant velocity",
+        "constant acceleration", "damped constant acceleration"}) {
     EXPECT_TRUE(std::regex_search(
         out, std::regex(horizon + R"(\s+)" + steps + R"(\s+)" + method + R"(\s+[\d.]+%)")))
         << horizon << " " << steps << " " << method << "\n"
@@ -122,41 +124,46 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
   EXPECT_NE(run.out.find("Brier"), std::string::npos);
   EXPECT_NE(run.out.find("ECE"), std::string::npos);
 
+  // Five horizons, six methods, and without a referee the rows "all" and "running" only.
   const auto accuracy = csv_rows(read(dir / "holdout" / "holdout-accuracy.csv"));
-  ASSERT_EQ(accuracy.size(), 1u + 5u * 4u);
-  EXPECT_EQ(accuracy[0], (std::vector<std::string>{"grid", "horizon_steps", "horizon_s", "method",
-                                                   "state_accuracy", "cell_accuracy",
-                                                   "mean_cell_distance", "mean_error_mm",
-                                                   "median_error_mm", "p90_error_mm", "robots"}));
+  ASSERT_EQ(accuracy.size(), 1u + 5u * 6u * 2u);
+  EXPECT_EQ(accuracy[0], (std::vector<std::string>{"grid", "horizon_steps", "horizon_s",
+                                                   "game_state", "method", "state_accuracy",
+                                                   "cell_accuracy", "mean_cell_distance",
+                                                   "mean_error_mm", "median_error_mm",
+                                                   "p90_error_mm", "robots"}));
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
-    ASSERT_EQ(accuracy[i].size(), 11u);
+    ASSERT_EQ(accuracy[i].size(), 12u);
     EXPECT_EQ(accuracy[i][0], "3x2");
-    const double cell = std::stod(accuracy[i][5]);
+    EXPECT_TRUE(accuracy[i][3] == "all" || accuracy[i][3] == "running") << accuracy[i][3];
+    const double cell = std::stod(accuracy[i][6]);
     EXPECT_GE(cell, 0.0);
     EXPECT_LE(cell, 1.0);
-    EXPECT_GE(std::stod(accuracy[i][9]), std::stod(accuracy[i][8]));  // p90 >= median
+    EXPECT_GE(std::stod(accuracy[i][10]), std::stod(accuracy[i][9]));  // p90 >= median
   }
   // The paper's simulation moves robots every 2 s: at 2 s and on, every method was scored.
-  EXPECT_GT(std::stoull(accuracy[5][10]), 0u);
+  EXPECT_GT(std::stoull(accuracy[13][11]), 0u);  // the 2 s section's first row
+  EXPECT_NE(run.out.find("no referee messages"), std::string::npos) << run.out;
 
   const auto calibration = csv_rows(read(dir / "holdout" / "holdout-calibration.csv"));
-  ASSERT_EQ(calibration.size(), 1u + 5u * 2u);
+  ASSERT_EQ(calibration.size(), 1u + 5u * 2u * 2u);
   EXPECT_EQ(calibration[0], (std::vector<std::string>{
-                                "grid", "horizon_steps", "horizon_s", "method", "quantity", "brier",
-                                "ece", "predictions", "within_radius_50", "within_radius_90"}));
-  EXPECT_EQ(calibration[3][4], "robot");
-  EXPECT_EQ(calibration[4][4], "formation");
+                                "grid", "horizon_steps", "horizon_s", "game_state", "method",
+                                "quantity", "brier", "ece", "predictions", "within_radius_50",
+                                "within_radius_90"}));
+  EXPECT_EQ(calibration[3][5], "robot");
+  EXPECT_EQ(calibration[4][5], "formation");
   // The paper's model states no radii: nothing is within them, and the report has no radii
   // section.
   for (std::size_t i = 1; i < calibration.size(); ++i) {
-    ASSERT_EQ(calibration[i].size(), 10u);
-    EXPECT_EQ(calibration[i][3], "model");
-    EXPECT_EQ(calibration[i][8], "0");
+    ASSERT_EQ(calibration[i].size(), 11u);
+    EXPECT_EQ(calibration[i][4], "model");
     EXPECT_EQ(calibration[i][9], "0");
+    EXPECT_EQ(calibration[i][10], "0");
   }
   EXPECT_EQ(run.out.find("radii"), std::string::npos) << run.out;
   const std::string reliability = read(dir / "holdout" / "holdout-reliability.csv");
-  EXPECT_EQ(std::count(reliability.begin(), reliability.end(), '\n'), 1 + 5 * 2 * 10);
+  EXPECT_EQ(std::count(reliability.begin(), reliability.end(), '\n'), 1 + 5 * 2 * 2 * 10);
 }
 
 TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
@@ -166,7 +173,7 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
        {std::pair{"a.log", "1"}, std::pair{"b.log.gz", "2"}, std::pair{"c.log", "3"}}) {
     const auto written =
         testing::run_to_end(producer_program,
-                            {"--referee", "off", "--write-log", (dir / name).string(), "--count",
+                            {"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(), "--count",
                              "300", "--seed", seed, "--cameras", "2"},
                             dir.path(), std::string("write-") + name, 30s);
     ASSERT_EQ(written.exit_code, 0) << written.err;
@@ -224,27 +231,33 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   EXPECT_NE(run.out.find("The model's radii"), std::string::npos) << run.out;
 
   const auto accuracy = csv_rows(read(dir / "motion" / "holdout-accuracy.csv"));
-  ASSERT_EQ(accuracy.size(), 1u + 5u * 4u);
-  for (std::size_t i = 1; i < accuracy.size(); i += 4) {
-    // Rows of one horizon: model, persistence, constant velocity, damped constant velocity.
-    ASSERT_EQ(accuracy[i].size(), 11u);
-    EXPECT_EQ(accuracy[i][3], "model");
-    const double model_mm = std::stod(accuracy[i][7]);
-    EXPECT_GT(std::stoull(accuracy[i][10]), 1000u) << i;
+  ASSERT_EQ(accuracy.size(), 1u + 5u * 6u * 2u);
+  std::size_t all_rows = 0;
+  for (std::size_t i = 1; i < accuracy.size(); i += 6) {
+    // Rows of one horizon and game state: the model, then the five baselines.
+    ASSERT_EQ(accuracy[i].size(), 12u);
+    EXPECT_EQ(accuracy[i][4], "model");
+    if (accuracy[i][3] != "all") continue;
+    ++all_rows;
+    const double model_mm = std::stod(accuracy[i][8]);
+    EXPECT_GT(std::stoull(accuracy[i][11]), 1000u) << i;
     EXPECT_GT(model_mm, 0.0);
-    // Robots that move: the model's mean error is below every baseline's.
+    // Robots that move: the model's mean error is below persistence's and constant velocity's.
+    for (std::size_t b = 1; b < 6; ++b) {
+      EXPECT_EQ(accuracy[i + b][11], accuracy[i][11]);  // the same robots scored
+    }
     for (std::size_t b = 1; b < 4; ++b) {
-      EXPECT_EQ(accuracy[i + b][10], accuracy[i][10]);  // the same robots scored
-      EXPECT_LT(model_mm, std::stod(accuracy[i + b][7])) << accuracy[i + b][3] << " row " << i;
+      EXPECT_LT(model_mm, std::stod(accuracy[i + b][8])) << accuracy[i + b][4] << " row " << i;
     }
   }
+  EXPECT_EQ(all_rows, 5u);
   const auto calibration = csv_rows(read(dir / "motion" / "holdout-calibration.csv"));
-  ASSERT_EQ(calibration.size(), 1u + 5u * 2u);
+  ASSERT_EQ(calibration.size(), 1u + 5u * 2u * 2u);
   EXPECT_EQ(calibration[0].back(), "within_radius_90");
   for (std::size_t i = 1; i < calibration.size(); ++i) {
-    ASSERT_EQ(calibration[i].size(), 10u);
-    const double within50 = std::stod(calibration[i][8]);
-    const double within90 = std::stod(calibration[i][9]);
+    ASSERT_EQ(calibration[i].size(), 11u);
+    const double within50 = std::stod(calibration[i][9]);
+    const double within90 = std::stod(calibration[i][10]);
     // Calibrated on the table's held-out frames: near 50% and 90% on another match.
     EXPECT_GT(within50, 0.3) << i;
     EXPECT_LT(within50, 0.7) << i;
@@ -260,6 +273,39 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   }
 }
 
+// Without logs, the default model is evaluated on a simulated match with its referee: every table
+// gains its rows by game state, as the daemons follow the referee.
+TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
+  TempDir dir;
+  const auto run = evaluate(dir,
+                            {"holdout", "--train-seconds", "120", "--test-seconds", "90",
+                             "--horizons", "1", "--chain-steps", "1", "--learn-during", "all"},
+                            "match");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto accuracy = csv_rows(read(dir / "match" / "holdout-accuracy.csv"));
+  // Two sections (1 s, and one step of 0.5 s), 11 rows of game state, 6 methods.
+  ASSERT_EQ(accuracy.size(), 1u + 2u * 11u * 6u);
+  std::map<std::string, std::uint64_t> robots;
+  for (std::size_t i = 1; i < accuracy.size(); ++i) {
+    if (accuracy[i][4] == "model" && accuracy[i][1] == "1" && accuracy[i][2] == "1") {
+      robots[accuracy[i][3]] = std::stoull(accuracy[i][11]);
+    }
+  }
+  ASSERT_EQ(robots.size(), 11u);
+  for (const std::string state : {"all", "running", "stop", "halt", "ball_placement_opponent",
+                                  "ball_placement_us", "kickoff_opponent", "kickoff_us",
+                                  "free_kick_opponent", "free_kick_us", "penalty"}) {
+    EXPECT_TRUE(robots.contains(state)) << state;
+  }
+  // The simulated match kicks off, plays, stops and places the ball.
+  EXPECT_GT(robots["running"], 1000u);
+  EXPECT_GT(robots["kickoff_opponent"] + robots["kickoff_us"], 0u);
+  std::uint64_t by_state = 0;
+  for (const auto& [state, n] : robots) by_state += state == "all" ? 0 : n;
+  EXPECT_EQ(by_state, robots["all"]);  // every instant in exactly one state
+  EXPECT_NE(run.out.find("by phase of the game"), std::string::npos) << run.out;
+}
+
 TEST(Evaluate, BadModeAndOptionsExitWithTwo) {
   TempDir dir;
   EXPECT_EQ(evaluate(dir, {"guess"}, "bad").exit_code, 2);
@@ -269,6 +315,11 @@ TEST(Evaluate, BadModeAndOptionsExitWithTwo) {
   EXPECT_EQ(evaluate(dir, {"holdout", "--horizons", "0.5,-1"}, "horizons").exit_code, 2);
   EXPECT_EQ(evaluate(dir, {"holdout", "--horizons", "0.5,,1"}, "empty-horizon").exit_code, 2);
   EXPECT_EQ(evaluate(dir, {"holdout", "--sampling", "sometimes"}, "sampling").exit_code, 2);
+  EXPECT_EQ(evaluate(dir, {"holdout", "--simulation", "dream"}, "simulation").exit_code, 2);
+  // A train log without anything to test on is refused, not tested on a simulation.
+  const auto no_test = evaluate(dir, {"holdout", "--train-log", (dir / "x.log").string()}, "no-test");
+  EXPECT_EQ(no_test.exit_code, 2);
+  EXPECT_NE(no_test.err.find("--test-log"), std::string::npos) << no_test.err;
   EXPECT_EQ(
       evaluate(dir, {"holdout", "--recalibration-half-life", "-1"}, "recalibration").exit_code, 2);
 }

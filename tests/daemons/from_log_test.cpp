@@ -40,7 +40,7 @@ class PredictFromLog : public ::testing::Test {
          {std::tuple{"train.log.gz", "1", "400"}, std::tuple{"test.log", "9", "60"}}) {
       const auto written =
           testing::run_to_end(producer_program,
-                              {"--referee", "off", "--write-log", (dir / name).string(), "--count",
+                              {"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(), "--count",
                                count, "--seed", seed, "--cameras", "2", "--jitter-mm", "10"},
                               dir.path(), std::string("write-") + name, 30s);
       ASSERT_EQ(written.exit_code, 0) << written.err;

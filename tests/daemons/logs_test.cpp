@@ -28,13 +28,12 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using testing::ChildProcess;
+using testing::new_group;
 using testing::Readiness;
 using testing::TempDir;
 
 const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 const std::filesystem::path record_program = SSLF_RECORD_PATH;
-
-std::string new_group() { return testing::unique_group(testing::free_udp_port()); }
 
 // Every datagram sent to a group, with its arrival time, collected on a thread of its own.
 class Listener {
@@ -182,7 +181,7 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
     const auto path = dir / name;
     const auto result = testing::run_to_end(
         producer_program,
-        {"--referee",   "off",    "--write-log", path.string(),  "--count",
+        {"--simulation", "paper", "--referee",   "off",    "--write-log", path.string(),  "--count",
          "80",          "--seed", "7",           "--cameras",    "3",
          "--jitter-mm", "12",     "--drop-rate", "0.1",          "--opponent-color",
          "blue",        "--step", "0.5",         "--start-time", "100"},
@@ -232,7 +231,7 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
 TEST(Logs, WriteLogNeedsACountAndRefusesReplayToo) {
   TempDir dir;
   const auto no_count = testing::run_to_end(
-      producer_program, {"--write-log", (dir / "a.log").string()}, dir.path(), "no-count", 5s);
+      producer_program, {"--simulation", "paper", "--write-log", (dir / "a.log").string()}, dir.path(), "no-count", 5s);
   EXPECT_EQ(no_count.exit_code, 2) << no_count.err;
   const auto both = testing::run_to_end(
       producer_program,
@@ -240,7 +239,7 @@ TEST(Logs, WriteLogNeedsACountAndRefusesReplayToo) {
       "both", 5s);
   EXPECT_EQ(both.exit_code, 2) << both.err;
   const auto unwritable = testing::run_to_end(
-      producer_program, {"--write-log", (dir / "no-such-dir" / "a.log").string(), "--count", "3"},
+      producer_program, {"--simulation", "paper", "--write-log", (dir / "no-such-dir" / "a.log").string(), "--count", "3"},
       dir.path(), "unwritable", 5s);
   EXPECT_EQ(unwritable.exit_code, 1);
   EXPECT_NE(unwritable.err.find("no-such-dir"), std::string::npos) << unwritable.err;
@@ -253,7 +252,7 @@ TEST(Logs, ReplaySendsExactlyTheFilesPackets) {
   TempDir dir;
   const auto path = dir / "feed.log.gz";
   ASSERT_EQ(testing::run_to_end(producer_program,
-                                {"--referee", "off", "--write-log", path.string(), "--count", "40",
+                                {"--simulation", "paper", "--referee", "off", "--write-log", path.string(), "--count", "40",
                                  "--seed", "5", "--cameras", "2"},
                                 dir.path(), "write-log", 20s)
                 .exit_code,
@@ -516,7 +515,7 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
   EXPECT_EQ(recorder.ready_fact("output"), path.string());
   const auto produced =
       testing::run_to_end(producer_program,
-                          {"--referee", "off", "--vision-address", group, "--period", "0.002",
+                          {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--period", "0.002",
                            "--count", "100", "--seed", "3", "--status-interval", "100"},
                           dir.path(), "producer", 20s);
   ASSERT_EQ(produced.exit_code, 0) << produced.err;

@@ -127,7 +127,7 @@ TEST_F(MotionDaemons, TrainerWritesAVersionTwoTableAndTheDaemonMulticastsTheCsvs
   const auto read = read_vision_log(train_log);
   ASSERT_TRUE(read) << read.error().message;
   for (const auto& packet : read->packets) library.add(packet);
-  ASSERT_TRUE(library.motion().has_value());
+  ASSERT_NE(library.motion(), nullptr);
   EXPECT_GT(library.motion()->instances(), 5000u);
   EXPECT_GT(library.motion()->held_out(), 1000u);
   EXPECT_TRUE(*loaded->motion == *library.motion());

@@ -178,7 +178,7 @@ TEST(OfflineTraining, LiveTrainingOnAPacedReplayEqualsOfflineTraining) {
       "offline");
   ASSERT_EQ(offline.exit_code, 0) << offline.err;
 
-  const std::string group = testing::unique_group(testing::free_udp_port());
+  const std::string group = testing::new_group();
   testing::ChildProcess live(trainer_program,
                              {"--vision-address", group, "--table", (dir / "live.bin").string(),
                               "--status-interval", "0.1", "--model", "paper"},

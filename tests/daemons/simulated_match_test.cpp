@@ -141,15 +141,16 @@ std::map<std::string, double> mean_errors(const std::filesystem::path& csv, doub
   std::map<std::string, double> out;
   std::ifstream in(csv);
   std::string line;
-  std::getline(in, line);  // grid,horizon_steps,horizon_s,method,...,mean_error_mm,...
+  std::getline(in, line);  // grid,horizon_steps,horizon_s,game_state,method,...,mean_error_mm,...
   while (std::getline(in, line)) {
     std::vector<std::string> cells;
     std::stringstream row(line);
     for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
-    if (cells.size() < 8 || cells[1] != "1" || std::abs(std::stod(cells[2]) - horizon_s) > 1e-9) {
+    if (cells.size() < 9 || cells[1] != "1" || cells[3] != "all" ||
+        std::abs(std::stod(cells[2]) - horizon_s) > 1e-9) {
       continue;
     }
-    out[cells[3]] = std::stod(cells[7]);
+    out[cells[4]] = std::stod(cells[8]);
   }
   return out;
 }
@@ -169,7 +170,7 @@ TEST(SimulatedMatch, TheMotionModelTrainedOnOneMatchBeatsTheBaselinesOnAnotherAt
                           dir.path(), "evaluate", 120s);
   ASSERT_EQ(evaluated.exit_code, 0) << evaluated.err;
   const auto errors = mean_errors(dir / "holdout-accuracy.csv", 1.0);
-  ASSERT_EQ(errors.size(), 4u) << evaluated.out;
+  ASSERT_EQ(errors.size(), 6u) << evaluated.out;
   // Generous margins: 168 mm against 306 (persistence) and 200 (constant velocity) when written.
   EXPECT_LT(errors.at("model"), 0.8 * errors.at("persistence")) << evaluated.out;
   EXPECT_LT(errors.at("model"), 0.97 * errors.at("constant velocity")) << evaluated.out;

@@ -36,7 +36,7 @@ std::vector<std::string> match_options(const std::string& seed) {
 }
 
 void write_log(const TempDir& dir, const std::string& name, std::vector<std::string> options) {
-  options.insert(options.begin(), {"--write-log", (dir / name).string(), "--count", "400"});
+  options.insert(options.begin(), {"--simulation", "paper", "--write-log", (dir / name).string(), "--count", "400"});
   const auto written = testing::run_to_end(producer_program, options, dir.path(), "write-" + name);
   ASSERT_EQ(written.exit_code, 0) << written.err;
 }
@@ -136,7 +136,7 @@ TEST(SimulatedReferee, ThePredictorFollowsTheLiveSimulationsRefereeThroughHalfTi
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   testing::PredictionListener listener(predictions);
   std::vector<std::string> live = match_options("5");
-  live.insert(live.end(), {"--vision-address", vision, "--referee-address", referee, "--count",
+  live.insert(live.end(), {"--simulation", "paper", "--vision-address", vision, "--referee-address", referee, "--count",
                            "100", "--period", "0.02", "--status-interval", "100"});
   const auto produced = testing::run_to_end(producer_program, live, dir.path(), "producer");
   ASSERT_EQ(produced.exit_code, 0) << produced.err;

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "reliability_support.hpp"
+#include "ssl_formation/paper_model/predictor.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::reliability {

@@ -50,7 +50,7 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
   const auto table_path = dir / "table.bin";
   // 500 formations a second for at most 120 s; the destructor stops it when the test is done.
   ChildProcess producer(producer_program,
-                        {"--referee", "off", "--vision-address", group, "--seed", "51", "--period",
+                        {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--seed", "51", "--period",
                          "0.002", "--count", "60000", "--status-interval", "100"},
                         dir.path(), "producer");
   std::mt19937_64 random(20240601);

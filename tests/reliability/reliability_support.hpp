@@ -82,6 +82,7 @@ inline std::vector<std::string> library_predictions(const std::vector<SSL_Wrappe
   PredictionConfig config;
   config.horizon = horizon;
   config.model = ModelKind::paper;  // as the daemons run: --model paper
+  config.sampler = sampler_config_for(ModelKind::paper);
   PredictionPipeline pipeline(config, [&](const PredictedFormation& predicted) {
     std::string datagram;
     encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram);

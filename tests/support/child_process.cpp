@@ -33,15 +33,20 @@ std::string read_file(const std::filesystem::path& path) {
 ChildProcess::ChildProcess(const std::filesystem::path& program, std::vector<std::string> arguments,
                            const std::filesystem::path& output_dir, const std::string& name,
                            Readiness readiness)
-    : stdout_path_(output_dir / (name + ".out")), stderr_path_(output_dir / (name + ".err")) {
+    : stdout_path_(std::filesystem::absolute(output_dir / (name + ".out"))),
+      stderr_path_(std::filesystem::absolute(output_dir / (name + ".err"))) {
+  arguments = FeedGroups{}.complete(program, std::move(arguments));
   if (readiness == Readiness::ready_file) {
-    ready_path_ = output_dir / (name + ".ready");
+    ready_path_ = std::filesystem::absolute(output_dir / (name + ".ready"));
     std::filesystem::remove(ready_path_);
     arguments.push_back("--ready-file");
     arguments.push_back(ready_path_.string());
   }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
+  // The test's own folder is the program's working folder: what it writes by default (a table
+  // file) stays there, apart from every other test's.
+  posix_spawn_file_actions_addchdir_np(&actions, output_dir.c_str());
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, stdout_path_.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);

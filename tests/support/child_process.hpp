@@ -1,7 +1,8 @@
 #pragma once
 // Runs one of our programs as a real process for end-to-end tests: its stdout and stderr go to
 // files the test can read and wait on; the destructor kills whatever is still running, so a
-// failing test leaves no process behind.
+// failing test leaves no process behind. A daemon joins and sends only on groups of its test's
+// own, never on the default ones (feed_groups.hpp).
 
 #include <sys/types.h>
 
@@ -11,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "feed_groups.hpp"
+
 namespace ssl_formation::testing {
 
 // Whether the program is one of our daemons, started with `--ready-file OUTPUT_DIR/NAME.ready`
@@ -19,6 +22,8 @@ enum class Readiness { none, ready_file };
 
 class ChildProcess {
  public:
+  // Starts `program` with `arguments`, completed with groups of its own for every feed the
+  // arguments leave out (FeedGroups::complete), in `output_dir` as its working folder.
   ChildProcess(const std::filesystem::path& program, std::vector<std::string> arguments,
                const std::filesystem::path& output_dir, const std::string& name,
                Readiness readiness = Readiness::none);
@@ -74,11 +79,5 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
-
-// A UDP port no socket on this machine uses right now (the kernel picks it), and a random
-// administratively scoped multicast group, so tests that ctest runs in parallel never share
-// traffic. Both stay on loopback: every program in the tests sends and joins on 127.0.0.1.
-std::uint16_t free_udp_port();
-std::string unique_group(std::uint16_t port);  // "239.x.y.z:PORT"
 
 }  // namespace ssl_formation::testing

@@ -1,8 +1,8 @@
 #pragma once
-// What the process tests of the pipeline share: a fresh loopback group per test, a listener that
-// collects the predictor's FormationPrediction messages on a thread of its own, an end marker to
-// know that nothing more is on its way, and a table's counts as a comparable list. Everything
-// sends and joins on 127.0.0.1 (the multicast layer's default).
+// What the process tests of the pipeline share: a listener that collects the predictor's
+// FormationPrediction messages on a thread of its own, an end marker to know that nothing more is
+// on its way, and a table's counts as a comparable list. Everything sends and joins on 127.0.0.1
+// (the multicast layer's default), on groups of the test's own (new_group(), feed_groups.hpp).
 
 #include <boost/asio/io_context.hpp>
 #include <chrono>
@@ -20,9 +20,6 @@
 #include "ssl_formation/paper_model/transition_table.hpp"
 
 namespace ssl_formation::testing {
-
-// "239.255.x.y:PORT" on a port nobody uses: tests that ctest runs in parallel never share traffic.
-inline std::string new_group() { return unique_group(free_udp_port()); }
 
 // What a test sends to a group once everything it expects has arrived, to know without sleeping
 // that nothing more is on the way: a socket hands datagrams over in the order they reached it, and

@@ -216,7 +216,7 @@ TEST_F(MotionTraining, RefusesToResumeAVersionOneTableWithTheMotionModel) {
   // --reset replaces it at the first save.
   auto training =
       open_training(at("t.bin"), parse({}).model.sampler_config(), true, motion_config(parse({})));
-  EXPECT_TRUE(training->motion().has_value());
+  EXPECT_TRUE(training->motion() != nullptr);
 }
 
 TEST_F(MotionTraining, RefusesToResumeAVersionTwoTableWithThePaperModel) {
@@ -235,7 +235,7 @@ TEST_F(MotionTraining, SavesAndResumesInProcess) {
   const TrainerOptions options = parse({"--horizon", "2"});
   auto training =
       open_training(at("t.bin"), options.model.sampler_config(), false, motion_config(options));
-  ASSERT_TRUE(training->motion().has_value());
+  ASSERT_TRUE(training->motion() != nullptr);
   for (const auto& packet : a_) training->add(packet);
   ASSERT_TRUE(training->changed_since_save());
   ASSERT_TRUE(save_training(at("t.bin"), *training));
@@ -244,7 +244,7 @@ TEST_F(MotionTraining, SavesAndResumesInProcess) {
 
   auto resumed =
       open_training(at("t.bin"), options.model.sampler_config(), false, motion_config(options));
-  ASSERT_TRUE(resumed->motion().has_value());
+  ASSERT_TRUE(resumed->motion() != nullptr);
   EXPECT_TRUE(*resumed->motion() == *training->motion());
   EXPECT_EQ(entries(resumed->table()), entries(training->table()));
   EXPECT_FALSE(resumed->changed_since_save());
@@ -273,7 +273,7 @@ TEST_F(MotionTraining, FramesReadFromALogTrainWhatItsPacketsTrain) {
   }
   ASSERT_EQ(streams[0].size(), a_.size());
   const auto from_packets = library_training(options, streams);
-  ASSERT_TRUE(from_frames.motion().has_value());
+  ASSERT_TRUE(from_frames.motion() != nullptr);
   EXPECT_GT(from_frames.motion()->instances(), 0u);
   EXPECT_TRUE(*from_frames.motion() == *from_packets->motion());
   EXPECT_EQ(entries(from_frames.table()), entries(from_packets->table()));

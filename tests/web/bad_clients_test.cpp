@@ -62,8 +62,8 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   TempDir dir;
   const auto table_path = dir / "table.bin";
   ASSERT_TRUE(save_table(table_path, web_testing::reference_table(3, 2000), TableMetadata{}));
-  const std::string vision = testing::unique_group(testing::free_udp_port());
-  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::string vision = testing::new_group();
+  const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
@@ -93,7 +93,7 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   constexpr int formations = 1000;
   ChildProcess producer(
       producer_program,
-      {"--referee", "off", "--vision-address", vision, "--seed", "9", "--count",
+      {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "9", "--count",
        std::to_string(formations), "--period", "0.003", "--status-interval", "100"},
       dir.path(), "producer");
   // Meanwhile, clients that vanish mid-frame, mid-request and mid-write, again and again.
@@ -182,7 +182,7 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
 
 TEST(FieldViewBadClients, OffByDefaultAndBadOptionsAreRefused) {
   TempDir dir;
-  const std::string vision = testing::unique_group(testing::free_udp_port());
+  const std::string vision = testing::new_group();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--table", (dir / "t.bin").string()},
                          dir.path(), "predictor", Readiness::ready_file);

@@ -71,7 +71,7 @@ void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const 
   out.reset();
   out.emplace(
       producer_program,
-      std::vector<std::string>{"--referee", "off", "--vision-address", group, "--seed", "5",
+      std::vector<std::string>{"--simulation", "paper", "--referee", "off", "--vision-address", group, "--seed", "5",
                                "--period", "0.1", "--cameras", "4", "--status-interval", "100"},
       dir.path(), name);
 }
@@ -101,8 +101,8 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   const auto table_path = dir / "table.bin";
   const web_testing::ReferenceTable reference = web_testing::reference_stored_table(3, 2000);
   ASSERT_TRUE(save_table(table_path, reference.table, reference.metadata));
-  const std::string vision = testing::unique_group(testing::free_udp_port());
-  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::string vision = testing::new_group();
+  const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
 

@@ -83,8 +83,8 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   const web_testing::ReferenceTable reference = web_testing::reference_stored_table(3, 300);
   ASSERT_GT(reference.metadata.samples, 0u);
   ASSERT_TRUE(save_table(table_path, reference.table, reference.metadata));
-  const std::string vision = testing::unique_group(testing::free_udp_port());
-  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::string vision = testing::new_group();
+  const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
@@ -99,7 +99,7 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   // The simulated feed: 2 s of data clock every 0.05 s of wall time, so an age taken from the
   // data's t_capture would be far off (and one from before a clock reset negative).
   ChildProcess producer(producer_program,
-                        {"--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
+                        {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
                          "60", "--period", "0.05", "--status-interval", "100"},
                         dir.path(), "producer");
   std::string bytes;
@@ -178,7 +178,7 @@ StoredTable motion_reference_table(std::uint64_t seed, int count) {
   metadata.field = training.sampler().field();
   metadata.step_s = sampler.step_s;
   metadata.samples = training.samples();
-  return StoredTable{training.table(), metadata, training.motion()};
+  return training.stored_table(metadata);
 }
 
 TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRadii) {
@@ -187,8 +187,8 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
   const StoredTable table = motion_reference_table(3, 300);
   ASSERT_TRUE(table.motion.has_value());
   ASSERT_TRUE(save_table(table_path, table));
-  const std::string vision = testing::unique_group(testing::free_udp_port());
-  const std::string predictions = testing::unique_group(testing::free_udp_port());
+  const std::string vision = testing::new_group();
+  const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--prediction-address", predictions,
@@ -201,7 +201,7 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
   RawClient view(port);
   ASSERT_TRUE(view.upgrade());
   ChildProcess producer(producer_program,
-                        {"--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
+                        {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
                          "40", "--period", "0.05", "--status-interval", "100"},
                         dir.path(), "producer");
   std::string bytes;

@@ -1,134 +1,131 @@
-// ssl-trainer's live mode: the vision feed through Training into the table file, saved every
-// --flush-interval and on SIGINT/SIGTERM.
+// ssl-trainer's live mode: the match's events from the network through Training into the table
+// file, saved as soon as it has something, then every --flush-interval, and on SIGINT/SIGTERM.
+
+#include "ssl_formation/trainer/live_trainer.hpp"
 
 #include <spdlog/spdlog.h>
 
 #include <boost/asio/io_context.hpp>
 
-#include "ssl_formation/app/daemon.hpp"
-#include "ssl_formation/net/vision_receiver.hpp"
-#include "ssl_formation/trainer/opponent_tables.hpp"
-#include "ssl_formation/trainer/table_store.hpp"
-#include "ssl_formation/trainer/trainer.hpp"
-
 namespace ssl_formation::trainer {
 
-namespace {
-
-// One status line, then a warning for each kind of bad input that arrived since the last one.
-void log_status(const Training& training, const net::VisionReceiver& receiver,
-                const net::TrackedVisionReceiver* tracked, SamplerCounters& reported) {
-  const SamplerCounters& c = training.sampler().counters();
-  const auto& motion = training.motion();
-  spdlog::info(
-      "status: {}{} formations={} transitions={} table_transitions={} states_seen={}{} "
-      "rejected_robots={} late_frames={} attacks={} {} | {}",
-      app::describe_reception(receiver), app::describe_tracked(tracked), c.samples, c.transitions, training.table().transitions(),
-      training.table().rows_seen(),
-      motion ? fmt::format(" motion_instances={} motion_held_out={} motion_rows={}",
-                           motion->instances(), motion->held_out(), motion->rows())
-             : std::string(),
-      c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id,
-      c.frames_late,
-      app::describe_attacks(training.sampler().attacks(), training.match().opponent().attacks_because),
-      app::describe_referee_counts(training.match()), describe_rejections(c));
-  for (const std::string& line : new_rejections(reported, c)) spdlog::warn("input: {}", line);
-  reported = c;
-}
-
-}  // namespace
-
-int run_live(const TrainerOptions& options) {
+LiveTrainer::LiveTrainer(const TrainerOptions& options, const app::Clock& clock)
+    : options_(options),
+      clock_(clock),
+      tables_((check_table_option(options), options)),
+      field_log_(options.model.sampler_config().field, options.model.sampler_config().use_geometry) {
   if (options.model.opponent_team == "all") {
     throw app::UsageError("--opponent-team all is for --from-log: live, name the opponent");
   }
-  const SamplerConfig config = options.model.sampler_config();
-  const auto group = app::parse_group_option("vision-address", options.network.vision_address);
-  const auto interface = app::parse_interface_option(options.network.interface, true);
-  const auto flush_period = app::seconds_option("flush-interval", options.flush_interval_s);
-  const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
+  const Training& training = tables_.training();
+  const SamplerConfig& config = training.sampler().config();
+  const MotionTable* motion = training.motion();
+  spdlog::info(
+      "training: model {}; grid {}, step {} s, {} sampling; learning {}; vision {}; referee {}; "
+      "{} {}, saved when it first learns, then every {} s",
+      motion ? fmt::format("motion ({} steps ahead)", motion->config().horizons)
+             : std::string(to_string(training.model())),
+      config.grid.to_string(), config.step_s, to_string(config.sampling),
+      training.learn_during() == LearnDuring::all ? "in every game state"
+                                                  : "in running play once a referee is heard",
+      options.network.tracked() ? "tracked " + options.network.tracker_address
+                                : options.network.vision_address,
+      options.network.referee_address, tables_.per_opponent() ? "a table per opponent in" : "table",
+      tables_.per_opponent() ? options.table_dir : tables_.path().string(),
+      options.flush_interval_s);
+  match_log_.update(training.front_end());
+}
 
-  const std::optional<MotionConfig> motion = motion_config(options);
-  const std::optional<net::MulticastEndpoint> referee_group =
-      app::parse_referee_option(options.network.referee_address);
-  OpponentTables tables(options);
+void LiveTrainer::on_event(const MatchEvent& event) {
+  const RefereeChange change = tables_.handle(event);
+  const Training& training = tables_.training();
+  switch (event.kind) {
+    case MatchEventKind::vision:
+      if (event.frame && event.frame->has_geometry) field_log_.update(training.sampler().field());
+      if (training.sampler().config().infer_attacks) match_log_.update(training.front_end());
+      break;
+    case MatchEventKind::referee:
+    case MatchEventKind::tracked_vision:
+      match_log_.update(training.front_end(), change);
+      break;
+  }
+}
+
+void LiveTrainer::start_new_stream() { tables_.training().start_new_stream(); }
+
+void LiveTrainer::tick() {
+  const Training& training = tables_.training();
+  if (!feed_problem_said_) {
+    if (const auto problem = training.feed_problem()) {
+      spdlog::warn("{}", *problem);
+      feed_problem_said_ = true;
+    }
+  }
+  if (!training.changed_since_save()) return;
+  const double now = clock_.steady_s();
+  if (last_save_s_ && now - *last_save_s_ < options_.flush_interval_s) return;
+  last_save_s_ = now;
+  if (tables_.save_if_changed()) ++saves_;
+}
+
+bool LiveTrainer::save_at_exit() { return tables_.save_at_exit(); }
+
+void LiveTrainer::log_status(const net::LiveMatchEvents* live) {
+  const Training& training = tables_.training();
+  const SamplerCounters& c = training.sampler().counters();
+  const MotionTable* motion = training.motion();
+  spdlog::info(
+      "status: {}{} formations={} transitions={} table_transitions={} states_seen={}{} "
+      "rejected_robots={} late_frames={} attacks={} {} | {}",
+      live ? app::describe_reception(live->vision()) : std::string("packets=(in-process)"),
+      app::describe_tracked(training.front_end()), c.samples, c.transitions,
+      training.table().transitions(), training.table().rows_seen(),
+      motion ? fmt::format(" motion_instances={} motion_held_out={} motion_rows={}",
+                           motion->instances(), motion->held_out(), motion->rows())
+             : std::string(),
+      c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id, c.frames_late,
+      app::describe_attacks(training.sampler().attacks(),
+                            training.match().opponent().attacks_because),
+      app::describe_referee_counts(training.match()), describe_rejections(c));
+  for (const std::string& line : new_rejections(reported_, c)) spdlog::warn("input: {}", line);
+  reported_ = c;
+}
+
+int run_live(const TrainerOptions& options) {
+  const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
+  const auto flush_period = app::seconds_option("flush-interval", options.flush_interval_s);
+  const net::LiveFeeds feeds = app::live_feeds(options.network, options.receive_buffer_bytes);
+  const app::SystemClock clock;
+  LiveTrainer trainer(options, clock);
 
   boost::asio::io_context io;
   app::ReadyFile ready(options.daemon.ready_file);
-  net::VisionReceiver receiver(io, group, interface, options.receive_buffer_bytes);
-  app::FieldSizeLog field_log(config.field, config.use_geometry);
-  app::MatchLog match_log;
-  match_log.update(tables.training().match(), tables.training().sampler().attacks());
-  const auto on_frame = [&](const VisionFrame& frame) {
-    Training& training = tables.training();
-    training.add(frame);
-    if (frame.has_geometry) field_log.update(training.sampler().field());
-    if (training.sampler().config().infer_attacks) {
-      match_log.update(training.match(), training.sampler().attacks());
-    }
-  };
-  // Raw vision, or a tracker's frames instead (never both: they would be two clocks).
-  std::optional<net::TrackedVisionReceiver> tracked;
-  VisionFrame geometry;  // tracked: the raw feed's geometry alone
-  if (options.network.tracked()) {
-    tracked.emplace(io, app::parse_group_option("tracker-address", options.network.tracker_address),
-                    interface, options.receive_buffer_bytes);
-    tracked->start(on_frame);
-    // The raw feed still gives the field size: the tracker's frames have none.
-    receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) {
-      if (app::geometry_only(frame, geometry)) on_frame(geometry);
-    });
-  } else {
-    receiver.start([&](const VisionFrame& frame, const net::udp::endpoint&) { on_frame(frame); });
-  }
-  // The referee on the same thread as the vision: each command applies from the next frame.
-  std::optional<net::MulticastReceiver> referee;
-  if (referee_group) {
-    referee.emplace(io, *referee_group, interface, options.receive_buffer_bytes);
-    referee->start([&](std::span<const std::byte> datagram, const net::udp::endpoint&) {
-      const RefereeChange change =
-          tables.add_referee(net::as_text(datagram), app::steady_seconds());
-      match_log.update(tables.training().match(), tables.training().sampler().attacks(), change);
-    });
-  }
-  spdlog::info(
-      "training: model {}; grid {}, step {} s, {} sampling; learning {}; referee {}; {} {} "
-      "saved every {} s",
-      motion ? fmt::format("motion ({} steps ahead)", motion->horizons) : std::string("paper"),
-      config.grid.to_string(), config.step_s, to_string(config.sampling),
-      tables.training().learn_during() == LearnDuring::all
-          ? "in every game state"
-          : "in running play once a referee is heard",
-      referee_group ? referee_group->to_string() : std::string("none"),
-      tables.per_opponent() ? "a table per opponent in" : "table",
-      tables.per_opponent() ? options.table_dir : tables.path().string(),
-      options.flush_interval_s);
-
-  app::RepeatingTimer flush(io, flush_period, [&] {
-    tables.save_if_changed();
-  });
-  SamplerCounters reported;
-  app::RepeatingTimer status(io, status_period,
-                             [&] { log_status(tables.training(), receiver, tracked ? &*tracked : nullptr, reported); });
+  net::LiveMatchEvents events(io, feeds, [&clock] { return clock.steady_s(); });
+  events.start(trainer);
+  // Often enough for the first save to come as soon as there is something, and for every save
+  // to come on time.
+  const auto tick_period =
+      std::min<std::chrono::steady_clock::duration>(flush_period, std::chrono::milliseconds(200));
+  app::RepeatingTimer ticks(io, tick_period, [&] { trainer.tick(); });
+  app::RepeatingTimer status(io, status_period, [&] { trainer.log_status(&events); });
   bool saved_on_exit = true;
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)",
                  signal);
-    receiver.stop();
-    if (tracked) tracked->stop();
-    if (referee) referee->stop();
-    flush.cancel();
+    events.stop();
+    ticks.cancel();
     status.cancel();
-    saved_on_exit = tables.save_at_exit();
+    saved_on_exit = trainer.save_at_exit();
     io.stop();
   });
-  ready.mark_ready("ssl-trainer", {{"vision", tracked ? "tracked " + options.network.tracker_address
-                                                    : group.to_string()},
-                                   {"referee", referee_group ? referee_group->to_string() : "none"},
-                                   {"interface", interface.to_string()},
-                                   {"table", tables.path().string()}});
+  ready.mark_ready("ssl-trainer",
+                   {{"vision", options.network.tracked() ? "tracked " + feeds.tracker->to_string()
+                                                         : feeds.vision.to_string()},
+                    {"referee", feeds.referee ? feeds.referee->to_string() : "none"},
+                    {"interface", feeds.interface.to_string()},
+                    {"table", trainer.tables().path().string()}});
   io.run();
-  log_status(tables.training(), receiver, tracked ? &*tracked : nullptr, reported);
+  trainer.log_status(&events);
   return saved_on_exit ? 0 : 1;
 }
 

@@ -17,12 +17,13 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "ssl_formation/app/progress.hpp"
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/match/tracked_vision.hpp"
+#include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
@@ -67,10 +68,14 @@ struct Progress {
 };
 
 std::unique_ptr<Training> new_training(const Destination& to, const OpponentChoice& opponent) {
-  return std::make_unique<Training>(
-      to.config, TransitionTable(to.config.grid), 0,
-      to.motion ? std::optional<MotionTable>(*to.motion) : std::nullopt,
-      MatchRules{opponent, to.rules.learn_during});
+  TrainingConfig config;
+  config.sampler = to.config;
+  config.rules = MatchRules{opponent, to.rules.learn_during};
+  config.tracked_vision = to.tracked;
+  ResumedLearner empty = resume_learner(
+      TransitionTable(to.config.grid),
+      to.motion ? std::optional<MotionTable>(*to.motion) : std::nullopt);
+  return std::make_unique<Training>(config, empty.kind, std::move(empty.learner));
 }
 
 LogOutcome train_log(const std::string& file, const Destination& to, Progress& progress) {
@@ -83,56 +88,44 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
   }
   // --opponent-team all: a training per team, made as the referee first names it.
   if (!to.all_teams) outcome.teams.push_back({new_training(to, to.rules.opponent)});
-  VisionFrame frame;  // detection packets decoded straight from the log's bytes
   VisionFrame geometry;  // the last geometry, for the trainings made part-way (all teams)
   RefereeFollower names;  // --opponent-team all: who the referee names, to make their trainings
-  TrackedVision tracked;
-  LogReader::MatchInput kind{};
-  std::string_view referee;
-  std::int64_t receive_ns = 0;
+  LogEvents events(*reader);
+  MatchEvent event;
   std::uint64_t reported_offset = 0;
-  while (reader->next_match_input(kind, frame, referee, &receive_ns)) {
-    if (kind == LogReader::MatchInput::tracker) {
-      // The tracker's frames stand in for the raw ones with --vision-source tracked.
-      if (!to.tracked || !tracked.add(referee, static_cast<double>(receive_ns) * 1e-9, frame)) {
-        continue;
+  // What the trainings learn from: the raw vision, or with --vision-source tracked the
+  // tracker's frames (the raw vision then gives only the field size).
+  const MatchEventKind learned_from =
+      to.tracked ? MatchEventKind::tracked_vision : MatchEventKind::vision;
+  while (events.next(event)) {
+    for (TeamOfLog& team : outcome.teams) team.training->on_event(event);
+    if (event.kind == MatchEventKind::referee && to.all_teams) {
+      // The names as the log's one followed game controller gives them.
+      names.add(event.payload, event.receive_s);
+      const RefereeView* view = names.heard() ? &names.view() : nullptr;
+      for (const std::string* name : {view ? &view->yellow_name : nullptr,
+                                      view ? &view->blue_name : nullptr}) {
+        if (!name || name->empty()) continue;  // an unnamed team could be anyone
+        const bool known = std::any_of(
+            outcome.teams.begin(), outcome.teams.end(), [&](const TeamOfLog& team) {
+              return same_team_name(team.training->match().choice().opponent_team, *name);
+            });
+        if (known) continue;
+        OpponentChoice choice = to.rules.opponent;
+        choice.our_team.clear();
+        choice.opponent_team = *name;
+        TeamOfLog& team = outcome.teams.emplace_back(TeamOfLog{new_training(to, choice)});
+        // The field the log's geometry gave so far, and the message that named the team.
+        if (geometry.has_geometry) team.training->add(geometry);
+        team.training->on_event(event);
       }
-    } else if (kind == LogReader::MatchInput::vision && to.tracked) {
-      // The raw vision's geometry still gives the field size: the tracker's frames have none.
-      if (!frame.has_geometry) continue;
-      frame.has_detection = false;
-    } else if (kind == LogReader::MatchInput::referee) {
-      const double receive_s = static_cast<double>(receive_ns) * 1e-9;
-      for (TeamOfLog& team : outcome.teams) team.training->add_referee(referee, receive_s);
-      if (to.all_teams) {
-        // The names as the log's one followed game controller gives them.
-        names.add(referee, receive_s);
-        const RefereeView* view = names.heard() ? &names.view() : nullptr;
-        for (const std::string* name : {view ? &view->yellow_name : nullptr,
-                                        view ? &view->blue_name : nullptr}) {
-          if (!name || name->empty()) continue;  // an unnamed team could be anyone
-          const bool known = std::any_of(
-              outcome.teams.begin(), outcome.teams.end(), [&](const TeamOfLog& team) {
-                return same_team_name(team.training->match().choice().opponent_team, *name);
-              });
-          if (known) continue;
-          OpponentChoice choice = to.rules.opponent;
-          choice.our_team.clear();
-          choice.opponent_team = *name;
-          TeamOfLog& team = outcome.teams.emplace_back(TeamOfLog{new_training(to, choice)});
-          // The field the log's geometry gave so far.
-          if (geometry.has_geometry) team.training->add(geometry);
-          team.training->add_referee(referee, receive_s);
-        }
-      }
-      continue;
     }
-    if (frame.has_geometry) {
+    if (event.kind == MatchEventKind::vision && event.frame->has_geometry) {
       geometry.has_geometry = true;
-      geometry.field_length = frame.field_length;
-      geometry.field_width = frame.field_width;
+      geometry.field_length = event.frame->field_length;
+      geometry.field_width = event.frame->field_width;
     }
-    for (TeamOfLog& team : outcome.teams) team.training->add(frame);
+    if (event.kind != learned_from) continue;
     if ((++outcome.frames & 4095) == 0) {
       const std::uint64_t offset = reader->compressed_offset();
       progress.bytes += offset - std::min(offset, reported_offset);
@@ -169,6 +162,7 @@ std::string describe_team(const TeamOfLog& team) {
 }  // namespace
 
 int run_offline(const TrainerOptions& options) {
+  check_table_option(options);
   Destination to;
   to.config = options.model.sampler_config();
   to.motion = motion_config(options);
@@ -196,8 +190,8 @@ int run_offline(const TrainerOptions& options) {
   // resumed stops the run before any log is read; --table-dir's as their teams turn up.
   std::map<std::filesystem::path, std::unique_ptr<Training>> tables;
   if (!to.per_team) {
-    tables[options.table] =
-        open_training(options.table, to.config, options.reset, to.motion, to.rules);
+    tables[options.table] = open_training(options.table, to.config, options.reset, to.motion,
+                                          to.rules, to.tracked);
   }
 
   std::vector<LogOutcome> outcomes(options.from_logs.size());
@@ -244,6 +238,7 @@ int run_offline(const TrainerOptions& options) {
 
   // The logs' counts added up in the order of the files, and a line per log.
   bool every_file_whole = true;
+  std::set<std::filesystem::path> taught;
   for (LogOutcome& log : outcomes) {
     if (!log.open_error.empty()) {
       spdlog::error("{}", log.open_error);
@@ -283,7 +278,7 @@ int run_offline(const TrainerOptions& options) {
       std::unique_ptr<Training>& table = tables[path];
       if (!table) {
         try {
-          table = open_training(path, to.config, options.reset, to.motion, to.rules);
+          table = open_training(path, to.config, options.reset, to.motion, to.rules, to.tracked);
         } catch (const std::runtime_error& error) {
           spdlog::error("{}; what {} taught of '{}' is not saved", error.what(), log.file,
                         training.match().opponent().name);
@@ -293,6 +288,7 @@ int run_offline(const TrainerOptions& options) {
         }
       }
       table->absorb(training);
+      taught.insert(path);
     }
     switch (log.ending) {
       case LogReader::Ending::none:
@@ -316,7 +312,17 @@ int run_offline(const TrainerOptions& options) {
         break;
     }
   }
+  // Only the tables some log taught are written: a run that could read no log writes nothing.
+  if (taught.empty()) {
+    const bool any_read = std::any_of(outcomes.begin(), outcomes.end(),
+                                      [](const LogOutcome& log) { return log.open_error.empty(); });
+    spdlog::warn("no table written: {}",
+                 any_read ? "no log taught anything of the opponent" : "no log could be read");
+    return every_file_whole ? 0 : 1;
+  }
   for (auto& [path, training] : tables) {
+    if (!taught.contains(path)) continue;
+    if (const auto problem = training->feed_problem()) spdlog::warn("{}", *problem);
     if (!save_training(path, *training)) return 1;
     spdlog::info("saved {}: {} transitions from {} formations, {} states seen", path.string(),
                  training->table().transitions(), training->samples(),

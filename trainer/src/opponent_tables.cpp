@@ -18,7 +18,8 @@ OpponentTables::OpponentTables(const TrainerOptions& options)
     : options_(options),
       config_(options.model.sampler_config()),
       motion_(motion_config(options)),
-      rules_(match_rules(options)) {
+      rules_(match_rules(options)),
+      tracked_vision_(options.network.tracked()) {
   if (per_opponent()) {
     std::error_code error;
     std::filesystem::create_directories(options_.table_dir, error);
@@ -36,11 +37,11 @@ OpponentTables::OpponentTables(const TrainerOptions& options)
 std::unique_ptr<Training> OpponentTables::open(const std::filesystem::path& path) {
   const bool reset = options_.reset && !opened_.contains(path);
   opened_.insert(path);
-  return open_training(path, config_, reset, motion_, rules_);
+  return open_training(path, config_, reset, motion_, rules_, tracked_vision_);
 }
 
-RefereeChange OpponentTables::add_referee(std::string_view payload, double receive_s) {
-  const RefereeChange change = training_->add_referee(payload, receive_s);
+RefereeChange OpponentTables::handle(const MatchEvent& event) {
+  const RefereeChange change = training_->handle(event);
   if (!per_opponent() || !change.teams) return change;
   const std::filesystem::path wanted = std::filesystem::path(options_.table_dir) /
                                        team_table_file_name(training_->match().opponent().name);
@@ -54,9 +55,13 @@ RefereeChange OpponentTables::add_referee(std::string_view payload, double recei
     saving_ = true;
   } catch (const std::runtime_error& error) {
     spdlog::error("{}; this opponent is trained into a table that is not saved", error.what());
-    next = std::make_unique<Training>(config_, TransitionTable(config_.grid), 0,
-                                      motion_ ? std::optional<MotionTable>(*motion_) : std::nullopt,
-                                      rules_);
+    TrainingConfig config;
+    config.sampler = config_;
+    config.rules = rules_;
+    config.tracked_vision = tracked_vision_;
+    ResumedLearner empty = resume_learner(
+        TransitionTable(config_.grid), motion_ ? std::optional<MotionTable>(*motion_) : std::nullopt);
+    next = std::make_unique<Training>(config, empty.kind, std::move(empty.learner));
     saving_ = false;
   }
   // The new table's training knows the field the old one learned from geometry, and hears what
@@ -68,7 +73,7 @@ RefereeChange OpponentTables::add_referee(std::string_view payload, double recei
     geometry.field_width = static_cast<std::int32_t>(training_->sampler().field().width_mm);
     next->add(geometry);
   }
-  next->add_referee(payload, receive_s);
+  next->handle(event);
   training_ = std::move(next);
   path_ = wanted;
   return change;

@@ -68,6 +68,17 @@ std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
   return config;
 }
 
+void check_table_option(const TrainerOptions& options) {
+  if (!options.table_dir.empty()) return;  // created where it is missing
+  const std::filesystem::path table(options.table);
+  const std::filesystem::path folder = table.has_parent_path() ? table.parent_path() : ".";
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) {
+    throw app::UsageError("--table " + options.table + ": the folder " + folder.string() +
+                          " does not exist; create it or give another --table");
+  }
+}
+
 MatchRules match_rules(const TrainerOptions& options) {
   return MatchRules{options.model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
 }

@@ -48,7 +48,12 @@ std::string describe_motion(const MotionConfig& config) {
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset,
                                         const std::optional<MotionConfig>& motion,
-                                        const std::optional<MatchRules>& rules) {
+                                        const std::optional<MatchRules>& rules,
+                                        bool tracked_vision) {
+  TrainingConfig training;
+  training.sampler = config;
+  training.rules = rules;
+  training.tracked_vision = tracked_vision;
   remove_stale_temporaries(table_path);
   std::optional<MotionTable> empty_motion;
   if (motion) empty_motion.emplace(*motion);
@@ -61,8 +66,8 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                    table_path.string());
     else
       spdlog::info("no table at {} yet: starting an empty {}", table_path.string(), what);
-    return std::make_unique<Training>(config, TransitionTable(config.grid), 0,
-                                      std::move(empty_motion), rules);
+    ResumedLearner empty = resume_learner(TransitionTable(config.grid), std::move(empty_motion));
+    return std::make_unique<Training>(training, empty.kind, std::move(empty.learner));
   }
   auto loaded = load_table(table_path, config.grid);
   if (!loaded) {
@@ -115,8 +120,9 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                  table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),
                  stored.metadata.samples, stored.table.rows_seen());
   }
-  return std::make_unique<Training>(config, std::move(stored.table), stored.metadata.samples,
-                                    std::move(stored.motion), rules);
+  ResumedLearner resumed = resume_learner(std::move(stored.table), std::move(stored.motion));
+  return std::make_unique<Training>(training, resumed.kind, std::move(resumed.learner),
+                                    stored.metadata.samples);
 }
 
 bool save_training(const std::filesystem::path& table_path, Training& training) {

@@ -44,22 +44,21 @@ std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& te
   return parse_group_option("tracker-address", text);
 }
 
-bool geometry_only(const VisionFrame& frame, VisionFrame& out) {
-  if (!frame.has_geometry) return false;
-  out.has_detection = false;
-  out.has_geometry = true;
-  out.field_length = frame.field_length;
-  out.field_width = frame.field_width;
-  return true;
-}
-
 double steady_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
 
-void MatchLog::update(const MatchFollower& match, std::optional<AttackDirection> attacks_now,
-                      const RefereeChange& change) {
+void MatchLog::update(const MatchFrontEnd& front_end, const RefereeChange& change) {
+  const MatchFollower& match = front_end.match();
+  const std::optional<AttackDirection> attacks_now = front_end.sampler().attacks();
+  const TrackedVision& tracked = front_end.tracked_vision();
+  if (tracked.source_uuid() != logged_tracker_) {
+    spdlog::info("tracked vision: following tracker '{}' (uuid {}){}", tracked.source_name(),
+                 tracked.source_uuid(),
+                 logged_tracker_.empty() ? "" : ": the one followed before fell silent");
+    logged_tracker_ = tracked.source_uuid();
+  }
   if (!logged_opponent_ || !(*logged_opponent_ == match.opponent()) ||
       logged_attacks_ != attacks_now) {
     spdlog::info("opponent: {}", describe(match.opponent(), attacks_now));
@@ -93,9 +92,21 @@ void MatchLog::update(const MatchFollower& match, std::optional<AttackDirection>
   reported_ = c;
 }
 
-std::string describe_tracked(const net::TrackedVisionReceiver* tracked) {
-  if (!tracked) return {};
-  const TrackerCounters& c = tracked->tracked().counters();
+net::LiveFeeds live_feeds(const NetworkOptions& network, int receive_buffer_bytes) {
+  net::LiveFeeds feeds;
+  feeds.vision = parse_group_option("vision-address", network.vision_address);
+  feeds.referee = parse_referee_option(network.referee_address);
+  if (network.tracked()) {
+    feeds.tracker = parse_group_option("tracker-address", network.tracker_address);
+  }
+  feeds.interface = parse_interface_option(network.interface, true);
+  feeds.receive_buffer_bytes = receive_buffer_bytes;
+  return feeds;
+}
+
+std::string describe_tracked(const MatchFrontEnd& front_end) {
+  if (!front_end.config().tracked_vision) return {};
+  const TrackerCounters& c = front_end.tracked_vision().counters();
   return fmt::format(" tracker_packets={} tracker_frames={} tracker_other_source={} "
                      "tracker_undecodable={}",
                      c.packets, c.frames, c.other_source, c.undecodable);

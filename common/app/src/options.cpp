@@ -14,12 +14,12 @@ Grid ModelOptions::parsed_grid() const {
 
 ModelKind ModelOptions::parsed_model() const {
   const auto parsed = parse_model(model);
-  if (!parsed) throw UsageError("--model must be motion or paper, not '" + model + "'");
+  if (!parsed) throw UsageError("--model must be one of " + model_names() + ", not '" + model + "'");
   return *parsed;
 }
 
 double ModelOptions::step() const {
-  if (step_s == 0.0) return parsed_model() == ModelKind::motion ? motion_step_s : paper_step_s;
+  if (step_s == 0.0) return describe(parsed_model()).default_step_s;
   if (!std::isfinite(step_s) || step_s <= 0.0) {
     std::ostringstream text;
     text << "--step must be a positive number of seconds, not " << step_s;
@@ -39,15 +39,11 @@ SamplerConfig ModelOptions::sampler_config() const {
   config.opponent_attacks = choice.attacks.value_or(AttackDirection::positive_x);
   const ModelKind kind = parsed_model();
   if (sampling == "auto") {
-    config.sampling = kind == ModelKind::motion ? Sampling::frame : Sampling::step;
+    config.sampling = sampler_config_for(kind).sampling;
   } else {
     const auto mode = parse_sampling(sampling);
     if (!mode) throw UsageError("--sampling must be auto, frame or step, not '" + sampling + "'");
-    if (kind == ModelKind::motion && *mode != Sampling::frame) {
-      throw UsageError(
-          "--model motion learns from every frame's velocities: use --sampling frame (or auto), "
-          "or --model paper for step sampling");
-    }
+    if (const auto problem = sampling_problem(kind, *mode)) throw UsageError(*problem);
     config.sampling = *mode;
   }
   config.field = FieldSize{field_length_mm, field_width_mm};
@@ -123,7 +119,9 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "the opponent's name as the game controller spells it (case aside)")(
       "model", po::value(&model.model)->default_value(model.model),
       "motion: positions in mm with calibrated radii, learned from every frame (needs a "
-      "version-3 table); paper: the paper's Markov model on cells")(
+      "version-3 table); paper: the paper's Markov model on cells; the baselines, which need no "
+      "table: persistence, constant-velocity, constant-acceleration (and, in ssl-evaluate, "
+      "damped-constant-velocity and damped-constant-acceleration, fitted on the training part)")(
       "sampling", po::value(&model.sampling)->default_value(model.sampling),
       "step: a formation every --step (the paper's protocol); frame: a formation at every frame, "
       "each robot's previous cell from --step earlier; auto: frame for --model motion, step for "

@@ -73,73 +73,6 @@ void accumulate(PaperSummary& summary, const PaperTest& test) {
   running(summary.mean_confidence[1], test.confidence[1]);
 }
 
-const char* to_string(Method method) {
-  switch (method) {
-    case Method::model:
-      return "model";
-    case Method::persistence:
-      return "persistence";
-    case Method::constant_velocity:
-      return "constant velocity";
-  }
-  return "?";
-}
-
-std::vector<RobotStateById> persistence(const StateCodec& codec, const Formation& current) {
-  const StateIndex centroid = static_cast<StateIndex>(codec.grid().cell_id(current.centroid_cell));
-  std::vector<RobotStateById> out;
-  out.reserve(current.robots.size());
-  for (const FormationRobot& robot : current.robots) {
-    const StateIndex cell = static_cast<StateIndex>(codec.grid().cell_id(robot.cell));
-    out.push_back({robot.robot_id, codec.compose(centroid, cell, cell)});
-  }
-  return out;
-}
-
-std::vector<RobotStateById> constant_velocity(const StateCodec& codec, const FieldSize& field,
-                                              const Formation& current, int horizon) {
-  const Grid& grid = codec.grid();
-  const auto moved = [&](const FormationRobot& robot, int steps) {
-    const Cell v = Cell{robot.cell.x - robot.previous_cell.x, robot.cell.y - robot.previous_cell.y};
-    return Cell{std::clamp(robot.cell.x + steps * v.x, 0, grid.length() - 1),
-                std::clamp(robot.cell.y + steps * v.y, 0, grid.width() - 1)};
-  };
-  Point sum;
-  for (const FormationRobot& robot : current.robots) {
-    const Point centre = grid.centre_of(moved(robot, horizon), field);
-    sum.x += centre.x;
-    sum.y += centre.y;
-  }
-  const double n = static_cast<double>(std::max<std::size_t>(current.robots.size(), 1));
-  const Cell centroid = grid.cell_of(Point{sum.x / n, sum.y / n}, field);
-  std::vector<RobotStateById> out;
-  out.reserve(current.robots.size());
-  for (const FormationRobot& robot : current.robots) {
-    out.push_back({robot.robot_id,
-                   codec.encode({centroid, moved(robot, horizon), moved(robot, horizon - 1)})});
-  }
-  return out;
-}
-
-std::vector<RobotStateById> predict_with(Method method, const TransitionTable& table,
-                                         const Formation& current, int horizon,
-                                         const FieldSize& field, double* confidence) {
-  switch (method) {
-    case Method::persistence:
-      return persistence(table.codec(), current);
-    case Method::constant_velocity:
-      return constant_velocity(table.codec(), field, current, horizon);
-    case Method::model:
-      break;
-  }
-  Prediction prediction;
-  predict(table, robot_states(current), horizon, prediction);
-  if (prediction.steps.empty()) return {};
-  const PredictedStep& last = prediction.steps.back();
-  if (confidence) *confidence = last.confidence;
-  return robot_states(last);
-}
-
 void score(Accuracy& accuracy, const StateCodec& codec,
            const std::vector<RobotStateById>& predicted,
            const std::vector<RobotStateById>& actual) {
@@ -172,58 +105,6 @@ void Calibration::add(double confidence, bool outcome) {
   ++bin_count[b];
   bin_confidence[b] += confidence;
   if (outcome) ++bin_hits[b];
-}
-
-HoldoutResult evaluate_holdout(const StateCodec& codec, const std::vector<PredictedTest>& test,
-                               const FieldSize& field) {
-  HoldoutResult result;
-  for (std::size_t i = 0; i < test.size(); ++i) {
-    const Formation& current = test[i].formation;
-    for (int horizon = 1; horizon <= HoldoutResult::max_horizon; ++horizon) {
-      const std::size_t target = i + static_cast<std::size_t>(horizon);
-      if (target >= test.size() || !test[target].formation.continues_previous) break;
-      const std::vector<RobotStateById> actual = robot_states(test[target].formation);
-      const auto h = static_cast<std::size_t>(horizon - 1);
-      for (std::size_t m = 0; m < all_methods.size(); ++m) {
-        std::vector<RobotStateById> predicted;
-        double confidence = 0.0;
-        switch (all_methods[m]) {
-          case Method::persistence:
-            predicted = persistence(codec, current);
-            break;
-          case Method::constant_velocity:
-            predicted = constant_velocity(codec, field, current, horizon);
-            break;
-          case Method::model:
-            if (h < test[i].prediction.steps.size()) {
-              const PredictedStep& step = test[i].prediction.steps[h];
-              predicted = robot_states(step);
-              confidence = step.confidence;
-            }
-            break;
-        }
-        Accuracy& accuracy = result.accuracy[h][m];
-        const std::uint64_t exact_before = accuracy.exact_states;
-        score(accuracy, codec, predicted, actual);
-        if (all_methods[m] == Method::model) {
-          const bool all_right = accuracy.exact_states - exact_before == actual.size() &&
-                                 predicted.size() == actual.size();
-          result.calibration[h].add(confidence, all_right);
-        }
-      }
-    }
-  }
-  return result;
-}
-
-HoldoutResult evaluate_holdout(const TransitionTable& table, const std::vector<Formation>& test,
-                               const FieldSize& field) {
-  std::vector<PredictedTest> predicted;
-  predicted.reserve(test.size());
-  for (const Formation& formation : test) {
-    predicted.push_back({formation, predict(table, formation, HoldoutResult::max_horizon)});
-  }
-  return evaluate_holdout(table.codec(), predicted, field);
 }
 
 }  // namespace ssl_formation::evaluation

@@ -84,19 +84,12 @@ void prefetch_object(const T& object) {
   for (std::size_t at = 0; at < sizeof(T); at += 64) __builtin_prefetch(bytes + at);
   __builtin_prefetch(bytes + sizeof(T) - 1);  // an object not aligned to a line spans one more
 }
-
-std::size_t row_slot(MotionKey key, std::size_t mask) {
-  key ^= key >> 31;
-  key *= 0x7fb5d329728ea185ULL;
-  key ^= key >> 27;
-  return static_cast<std::size_t>(key) & mask;
-}
 }  // namespace
 
 MotionRow& MotionRowMap::operator[](MotionKey key) {
   if (2 * (row_keys_.size() + 1) > slots_.size()) grow();
   const std::size_t mask = slots_.size() - 1;
-  for (std::size_t i = row_slot(key, mask);; i = (i + 1) & mask) {
+  for (std::size_t i = motion_key_slot(key, mask);; i = (i + 1) & mask) {
     Slot& slot = slots_[i];
     if (slot.key == key) return row(slot.row);
     if (slot.key == empty_key) {
@@ -119,7 +112,7 @@ const MotionRow* MotionRowMap::find(MotionKey key) const {
 std::uint32_t MotionRowMap::row_number(MotionKey key) const {
   if (slots_.empty()) return no_row;
   const std::size_t mask = slots_.size() - 1;
-  for (std::size_t i = row_slot(key, mask);; i = (i + 1) & mask) {
+  for (std::size_t i = motion_key_slot(key, mask);; i = (i + 1) & mask) {
     const Slot& slot = slots_[i];
     if (slot.key == key) return slot.row;
     if (slot.key == empty_key) return no_row;
@@ -128,7 +121,7 @@ std::uint32_t MotionRowMap::row_number(MotionKey key) const {
 
 void MotionRowMap::prefetch_slot(MotionKey key) const {
   if (slots_.empty()) return;
-  __builtin_prefetch(&slots_[row_slot(key, slots_.size() - 1)]);
+  __builtin_prefetch(&slots_[motion_key_slot(key, slots_.size() - 1)]);
 }
 
 void MotionRowMap::prefetch_row(std::uint32_t number) const { prefetch_object(row(number)); }
@@ -143,7 +136,7 @@ void MotionRowMap::grow() {
   std::vector<Slot, ProbedAllocator<Slot>> slots(std::max<std::size_t>(64, slots_.size() * 2));
   const std::size_t mask = slots.size() - 1;
   for (std::size_t row = 0; row < row_keys_.size(); ++row) {
-    std::size_t i = row_slot(row_keys_[row], mask);
+    std::size_t i = motion_key_slot(row_keys_[row], mask);
     while (slots[i].key != empty_key) i = (i + 1) & mask;
     slots[i] = Slot{row_keys_[row], static_cast<std::uint32_t>(row)};
   }
@@ -158,16 +151,6 @@ bool operator==(const MotionRowMap& a, const MotionRowMap& b) {
     equal = equal && other && *other == row;
   });
   return equal;
-}
-
-std::optional<ModelKind> parse_model(std::string_view text) {
-  if (text == "paper") return ModelKind::paper;
-  if (text == "motion") return ModelKind::motion;
-  return std::nullopt;
-}
-
-std::string_view to_string(ModelKind model) {
-  return model == ModelKind::paper ? "paper" : "motion";
 }
 
 bool MotionConfig::valid() const {

@@ -184,12 +184,6 @@ MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& 
 
 namespace {
 constexpr MotionKey empty_slot = ~MotionKey{0};  // no key has every bit set
-std::size_t slot_of(MotionKey key, std::size_t mask) {
-  key ^= key >> 31;
-  key *= 0x7fb5d329728ea185ULL;
-  key ^= key >> 27;
-  return static_cast<std::size_t>(key) & mask;
-}
 }  // namespace
 
 void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates) {
@@ -198,7 +192,7 @@ void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>&
   index_mask_ = size - 1;
   index_.assign(size, Slot{empty_slot, 0, 0, 0, {}});
   for (const auto& [key, e] : estimates) {
-    std::size_t slot = slot_of(key, index_mask_);
+    std::size_t slot = motion_key_slot(key, index_mask_);
     while (index_[slot].key != empty_slot) slot = (slot + 1) & index_mask_;
     index_[slot] = Slot{key,
                         static_cast<float>(e.mean_x),
@@ -213,7 +207,7 @@ void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>&
 }
 
 const MotionModel::Slot* MotionModel::find(MotionKey key) const {
-  for (std::size_t slot = slot_of(key, index_mask_);; slot = (slot + 1) & index_mask_) {
+  for (std::size_t slot = motion_key_slot(key, index_mask_);; slot = (slot + 1) & index_mask_) {
     if (index_[slot].key == key) return &index_[slot];
     if (index_[slot].key == empty_slot) return nullptr;
   }

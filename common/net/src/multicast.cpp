@@ -455,10 +455,8 @@ void MulticastReceiver::stop() noexcept {
 
 bool MulticastReceiver::running() const { return state_->running; }
 const MulticastEndpoint& MulticastReceiver::endpoint() const { return state_->endpoint; }
-const InterfaceChoice& MulticastReceiver::interface() const { return state_->interface; }
 std::vector<address_v4> MulticastReceiver::joined_interfaces() const { return state_->joined; }
 int MulticastReceiver::granted_receive_buffer() const { return state_->granted_buffer; }
-int MulticastReceiver::requested_receive_buffer() const { return state_->requested_buffer; }
 bool MulticastReceiver::kernel_drops_supported() const { return state_->drops_supported; }
 const ReceiverCounters& MulticastReceiver::counters() const { return state_->counters; }
 
@@ -509,11 +507,6 @@ void MulticastSender::open() {
 
 bool MulticastSender::is_open() const { return socket_.is_open(); }
 
-void MulticastSender::close() {
-  error_code ignored;
-  socket_.close(ignored);
-}
-
 bool MulticastSender::send(std::span<const std::byte> data) {
   error_code ec;
   if (!socket_.is_open()) {
@@ -531,7 +524,6 @@ bool MulticastSender::send(std::span<const std::byte> data) {
     return false;
   }
   sent_.fetch_add(1, std::memory_order_relaxed);
-  sent_bytes_.fetch_add(data.size(), std::memory_order_relaxed);
   return true;
 }
 

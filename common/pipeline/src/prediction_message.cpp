@@ -119,18 +119,6 @@ std::size_t step_size(std::size_t k, const PredictedStep& step) {
 
 }  // namespace
 
-PredictionContext prediction_context(const TransitionTable& table, const SamplerConfig& config,
-                                     const FieldSize& field) {
-  PredictionContext context;
-  context.codec = &table.codec();
-  context.field = field;
-  context.opponent_attacks = config.opponent_attacks;
-  context.opponent_color = config.opponent_color;
-  context.step_s = config.step_s;
-  context.table_transitions = table.transitions();
-  return context;
-}
-
 void encode_prediction(const Formation& current, const Prediction& prediction,
                        const PredictionContext& context, std::string& buffer) {
   // An upper bound of the encoded size: every varint at its longest.
@@ -276,7 +264,8 @@ double whole(double mm) {
 
 std::string describe(const Formation& current, const Prediction& prediction,
                      const PredictionContext* context) {
-  const bool motion = context && context->model == ModelKind::motion;
+  // The models that state positions in mm are shown by them; the paper's by its cells.
+  const bool motion = context && describe(context->model).states_positions;
   std::string line;
   char number[96];
   std::snprintf(number, sizeof number, "t=%.2f frame=%u now C", current.time_s,

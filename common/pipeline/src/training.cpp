@@ -6,86 +6,106 @@
 
 namespace ssl_formation {
 
-Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before,
-                   std::optional<MotionTable> motion, std::optional<MatchRules> rules)
-    : table_(std::move(table)),
-      motion_(std::move(motion)),
-      motion_history_(motion_ ? motion_->config() : MotionConfig{}),
-      sampler_(config, [this](const FormationSample& sample) { on_sample(sample); }),
-      match_(rules ? rules->opponent
-                   : fixed_opponent(config.opponent_color, config.opponent_attacks,
-                                    config.infer_attacks)),
-      learn_during_(rules ? rules->learn_during : LearnDuring::running),
-      samples_before_(samples_before),
-      saved_transitions_(table_.transitions()),
-      saved_samples_(samples_before),
-      saved_motion_instances_(motion_instances()) {
-  if (motion_ && config.sampling != Sampling::frame) {
-    throw std::invalid_argument(
-        "the motion model learns from every frame: it needs --sampling frame");
+namespace {
+
+FrontEndConfig front_end_config(const TrainingConfig& config) {
+  FrontEndConfig front;
+  front.sampler = config.sampler;
+  front.opponent = config.rules ? std::optional<OpponentChoice>(config.rules->opponent)
+                                : std::nullopt;
+  front.tracked_vision = config.tracked_vision;
+  const LearnDuring learn_during = config.rules ? config.rules->learn_during : LearnDuring::running;
+  front.keep_commands_apart = learn_during == LearnDuring::running;
+  return front;
+}
+
+// Checks what can be checked before anything is counted.
+std::unique_ptr<Learner> checked(const TrainingConfig& config, ModelKind model,
+                                 std::unique_ptr<Learner> learner) {
+  if (const auto problem = sampling_problem(model, config.sampler.sampling)) {
+    throw std::invalid_argument(*problem);
   }
-  if (motion_ && std::abs(motion_->config().step_s - config.step_s) > 1e-9) {
+  if (const TransitionTable* table = learner->transitions();
+      table && table->grid() != config.sampler.grid) {
+    throw std::invalid_argument("the table's grid " + table->grid().to_string() +
+                                " differs from the sampler's " + config.sampler.grid.to_string());
+  }
+  if (const MotionTable* motion = learner->motion();
+      motion && std::abs(motion->config().step_s - config.sampler.step_s) > 1e-9) {
     throw std::invalid_argument("the motion table's step differs from the sampler's");
   }
-  if (table_.grid() != config.grid) {
-    throw std::invalid_argument("the table's grid " + table_.grid().to_string() +
-                                " differs from the sampler's " + config.grid.to_string());
-  }
-  follow_opponent();
+  return learner;
 }
 
-RefereeChange Training::add_referee(std::string_view payload, double receive_s) {
-  const RefereeChange change = match_.add_referee(payload, receive_s);
-  if (!change.any()) return change;
-  follow_opponent();
-  if (change.command && learn_during_ == LearnDuring::running) {
-    sampler_.start_new_segment();
-    segment_start_s_ = std::numeric_limits<double>::infinity();
+}  // namespace
+
+Training::Training(TrainingConfig config, ModelKind model, std::unique_ptr<Learner> learner,
+                   std::uint64_t samples_before)
+    : model_(model),
+      learner_(checked(config, model, std::move(learner))),
+      learn_during_(config.rules ? config.rules->learn_during : LearnDuring::running),
+      front_end_(front_end_config(config),
+                 {[this](const MatchMoment& moment) { on_sample(moment); },
+                  [this] { learner_->forget_match(); }}),
+      samples_before_(samples_before),
+      saved_progress_(learner_->progress()),
+      saved_samples_(samples_before) {}
+
+namespace {
+TrainingConfig table_training_config(SamplerConfig sampler, std::optional<MatchRules> rules) {
+  TrainingConfig config;
+  config.sampler = std::move(sampler);
+  config.rules = std::move(rules);
+  return config;
+}
+}  // namespace
+
+Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before,
+                   std::optional<MotionTable> motion, std::optional<MatchRules> rules)
+    : Training(table_training_config(std::move(config), std::move(rules)),
+               resume_learner(std::move(table), std::move(motion)), samples_before) {}
+
+Training::Training(TrainingConfig config, ResumedLearner resumed, std::uint64_t samples_before)
+    : Training(std::move(config), resumed.kind, std::move(resumed.learner), samples_before) {}
+
+const TransitionTable& Training::table() const {
+  const TransitionTable* table = learner_->transitions();
+  if (!table) {
+    throw std::logic_error("--model " + std::string(to_string(model_)) + " keeps no table");
   }
-  return change;
+  return *table;
 }
 
-void Training::start_new_stream() {
-  sampler_.start_new_stream();
-  motion_history_.clear();
-  match_.reset();
-  follow_opponent();
-  segment_start_s_ = -std::numeric_limits<double>::infinity();
+StoredTable Training::stored_table(const TableMetadata& metadata) const {
+  const MotionTable* motion = learner_->motion();
+  return StoredTable{table(), metadata,
+                     motion ? std::optional<MotionTable>(*motion) : std::nullopt};
+}
+
+StoredTable Training::stored_table() const {
+  TableMetadata metadata;
+  metadata.field = sampler().field();
+  metadata.step_s = sampler().config().step_s;
+  metadata.samples = samples();
+  return stored_table(metadata);
+}
+
+std::optional<std::string> Training::feed_problem() const {
+  return ssl_formation::feed_problem(model_, front_end_.recent_frame_gap_s());
 }
 
 void Training::absorb(const Training& other) {
-  if (motion_.has_value() != other.motion_.has_value()) {
-    throw std::invalid_argument("a training of the other model cannot be added");
-  }
-  if (motion_ && !(motion_->config() == other.motion_->config())) {
-    throw std::invalid_argument("a training with other motion model settings cannot be added");
-  }
-  table_.merge(other.table_);  // checks the grid
-  if (motion_) motion_->merge(*other.motion_);
+  learner_->absorb(*other.learner_);
   samples_before_ += other.samples();
 }
 
-void Training::follow_opponent() {
-  const Opponent& opponent = match_.opponent();
-  // The motion history keys robots by id, which the other team's robots share.
-  if (opponent.color != sampler_.config().opponent_color) motion_history_.clear();
-  sampler_.set_opponent(opponent.color, opponent.attacks);
-}
-
-void Training::on_sample(const FormationSample& sample) {
-  if (segment_start_s_ == std::numeric_limits<double>::infinity()) {
-    segment_start_s_ = sample.formation.time_s;
-  }
-  const bool learning = match_.learning(learn_during_);
-  if (learning) {
-    for (const Transition& t : sample.transitions) table_.add(t.from, t.to);
+void Training::on_sample(const MatchMoment& moment) {
+  // Followed in every state, so that velocities are known when learning starts again.
+  learner_->observe(moment);
+  if (match().learning(learn_during_)) {
+    learner_->learn(moment);
   } else {
     ++samples_outside_play_;
-  }
-  if (motion_) {
-    // Followed in every state, so that velocities are known when play starts again.
-    motion_history_.add(sample.formation);
-    if (learning) learn_motion(*motion_, motion_history_, sample.formation, segment_start_s_);
   }
 }
 

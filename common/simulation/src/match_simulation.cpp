@@ -55,9 +55,6 @@ Point away_from(Point p, Point centre, double distance) {
   if (l == 0.0) return Point{centre.x - distance, centre.y};
   return Point{centre.x + dx / l * distance, centre.y + dy / l * distance};
 }
-TeamColor other_color(TeamColor color) {
-  return color == TeamColor::yellow ? TeamColor::blue : TeamColor::yellow;
-}
 // The team a team command (a kick-off, a free kick, a placement) is for: its yellow value is
 // even, its blue one odd.
 TeamColor team_of_command(int command) {
@@ -451,7 +448,7 @@ void MatchSimulation::call_stoppage(double now_s) {
   }
   // A goal kick for us, from the side of our goal area where the ball went out.
   const Point spot{field_.length_mm / 2 - 500.0, ball_.position.y < 0 ? -1000.0 : 1000.0};
-  game_->stop_for_ball_out(other_color(config_.opponent_color), now_s, normalise(spot, attacks_));
+  game_->stop_for_ball_out(opposite(config_.opponent_color), now_s, normalise(spot, attacks_));
 }
 
 void MatchSimulation::start_our_possession(double now_s) {

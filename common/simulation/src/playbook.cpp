@@ -228,4 +228,11 @@ Result<Playbook> load_playbook(const std::string& path) {
   return parse_playbook(text.str(), path);
 }
 
+Result<Playbook> builtin_or_file_playbook(const std::string& name_or_path) {
+  if (const auto text = builtin_playbook_text(name_or_path)) {
+    return parse_playbook(*text, name_or_path);
+  }
+  return load_playbook(name_or_path);
+}
+
 }  // namespace ssl_formation::sim

@@ -25,14 +25,6 @@ constexpr double kShortestPlayS = 5.0;
 constexpr std::uint32_t kTimeouts = 4;
 constexpr std::uint32_t kTimeoutTimeUs = 300'000'000;
 
-TeamColor other(TeamColor color) {
-  return color == TeamColor::yellow ? TeamColor::blue : TeamColor::yellow;
-}
-
-AttackDirection other(AttackDirection direction) {
-  return direction == AttackDirection::positive_x ? AttackDirection::negative_x
-                                                  : AttackDirection::positive_x;
-}
 
 std::uint64_t microseconds(double t_s) {
   return t_s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::llround(t_s * 1e6));
@@ -88,7 +80,7 @@ SimulatedGameController::SimulatedGameController(GameControllerConfig config)
   start_match(config_.start_time_s);
 }
 
-TeamColor SimulatedGameController::our_color() const { return other(config_.opponent_color); }
+TeamColor SimulatedGameController::our_color() const { return opposite(config_.opponent_color); }
 
 GameState SimulatedGameController::state() const {
   return game_state_of_command(phase_.command).value_or(GameState::unknown);
@@ -187,7 +179,7 @@ void SimulatedGameController::stop_for_goal(TeamColor scorer, double at_s) {
   issue(Referee::STOP, at_s);
   phase_.until_s = at_s + kGoalStopS;
   queued_.push_back(
-      {for_team(Referee::PREPARE_KICKOFF_YELLOW, other(scorer)), kKickoffPreparationS});
+      {for_team(Referee::PREPARE_KICKOFF_YELLOW, opposite(scorer)), kKickoffPreparationS});
   queued_.push_back({Referee::NORMAL_START, kUntilStoppage});
 }
 
@@ -237,7 +229,7 @@ void SimulatedGameController::advance(double from_s) {
     case Referee::NORMAL_HALF_TIME:
       // The teams change ends; we kick off the second half.
       second_half_ = true;
-      opponent_attacks_ = other(opponent_attacks_);
+      opponent_attacks_ = opposite(opponent_attacks_);
       set_sides();
       phase_.stage = Referee::NORMAL_SECOND_HALF_PRE;
       issue(for_team(Referee::PREPARE_KICKOFF_YELLOW, our_color()), from_s);

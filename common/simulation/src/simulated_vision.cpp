@@ -33,9 +33,6 @@ const std::array<std::array<TeamPositions, formations_per_play>, play_count> pla
     }},
 }};
 
-const std::array<const char*, play_count> play_names{
-    "pass and shot through the centre", "corner from the left", "corner from the right"};
-
 // Our own team (the other colour): a compact defence in front of our goal at +x.
 const TeamPositions our_team{
     {{4200, 0}, {3000, -1000}, {3000, 1000}, {1800, -1800}, {1800, 1800}, {1000, 0}}};
@@ -45,8 +42,6 @@ const TeamPositions our_team{
 const TeamPositions& play_formation(int play, int formation) {
   return plays.at(static_cast<std::size_t>(play)).at(static_cast<std::size_t>(formation));
 }
-
-const char* play_name(int play) { return play_names.at(static_cast<std::size_t>(play)); }
 
 void check_camera_settings(int cameras, double drop_rate, double jitter_mm) {
   if (cameras < 1 || cameras > 8) throw std::invalid_argument("cameras must be between 1 and 8");

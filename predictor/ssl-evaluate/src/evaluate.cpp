@@ -7,14 +7,17 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <random>
 
 #include "ssl_formation/evaluation/evaluation.hpp"
-#include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/evaluation/position_evaluation.hpp"
-#include "ssl_formation/pipeline/prediction_pipeline.hpp"
+#include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/files/real_log_shape.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/playbook.hpp"
+#include "ssl_formation/simulation/simulated_events.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 
 namespace ssl_formation::evaluate {
 
@@ -22,81 +25,71 @@ namespace ev = ssl_formation::evaluation;
 
 namespace {
 
-// A stream of vision packets: a log file, or the simulated vision of a seed.
-class PacketSource {
+using Streams = std::vector<RecordedMatch>;
+
+// A whole log in memory; everything before a damaged part is kept.
+RecordedMatch read_log(const std::string& path) {
+  Result<RecordedLog> log = read_recorded_log(path);
+  if (!log) throw std::runtime_error(log.error().message);
+  if (log->stopped_early) {
+    // A file with nothing before the damage is no data.
+    if (log->match.vision_events() == 0) throw std::runtime_error(log->stopped_early->message);
+    spdlog::warn("{}; using the {} vision packets before it", log->stopped_early->message,
+                 log->match.vision_events());
+  }
+  return std::move(log->match);
+}
+
+// The paper's simulated opponent (no referee): one formation every 2 s of data time.
+RecordedMatch paper_simulation(const EvaluateOptions& options, std::uint64_t seed, int formations) {
+  sim::SimulationConfig config;
+  config.seed = seed;
+  config.jitter_mm = options.jitter_mm;
+  config.cameras = options.cameras;
+  return sim::record_paper_simulation(config, formations);
+}
+
+// A simulated match with its game controller: 60 frames a second of a team running a playbook.
+RecordedMatch match_simulation(const EvaluateOptions& options, std::uint64_t seed, double seconds) {
+  sim::MatchSimulationConfig config;
+  config.seed = seed;
+  Result<sim::Playbook> playbook = sim::builtin_or_file_playbook(options.playbook);
+  if (!playbook) throw app::UsageError("--playbook: " + playbook.error().message);
+  config.playbook = std::move(*playbook);
+  config.jitter_mm = options.jitter_mm;
+  config.cameras = options.cameras;
+  sim::GameControllerConfig game;
+  game.seed = seed;
+  game.random_stoppages = false;  // the match calls its own stoppages
+  config.game = game;
+  return sim::record_match_simulation(std::move(config), seconds);
+}
+
+// A CSV file in --output-dir, or nowhere without one: tables are printed either way.
+class CsvFile {
  public:
-  static PacketSource from_log(const std::string& path) {
-    PacketSource source;
-    Result<LogVisionPackets> log = read_vision_log(path);
-    if (!log) throw std::runtime_error(log.error().message);
-    if (log->stopped_early) {
-      // Everything before the damage is kept; a file with nothing before it is no data.
-      if (log->packets.empty()) throw std::runtime_error(log->stopped_early->message);
-      spdlog::warn("{}; using the {} packets before it", log->stopped_early->message,
-                   log->packets.size());
-    }
-    source.packets_ = std::move(log->packets);
-    return source;
+  CsvFile(const EvaluateOptions& options, const std::string& name) {
+    if (options.output_dir.empty()) return;
+    const std::filesystem::path path = std::filesystem::path(options.output_dir) / name;
+    std::filesystem::create_directories(path.parent_path());
+    out_.open(path);
+    if (!out_) throw std::runtime_error("cannot write " + path.string());
+    spdlog::info("writing {}", path.string());
   }
-  static PacketSource simulated(std::uint64_t seed, int formations, double jitter_mm, int cameras) {
-    PacketSource source;
-    sim::SimulationConfig config;
-    config.seed = seed;
-    config.jitter_mm = jitter_mm;
-    config.cameras = cameras;
-    sim::SimulatedVision vision(config);
-    for (int i = 0; i < formations; ++i) {
-      for (auto& packet : vision.next().packets) source.packets_.push_back(std::move(packet));
-    }
-    return source;
-  }
-  // Several logs one after the other (for the paper protocol, which trains one table).
-  static PacketSource from_logs(const std::vector<std::string>& paths) {
-    PacketSource source;
-    for (const std::string& path : paths) {
-      PacketSource one = from_log(path);
-      source.packets_.insert(source.packets_.end(), std::make_move_iterator(one.packets_.begin()),
-                             std::make_move_iterator(one.packets_.end()));
-    }
-    return source;
-  }
-  const std::vector<SSL_WrapperPacket>& packets() const { return packets_; }
-  // The first `fraction` of the packets and the rest: a time split of one log.
-  std::pair<PacketSource, PacketSource> split(double fraction) const {
-    const auto cut = static_cast<std::size_t>(fraction * static_cast<double>(packets_.size()));
-    PacketSource head;
-    PacketSource tail;
-    head.packets_.assign(packets_.begin(), packets_.begin() + static_cast<std::ptrdiff_t>(cut));
-    tail.packets_.assign(packets_.begin() + static_cast<std::ptrdiff_t>(cut), packets_.end());
-    return {std::move(head), std::move(tail)};
+  template <typename T>
+  CsvFile& operator<<(const T& value) {
+    if (out_.is_open()) out_ << value;
+    return *this;
   }
 
  private:
-  std::vector<SSL_WrapperPacket> packets_;
+  std::ofstream out_;
 };
 
-TransitionTable train(const SamplerConfig& config, const PacketSource& source,
-                      FieldSize* field = nullptr, std::uint64_t* samples = nullptr) {
-  Training training(config, TransitionTable(config.grid));
-  for (const auto& packet : source.packets()) training.add(packet);
-  if (field) *field = training.sampler().field();
-  if (samples) *samples = training.samples();
-  return training.table();
-}
-
-std::ofstream open_csv(const EvaluateOptions& options, const std::string& name) {
-  const std::filesystem::path path = std::filesystem::path(options.output_dir) / name;
-  std::filesystem::create_directories(path.parent_path());
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-  spdlog::info("writing {}", path.string());
-  return out;
-}
+}  // namespace
 
 // ---- paper
 // ---------------------------------------------------------------------------------------
-
-}  // namespace
 
 int run_paper(const EvaluateOptions& options) {
   // The paper's protocol is the paper's model on step sampling, whatever --model says.
@@ -104,13 +97,24 @@ int run_paper(const EvaluateOptions& options) {
   paper.model = "paper";
   SamplerConfig config = paper.sampler_config();
   const auto started = std::chrono::steady_clock::now();
-  const PacketSource training_data =
-      options.train_logs.empty() ? PacketSource::simulated(options.seed, options.train_formations,
-                                                           options.jitter_mm, options.cameras)
-                                 : PacketSource::from_logs(options.train_logs);
-  FieldSize field = config.field;
-  std::uint64_t training_samples = 0;
-  const TransitionTable table = train(config, training_data, &field, &training_samples);
+  // The paper's protocol trains one table, on the logs one after the other (each its own
+  // stream) or on the paper's simulated opponent.
+  Streams training_data;
+  if (options.train_logs.empty()) {
+    training_data.push_back(paper_simulation(options, options.seed, options.train_formations));
+  } else {
+    for (const std::string& log : options.train_logs) training_data.push_back(read_log(log));
+  }
+  Training training(config, TransitionTable(config.grid));
+  std::size_t packets = 0;
+  for (const RecordedMatch& stream : training_data) {
+    training.start_new_stream();
+    stream.replay(training);
+    packets += stream.vision_events();
+  }
+  const FieldSize field = training.sampler().field();
+  const std::uint64_t training_samples = training.samples();
+  const TransitionTable& table = training.table();
 
   std::vector<ev::PlayStates> plays;
   for (int p = 0; p < sim::play_count; ++p) {
@@ -127,7 +131,7 @@ int run_paper(const EvaluateOptions& options) {
   std::uniform_real_distribution<double> x(-field.length_mm / 2, field.length_mm / 2);
   std::uniform_real_distribution<double> y(-field.width_mm / 2, field.width_mm / 2);
   ev::PaperSummary summary;
-  std::ofstream csv = open_csv(options, "paper-running-averages.csv");
+  CsvFile csv(options, "paper-running-averages.csv");
   csv << "test,count_per_play,distance_per_play,count_per_formation,distance_per_formation,"
          "confidence_1,confidence_2\n";
   for (int t = 0; t < options.tests; ++t) {
@@ -149,7 +153,7 @@ int run_paper(const EvaluateOptions& options) {
   std::printf(
       "Paper protocol (§6.1): trained on %llu formations (%zu packets, %llu transitions), "
       "%d tests, grid %s\n",
-      static_cast<unsigned long long>(training_samples), training_data.packets().size(),
+      static_cast<unsigned long long>(training_samples), packets,
       static_cast<unsigned long long>(table.transitions()), summary.tests,
       config.grid.to_string().c_str());
   std::printf("%-28s %14s %14s %14s %14s\n", "", "per play", "paper", "per formation", "paper");
@@ -168,37 +172,38 @@ int run_paper(const EvaluateOptions& options) {
 
 namespace {
 
-using Streams = std::vector<std::vector<SSL_WrapperPacket>>;
-
-// The training and test streams the options describe: logs (each its own stream, split in
-// time with --split) or the simulated vision of two seeds.
-std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options) {
+// The training and test streams the options describe: logs (each its own stream, split in time
+// with --split), or simulations of two seeds.
+std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options,
+                                            const std::string& simulation) {
   Streams train;
   Streams test;
   if (options.split > 0.0) {
     if (options.train_logs.empty()) throw app::UsageError("--split needs --train-log");
     for (const std::string& log : options.train_logs) {
-      auto [head, tail] = PacketSource::from_log(log).split(options.split);
-      train.push_back(head.packets());
-      test.push_back(tail.packets());
+      auto [head, tail] = read_log(log).split(options.split);
+      train.push_back(std::move(head));
+      test.push_back(std::move(tail));
     }
+  } else if (!options.train_logs.empty() && options.test_logs.empty()) {
+    throw app::UsageError(
+        "--train-log needs --test-log (other logs to test on) or --split F (the rest of each "
+        "log after its first F): a model is only judged on data it was not trained on");
   } else {
-    for (const std::string& log : options.train_logs) {
-      train.push_back(PacketSource::from_log(log).packets());
-    }
-    if (train.empty()) {
-      train.push_back(PacketSource::simulated(options.seed, options.train_formations,
-                                              options.jitter_mm, options.cameras)
-                          .packets());
-    }
+    for (const std::string& log : options.train_logs) train.push_back(read_log(log));
   }
-  for (const std::string& log : options.test_logs) {
-    test.push_back(PacketSource::from_log(log).packets());
+  for (const std::string& log : options.test_logs) test.push_back(read_log(log));
+  if (train.empty() != test.empty()) {
+    throw app::UsageError("give both --train-log and --test-log, or neither (a simulation)");
   }
-  if (test.empty()) {
-    test.push_back(PacketSource::simulated(options.test_seed, options.test_formations,
-                                           options.jitter_mm, options.cameras)
-                       .packets());
+  if (train.empty()) {
+    if (simulation == "paper") {
+      train.push_back(paper_simulation(options, options.seed, options.train_formations));
+      test.push_back(paper_simulation(options, options.test_seed, options.test_formations));
+    } else {
+      train.push_back(match_simulation(options, options.seed, options.train_seconds));
+      test.push_back(match_simulation(options, options.test_seed, options.test_seconds));
+    }
   }
   return {std::move(train), std::move(test)};
 }
@@ -215,16 +220,24 @@ struct GridReport {
   double prediction_us = 0.0;     // mean two-step prediction time of the chains' table
 };
 
-// Two-step predictions from the test formations, timed, as the predictor does live.
+// Two-step predictions of the paper's model from the test formations, timed.
 double time_predictions(const TransitionTable& table, const Streams& test,
                         const SamplerConfig& config) {
   std::vector<std::vector<RobotStateById>> inputs;
   FormationSampler sampler(config, [&](const FormationSample& sample) {
     if (inputs.size() < 5000) inputs.push_back(robot_states(sample.formation));
   });
-  for (const auto& stream : test) {
-    sampler.start_new_stream();
-    for (const auto& packet : stream) sampler.add(packet);
+  struct Feed final : MatchEventSink {
+    FormationSampler& sampler;
+    explicit Feed(FormationSampler& s) : sampler(s) {}
+    void on_event(const MatchEvent& event) override {
+      if (event.kind == MatchEventKind::vision) sampler.add(*event.frame);
+    }
+    void start_new_stream() override { sampler.start_new_stream(); }
+  } feed(sampler);
+  for (const RecordedMatch& stream : test) {
+    feed.start_new_stream();
+    stream.replay(feed);
   }
   Prediction prediction;
   const auto start = std::chrono::steady_clock::now();
@@ -255,16 +268,35 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.velocity_window_s = options.velocity_window_s;
     config.model = model.parsed_model();
     config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
+    config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
+    config.tracked_vision = options.network.tracked();
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
   for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);
   evaluate(base.step_s, options.chain_steps);
-  report.prediction_us =
-      time_predictions(report.sections.back().evaluation.table->table, test, base);
+  if (const auto& table = report.sections.back().evaluation.table) {
+    report.prediction_us = time_predictions(table->table, test, base);
+  }
   return report;
 }
 
 const char* quantity_name(bool robot) { return robot ? "robot" : "formation"; }
+
+// How a method is named in the tables: the model as "model", the baselines by their labels.
+std::string method_label(const ev::PositionEvaluation& evaluation, std::size_t m) {
+  return m == 0 ? std::string("model") : std::string(describe(evaluation.methods[m]).label);
+}
+
+// The rows a report shows: every row when the test streams had a referee, else "all" and
+// "running" (every instant is running play as far as anyone can tell).
+std::vector<std::size_t> reported_rows(const ev::PositionEvaluation& evaluation) {
+  if (evaluation.test_has_referee) {
+    std::vector<std::size_t> rows(ev::state_rows);
+    for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = r;
+    return rows;
+  }
+  return {0, ev::state_row_of(GamePhase::running)};
+}
 
 void print_holdout(const GridReport& report, const SamplerConfig& base) {
   const ev::PositionEvaluation& chains = report.sections.back().evaluation;
@@ -275,19 +307,47 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
       static_cast<unsigned long long>(chains.test_formations),
       static_cast<unsigned long long>(chains.transitions),
       static_cast<unsigned long long>(chains.train_formations));
-  std::printf("%9s %5s %-25s %11s %11s %9s %9s %9s %9s %9s\n", "horizon", "steps", "method",
+  if (chains.feed_problem) std::printf("warning: %s\n", chains.feed_problem->c_str());
+  if (!chains.test_has_referee) {
+    std::printf("The test streams carry no referee messages: every instant counts as running "
+                "play, and only the rows 'all' and 'running' are given.\n");
+  }
+  std::printf("%9s %5s %-30s %11s %11s %9s %9s %9s %9s %9s\n", "horizon", "steps", "method",
               "exact state", "exact cell", "cells off", "mean mm", "median mm", "p90 mm", "robots");
   for (const Section& section : report.sections) {
-    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
-      const ev::HorizonScore& score = section.evaluation.horizons[h];
-      for (std::size_t m = 0; m < ev::all_position_methods.size(); ++m) {
-        const ev::Accuracy& a = score.cells[m];
-        std::printf("%7.2f s %5zu %-25s %10.2f%% %10.2f%% %9.3f %9.1f %9.1f %9.1f %9llu\n",
-                    score.horizon_s, h + 1,
-                    std::string(ev::to_string(ev::all_position_methods[m])).c_str(),
+    const ev::PositionEvaluation& evaluation = section.evaluation;
+    for (std::size_t h = 0; h < evaluation.all().size(); ++h) {
+      const ev::HorizonScore& score = evaluation.all()[h];
+      for (std::size_t m = 0; m < score.methods.size(); ++m) {
+        const ev::Accuracy& a = score.methods[m].cells;
+        const ev::ErrorStats& e = score.methods[m].error;
+        std::printf("%7.2f s %5zu %-30s %10.2f%% %10.2f%% %9.3f %9.1f %9.1f %9.1f %9llu\n",
+                    score.horizon_s, h + 1, method_label(evaluation, m).c_str(),
                     100.0 * a.state_accuracy(), 100.0 * a.cell_accuracy(), a.mean_distance(),
-                    score.error[m].mean(), score.error[m].median(), score.error[m].percentile(90),
-                    static_cast<unsigned long long>(a.robots));
+                    e.mean(), e.median(), e.percentile(90), static_cast<unsigned long long>(a.robots));
+      }
+    }
+  }
+  // By phase of the game: the mean error of every method, for the rows with anything in them.
+  std::printf("Mean error (mm) by phase of the game:\n%9s %5s %-24s %9s", "horizon", "steps",
+              "game state", "robots");
+  for (std::size_t m = 0; m < chains.methods.size(); ++m) {
+    std::printf(" %12.12s", method_label(chains, m).c_str());
+  }
+  std::printf("\n");
+  for (const Section& section : report.sections) {
+    const ev::PositionEvaluation& evaluation = section.evaluation;
+    for (const std::size_t row : reported_rows(evaluation)) {
+      for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
+        const ev::HorizonScore& score = evaluation.rows[row][h];
+        if (score.methods.front().cells.robots == 0) continue;
+        std::printf("%7.2f s %5zu %-24s %9llu", score.horizon_s, h + 1,
+                    std::string(ev::state_row_name(row)).c_str(),
+                    static_cast<unsigned long long>(score.methods.front().cells.robots));
+        for (const ev::MethodScore& method : score.methods) {
+          std::printf(" %12.1f", method.error.mean());
+        }
+        std::printf("\n");
       }
     }
   }
@@ -295,8 +355,8 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
   std::printf("%9s %5s %-10s %9s %9s %12s\n", "horizon", "steps", "quantity", "Brier", "ECE",
               "predictions");
   for (const Section& section : report.sections) {
-    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
-      const ev::HorizonScore& score = section.evaluation.horizons[h];
+    for (std::size_t h = 0; h < section.evaluation.all().size(); ++h) {
+      const ev::HorizonScore& score = section.evaluation.all()[h];
       for (const bool robot : {true, false}) {
         const ev::Calibration& c = robot ? score.robot : score.formation;
         std::printf("%7.2f s %5zu %-10s %9.4f %9.4f %12llu\n", score.horizon_s, h + 1,
@@ -305,12 +365,12 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
       }
     }
   }
-  if (report.sections.front().evaluation.horizons.front().radii.robots == 0) return;
+  if (report.sections.front().evaluation.all().front().radii.robots == 0) return;
   std::printf("The model's radii: how often the robot was within them (aim: 50%% and 90%%):\n");
   std::printf("%9s %5s %12s %12s %12s\n", "horizon", "steps", "within r50", "within r90", "robots");
   for (const Section& section : report.sections) {
-    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
-      const ev::HorizonScore& score = section.evaluation.horizons[h];
+    for (std::size_t h = 0; h < section.evaluation.all().size(); ++h) {
+      const ev::HorizonScore& score = section.evaluation.all()[h];
       std::printf("%7.2f s %5zu %11.1f%% %11.1f%% %12llu\n", score.horizon_s, h + 1,
                   100.0 * score.radii.share50(), 100.0 * score.radii.share90(),
                   static_cast<unsigned long long>(score.radii.robots));
@@ -318,32 +378,36 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
   }
 }
 
-void write_holdout_csv(std::ofstream& accuracy, std::ofstream& calibration,
-                       std::ofstream& reliability, const GridReport& report) {
+void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliability,
+                       const GridReport& report) {
   const std::string grid = report.grid.to_string();
   for (const Section& section : report.sections) {
-    for (std::size_t h = 0; h < section.evaluation.horizons.size(); ++h) {
-      const ev::HorizonScore& score = section.evaluation.horizons[h];
-      for (std::size_t m = 0; m < ev::all_position_methods.size(); ++m) {
-        const ev::Accuracy& a = score.cells[m];
-        accuracy << grid << ',' << h + 1 << ',' << score.horizon_s << ','
-                 << ev::to_string(ev::all_position_methods[m]) << ',' << a.state_accuracy() << ','
-                 << a.cell_accuracy() << ',' << a.mean_distance() << ',' << score.error[m].mean()
-                 << ',' << score.error[m].median() << ',' << score.error[m].percentile(90) << ','
-                 << a.robots << '\n';
-      }
-      for (const bool robot : {true, false}) {
-        const ev::Calibration& c = robot ? score.robot : score.formation;
-        calibration << grid << ',' << h + 1 << ',' << score.horizon_s << ",model,"
-                    << quantity_name(robot) << ',' << c.brier() << ','
-                    << ev::expected_calibration_error(c) << ',' << c.n << ','
-                    << score.radii.share50() << ',' << score.radii.share90() << '\n';
-        for (std::size_t b = 0; b < c.bin_count.size(); ++b) {
-          const auto n = static_cast<double>(c.bin_count[b]);
-          reliability << grid << ',' << h + 1 << ',' << score.horizon_s << ','
-                      << quantity_name(robot) << ',' << b << ',' << c.bin_count[b] << ','
-                      << (n > 0 ? c.bin_confidence[b] / n : 0.0) << ','
-                      << (n > 0 ? static_cast<double>(c.bin_hits[b]) / n : 0.0) << '\n';
+    const ev::PositionEvaluation& evaluation = section.evaluation;
+    for (const std::size_t row : reported_rows(evaluation)) {
+      const std::string state(ev::state_row_name(row));
+      for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
+        const ev::HorizonScore& score = evaluation.rows[row][h];
+        for (std::size_t m = 0; m < score.methods.size(); ++m) {
+          const ev::Accuracy& a = score.methods[m].cells;
+          const ev::ErrorStats& e = score.methods[m].error;
+          accuracy << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state << ','
+                   << method_label(evaluation, m) << ',' << a.state_accuracy() << ','
+                   << a.cell_accuracy() << ',' << a.mean_distance() << ',' << e.mean() << ','
+                   << e.median() << ',' << e.percentile(90) << ',' << a.robots << '\n';
+        }
+        for (const bool robot : {true, false}) {
+          const ev::Calibration& c = robot ? score.robot : score.formation;
+          calibration << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state
+                      << ",model," << quantity_name(robot) << ',' << c.brier() << ','
+                      << ev::expected_calibration_error(c) << ',' << c.n << ','
+                      << score.radii.share50() << ',' << score.radii.share90() << '\n';
+          for (std::size_t b = 0; b < c.bin_count.size(); ++b) {
+            const auto n = static_cast<double>(c.bin_count[b]);
+            reliability << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state << ','
+                        << quantity_name(robot) << ',' << b << ',' << c.bin_count[b] << ','
+                        << (n > 0 ? c.bin_confidence[b] / n : 0.0) << ','
+                        << (n > 0 ? static_cast<double>(c.bin_hits[b]) / n : 0.0) << '\n';
+          }
         }
       }
     }
@@ -380,17 +444,29 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   if (!(options.velocity_window_s > 0.0)) {
     throw app::UsageError("--velocity-window must be a positive number of seconds");
   }
+  if (!(options.train_seconds > 0.0) || !(options.test_seconds > 0.0)) {
+    throw app::UsageError("--train-seconds and --test-seconds must be positive");
+  }
   const SamplerConfig base = options.model.sampler_config();
-  const auto [train, test] = holdout_streams(options);
+  (void)app::parsed_learn_during(options.learn_during);
+  std::string simulation = options.simulation;
+  if (simulation == "auto") {
+    simulation = describe(options.model.parsed_model()).needs_every_frame ? "match" : "paper";
+  }
+  if (simulation != "paper" && simulation != "match") {
+    throw app::UsageError("--simulation must be auto, paper or match, not '" + options.simulation +
+                          "'");
+  }
+  const auto [train, test] = holdout_streams(options, simulation);
   const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
-  std::ofstream accuracy = open_csv(options, prefix + "accuracy.csv");
-  accuracy << "grid,horizon_steps,horizon_s,method,state_accuracy,cell_accuracy,"
+  CsvFile accuracy(options, prefix + "accuracy.csv");
+  accuracy << "grid,horizon_steps,horizon_s,game_state,method,state_accuracy,cell_accuracy,"
               "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots\n";
-  std::ofstream calibration = open_csv(options, prefix + "calibration.csv");
-  calibration << "grid,horizon_steps,horizon_s,method,quantity,brier,ece,predictions,"
+  CsvFile calibration(options, prefix + "calibration.csv");
+  calibration << "grid,horizon_steps,horizon_s,game_state,method,quantity,brier,ece,predictions,"
                  "within_radius_50,within_radius_90\n";
-  std::ofstream reliability = open_csv(options, prefix + "reliability.csv");
-  reliability << "grid,horizon_steps,horizon_s,quantity,bin,count,mean_confidence,"
+  CsvFile reliability(options, prefix + "reliability.csv");
+  reliability << "grid,horizon_steps,horizon_s,game_state,quantity,bin,count,mean_confidence,"
                  "observed_frequency\n";
   std::vector<GridReport> reports;
   for (const std::string& grid : grids) {
@@ -400,7 +476,7 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     std::printf("\n");
   }
   if (grids.size() > 1) {
-    std::ofstream sweep = open_csv(options, "grid-sweep.csv");
+    CsvFile sweep(options, "grid-sweep.csv");
     sweep << "grid,states,transitions,table_memory_bytes,prediction_us,model_cell_accuracy_h1,"
              "persistence_cell_accuracy_h1,constant_velocity_cell_accuracy_h1,"
              "damped_constant_velocity_cell_accuracy_h1,model_mean_error_mm_h1\n";
@@ -409,19 +485,26 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
                 "persist cell", "const-v cell");
     for (const GridReport& r : reports) {
       const ev::PositionEvaluation& chains = r.sections.back().evaluation;
-      const ev::HorizonScore& h1 = chains.horizons.front();
+      const ev::HorizonScore& h1 = chains.all().front();
+      const auto cell = [&](ModelKind kind) {
+        const auto it = std::find(chains.methods.begin() + 1, chains.methods.end(), kind);
+        if (it == chains.methods.end()) return 0.0;
+        return h1.methods[static_cast<std::size_t>(it - chains.methods.begin())]
+            .cells.cell_accuracy();
+      };
       const StateCodec codec(r.grid);
       std::printf("%-6s %12u %12llu %11.1f KiB %14.3f %11.2f%% %11.2f%% %11.2f%%\n",
                   r.grid.to_string().c_str(), codec.state_count(),
                   static_cast<unsigned long long>(chains.transitions),
                   static_cast<double>(chains.table_memory_bytes) / 1024.0, r.prediction_us,
-                  100 * h1.cells[0].cell_accuracy(), 100 * h1.cells[1].cell_accuracy(),
-                  100 * h1.cells[2].cell_accuracy());
+                  100 * h1.methods[0].cells.cell_accuracy(), 100 * cell(ModelKind::persistence),
+                  100 * cell(ModelKind::constant_velocity));
       sweep << r.grid.to_string() << ',' << codec.state_count() << ',' << chains.transitions << ','
             << chains.table_memory_bytes << ',' << r.prediction_us << ','
-            << h1.cells[0].cell_accuracy() << ',' << h1.cells[1].cell_accuracy() << ','
-            << h1.cells[2].cell_accuracy() << ',' << h1.cells[3].cell_accuracy() << ','
-            << h1.error[0].mean() << '\n';
+            << h1.methods[0].cells.cell_accuracy() << ',' << cell(ModelKind::persistence) << ','
+            << cell(ModelKind::constant_velocity) << ','
+            << cell(ModelKind::damped_constant_velocity) << ',' << h1.methods[0].error.mean()
+            << '\n';
     }
   }
   return 0;

@@ -15,32 +15,6 @@ Formation formation_at(const StateCodec& codec, const std::vector<Point>& positi
   return FormationSampler::formation_at(codec, field, positions, previous);
 }
 
-TEST(Baselines, PersistenceKeepsEveryCellAndTheCentroid) {
-  const StateCodec codec(Grid(3, 2));
-  const Formation before = formation_at(codec, {{-3000, -1500}, {0, 1500}});
-  const Formation now = formation_at(codec, {{0, -1500}, {0, 1500}}, &before);
-  const auto guess = persistence(codec, now);
-  ASSERT_EQ(guess.size(), 2u);
-  EXPECT_EQ(codec.decode(guess[0].state), (RobotState{now.centroid_cell, {1, 0}, {1, 0}}));
-  EXPECT_EQ(codec.decode(guess[1].state), (RobotState{now.centroid_cell, {1, 1}, {1, 1}}));
-}
-
-TEST(Baselines, ConstantVelocityMovesOnAndClamps) {
-  const StateCodec codec(Grid(3, 2));
-  // Robot 0 moves +1 column a step; robot 1 moves -1 row and will hit the edge.
-  const Formation before = formation_at(codec, {{-3000, -1500}, {3000, 1500}});
-  const Formation now = formation_at(codec, {{0, -1500}, {3000, -1500}}, &before);
-  const auto one = constant_velocity(codec, field, now, 1);
-  EXPECT_EQ(codec.decode(one[0].state).position, (Cell{2, 0}));
-  EXPECT_EQ(codec.decode(one[0].state).previous, (Cell{1, 0}));
-  EXPECT_EQ(codec.decode(one[1].state).position, (Cell{2, 0}));  // clamped at row 0
-  // Centroid: mean of centres (3000,-1500) and (3000,-1500) -> cell (2,0).
-  EXPECT_EQ(codec.decode(one[0].state).centroid, (Cell{2, 0}));
-  const auto three = constant_velocity(codec, field, now, 3);
-  EXPECT_EQ(codec.decode(three[0].state).position, (Cell{2, 0}));  // clamped at the last column
-  EXPECT_EQ(codec.decode(three[0].state).previous, (Cell{2, 0}));
-}
-
 TEST(Accuracy, ScoresStatesCellsAndDistances) {
   const StateCodec codec(Grid(3, 2));
   Accuracy accuracy;
@@ -113,32 +87,6 @@ TEST(PaperProtocol, PicksTheClosestPlayPerMeasureAndScoresThreeFormations) {
   EXPECT_EQ(summary.tests, 2);
   EXPECT_NEAR(summary.count_per_play, 1.5, 1e-12);
   EXPECT_NEAR(summary.distance_per_formation, 0.5, 1e-12);
-}
-
-TEST(Holdout, ScoresOnlyConsecutiveChainsAndEveryMethodOnTheSameSamples) {
-  const StateCodec codec(Grid(3, 2));
-  TransitionTable table(Grid(3, 2));
-  // A robot walking along row 0, then a gap, then one more formation.
-  std::vector<Formation> test;
-  test.push_back(formation_at(codec, {{-3000, -1500}}));
-  test.push_back(formation_at(codec, {{0, -1500}}, &test.back()));
-  test.push_back(formation_at(codec, {{3000, -1500}}, &test.back()));
-  test.push_back(formation_at(codec, {{3000, -1500}}));  // starts a new chain
-  table.add(test[0].robots[0].state, test[1].robots[0].state);
-  table.add(test[1].robots[0].state, test[2].robots[0].state);
-  const HoldoutResult result = evaluate_holdout(table, test, field);
-  // Horizon 1: 0->1 and 1->2 (2->3 is across the gap). Horizon 2: 0->2. Horizon 3: none.
-  for (std::size_t m = 0; m < 3; ++m) {
-    EXPECT_EQ(result.accuracy[0][m].formations, 2u);
-    EXPECT_EQ(result.accuracy[1][m].formations, 1u);
-    EXPECT_EQ(result.accuracy[2][m].formations, 0u);
-  }
-  EXPECT_EQ(result.accuracy[0][0].exact_states, 2u);  // the model learned this walk
-  EXPECT_EQ(result.accuracy[1][0].exact_states, 1u);
-  EXPECT_EQ(result.accuracy[0][1].exact_cells, 0u);  // persistence never moves
-  EXPECT_EQ(result.accuracy[0][2].exact_cells, 1u);  // constant velocity right once 1->2
-  EXPECT_EQ(result.calibration[0].n, 2u);
-  EXPECT_NEAR(result.calibration[0].brier(), 0.0, 1e-12);  // confidence 1, right both times
 }
 
 }  // namespace

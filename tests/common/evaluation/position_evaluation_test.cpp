@@ -1,6 +1,7 @@
 // The held-out evaluation in millimetres on hand-built streams with known motion: every
-// baseline's error to 1e-5 against the formulas, the model's against its own predicted cells,
-// the damping fit, percentiles, and the expected calibration error of a worked example.
+// baseline's error to 1e-5 against the formulas (the damped one's factor by least squares), the
+// model's against its own predicted cells, the rows by phase of the game, percentiles, and the
+// expected calibration error of a worked example.
 
 #include "ssl_formation/evaluation/position_evaluation.hpp"
 
@@ -29,7 +30,7 @@ constexpr double still_x = 3000;
 constexpr double still_y = -2000;
 
 // Robot 0 accelerates along x, robot 1 circles, robot 2 stands still.
-std::vector<SSL_WrapperPacket> stream(double seconds) {
+std::vector<SSL_WrapperPacket> packets_of(double seconds) {
   std::vector<SSL_WrapperPacket> packets;
   const int frames = static_cast<int>(std::lround(seconds / frame_s));
   for (int i = 0; i <= frames; ++i) {
@@ -44,6 +45,16 @@ std::vector<SSL_WrapperPacket> stream(double seconds) {
   }
   return packets;
 }
+
+RecordedMatch recorded(const std::vector<SSL_WrapperPacket>& packets) {
+  RecordedMatch match;
+  for (const SSL_WrapperPacket& packet : packets) {
+    match.add_vision(packet, packet.detection().t_capture());
+  }
+  return match;
+}
+
+RecordedMatch stream(double seconds) { return recorded(packets_of(seconds)); }
 
 Point position_of(std::uint32_t id, double t) {
   switch (id) {
@@ -60,11 +71,19 @@ double distance(Point a, Point b) { return std::hypot(a.x - b.x, a.y - b.y); }
 
 // The velocity as the evaluation takes it: a RobotTracker fed with every frame's position from
 // the stream's start up to t, once its track has gone on for more than half the window.
-std::optional<Point> velocity_at(std::uint32_t id, double t, double window) {
+std::optional<RobotTracker> tracker_at(std::uint32_t id, double t, double window) {
   RobotTracker tracker;
   for (int i = 0; frame_s * i <= t + 1e-9; ++i) tracker.observe(frame_s * i, position_of(id, frame_s * i));
   if (tracker.observations() < 2 || !(t - tracker.first_s() > window / 2.0)) return std::nullopt;
-  return tracker.velocity();
+  return tracker;
+}
+std::optional<Point> velocity_at(std::uint32_t id, double t, double window) {
+  const auto tracker = tracker_at(id, t, window);
+  return tracker ? std::optional<Point>(tracker->velocity()) : std::nullopt;
+}
+std::optional<Point> acceleration_at(std::uint32_t id, double t, double window) {
+  const auto tracker = tracker_at(id, t, window);
+  return tracker ? std::optional<Point>(tracker->acceleration()) : std::nullopt;
 }
 
 TEST(PositionEvaluation, BaselineErrorsInMillimetresMatchTheKnownMotion) {
@@ -74,10 +93,14 @@ TEST(PositionEvaluation, BaselineErrorsInMillimetresMatchTheKnownMotion) {
   config.sampler.sampling = Sampling::frame;
   config.steps = 2;  // 0.5 s and 1 s
   config.velocity_window_s = 0.1;
-  const std::vector<SSL_WrapperPacket> train = stream(20.0);
-  const std::vector<SSL_WrapperPacket> test = stream(10.0);
-  const PositionEvaluation result = evaluate_positions(config, {train}, {test});
-  ASSERT_EQ(result.horizons.size(), 2u);
+  const PositionEvaluation result = evaluate_positions(config, {stream(20.0)}, {stream(10.0)});
+  ASSERT_EQ(result.all().size(), 2u);
+  ASSERT_EQ(result.methods.size(), 6u);
+  EXPECT_EQ(result.methods[1], ModelKind::persistence);
+  EXPECT_EQ(result.methods[2], ModelKind::constant_velocity);
+  EXPECT_EQ(result.methods[3], ModelKind::damped_constant_velocity);
+  EXPECT_EQ(result.methods[4], ModelKind::constant_acceleration);
+  EXPECT_FALSE(result.test_has_referee);
   EXPECT_EQ(result.test_formations, 201u);
 
   for (int k = 1; k <= 2; ++k) {
@@ -101,11 +124,10 @@ TEST(PositionEvaluation, BaselineErrorsInMillimetresMatchTheKnownMotion) {
       }
     }
     const double damping = dot / norm;
-    EXPECT_NEAR(result.damping[static_cast<std::size_t>(k - 1)], damping, 1e-9);
 
     // Every test instant with a truth h later; robots without a velocity yet (the first
     // window) extrapolate nothing.
-    std::array<double, 4> sum{};
+    std::array<double, 5> sum{};
     std::size_t robots = 0;
     for (int i = 0; frame_s * i + h <= 10.0 + 1e-9; ++i) {
       const double t = frame_s * i;
@@ -117,30 +139,43 @@ TEST(PositionEvaluation, BaselineErrorsInMillimetresMatchTheKnownMotion) {
         sum[2] += distance({now.x + velocity.x * h, now.y + velocity.y * h}, later);
         sum[3] +=
             distance({now.x + damping * velocity.x * h, now.y + damping * velocity.y * h}, later);
+        const Point a = acceleration_at(id, t, w).value_or(Point{});
+        sum[4] += distance({now.x + velocity.x * h + 0.5 * a.x * h * h,
+                            now.y + velocity.y * h + 0.5 * a.y * h * h},
+                           later);
         ++robots;
       }
     }
-    const HorizonScore& score = result.horizons[static_cast<std::size_t>(k - 1)];
+    const HorizonScore& score = result.all()[static_cast<std::size_t>(k - 1)];
     EXPECT_DOUBLE_EQ(score.horizon_s, h);
-    for (std::size_t m = 1; m < 4; ++m) {
-      SCOPED_TRACE(std::string(to_string(all_position_methods[m])));
-      ASSERT_EQ(score.error[m].count(), robots);
+    for (std::size_t m = 1; m < 5; ++m) {
+      SCOPED_TRACE(std::string(describe(result.methods[m]).label));
+      ASSERT_EQ(score.methods[m].error.count(), robots);
       // The tracker runs on the data clock's times, which differ from frame_s * i by a rounding.
-      EXPECT_NEAR(score.error[m].mean(), sum[m] / static_cast<double>(robots), 1e-5);
+      // Constant acceleration scales that rounding by h^2.
+      EXPECT_NEAR(score.methods[m].error.mean(), sum[m] / static_cast<double>(robots),
+                  m == 4 ? 1e-4 : 1e-5);
     }
     // Constant velocity misses the accelerating robot's a * h^2 / 2; persistence misses more.
-    EXPECT_GT(score.error[1].mean(), score.error[2].mean());
-    ASSERT_EQ(score.error[0].count(), robots);
+    EXPECT_GT(score.methods[1].error.mean(), score.methods[2].error.mean());
+    ASSERT_EQ(score.methods[0].error.count(), robots);
+    // Without a referee every instant is running play: the row "running" is the row "all".
+    const HorizonScore& running =
+        result.rows[state_row_of(GamePhase::running)][static_cast<std::size_t>(k - 1)];
+    EXPECT_EQ(running.methods[2].error.count(), robots);
+    EXPECT_DOUBLE_EQ(running.methods[2].error.mean(), score.methods[2].error.mean());
+    EXPECT_EQ(result.rows[state_row_of(GamePhase::halt)][0].methods[0].error.count(), 0u);
   }
 }
 
 TEST(PositionEvaluation, TheModelIsScoredAtTheCentreOfItsPredictedCell) {
   PositionEvaluationConfig config;
+  config.model = ModelKind::paper;
   config.sampler.grid = Grid(3, 2);
   config.sampler.step_s = 1.0;
   config.sampler.sampling = Sampling::frame;
-  const std::vector<SSL_WrapperPacket> data = stream(12.0);
-  const PositionEvaluation result = evaluate_positions(config, {data}, {data});
+  const std::vector<SSL_WrapperPacket> data = packets_of(12.0);
+  const PositionEvaluation result = evaluate_positions(config, {recorded(data)}, {recorded(data)});
 
   // The same table and predictions by hand.
   Training training(config.sampler, TransitionTable(config.sampler.grid));
@@ -165,26 +200,27 @@ TEST(PositionEvaluation, TheModelIsScoredAtTheCentreOfItsPredictedCell) {
       ++robots;
     }
   }
-  const HorizonScore& score = result.horizons[0];
-  ASSERT_EQ(score.error[0].count(), robots);
-  EXPECT_NEAR(score.error[0].mean(), sum / static_cast<double>(robots), 1e-6);
-  EXPECT_EQ(score.cells[0].exact_cells, right);
+  const HorizonScore& score = result.all()[0];
+  ASSERT_EQ(score.methods[0].error.count(), robots);
+  EXPECT_NEAR(score.methods[0].error.mean(), sum / static_cast<double>(robots), 1e-6);
+  EXPECT_EQ(score.methods[0].cells.exact_cells, right);
   EXPECT_EQ(score.robot.n, robots);
 }
 
 TEST(PositionEvaluation, StepSamplingStillTakesVelocitiesFromEveryObservedFrame) {
-  // One formation a step, but the baselines see the robots' own positions frame by frame: the
-  // same errors as with frame sampling on the instants both score.
+  // One formation a step for the paper's model, but the baselines run as they would live, on
+  // every frame: their velocities come from the robots' own positions frame by frame.
   PositionEvaluationConfig config;
+  config.model = ModelKind::paper;
   config.sampler.grid = Grid(6, 4);
   config.sampler.step_s = 0.5;
   config.sampler.sampling = Sampling::step;
   const PositionEvaluation step = evaluate_positions(config, {stream(20.0)}, {stream(10.0)});
-  const HorizonScore& score = step.horizons[0];
-  ASSERT_GT(score.error[1].count(), 0u);
+  const HorizonScore& score = step.all()[0];
+  ASSERT_GT(score.methods[1].error.count(), 0u);
   EXPECT_EQ(step.test_formations, 21u);
   // Constant velocity beats persistence on this motion only if it had velocities.
-  EXPECT_LT(score.error[2].mean(), 0.5 * score.error[1].mean());
+  EXPECT_LT(score.methods[2].error.mean(), 0.5 * score.methods[1].error.mean());
 }
 
 TEST(PositionEvaluation, PercentilesInterpolateBetweenOrderStatistics) {
@@ -213,46 +249,6 @@ TEST(PositionEvaluation, ExpectedCalibrationErrorOfAWorkedExample) {
   for (int i = 0; i < 10; ++i) perfect.add(0.35, i < 3);
   EXPECT_NEAR(expected_calibration_error(perfect), 0.05, 1e-12);  // 0.35 stated, 0.30 seen
   EXPECT_EQ(expected_calibration_error(Calibration{}), 0.0);
-}
-
-TEST(PositionEvaluation, DampingFitIsTheLeastSquaresFactor) {
-  DampingFit fit;
-  EXPECT_EQ(fit.factor(), 1.0);  // nothing moved: plain constant velocity
-  fit.add({50, 0}, {100, 0});
-  fit.add({0, 30}, {0, 100});
-  EXPECT_NEAR(fit.factor(), (5000.0 + 3000.0) / 20000.0, 1e-12);
-}
-
-TEST(PositionEvaluation, RobotTracksFindTheNearestPositionWithinTheTolerance) {
-  RobotTracks tracks;
-  for (int i = 0; i < 5; ++i) {
-    Formation f;
-    f.time_s = 10.0 + 0.1 * i;
-    FormationRobot r;
-    r.robot_id = 7;
-    r.feed_position = {100.0 * i, 0};
-    f.robots.push_back(r);
-    tracks.add(f);
-  }
-  ASSERT_TRUE(tracks.nearest(7, 10.21, 0.05));
-  EXPECT_DOUBLE_EQ(tracks.nearest(7, 10.21, 0.05)->position.x, 200.0);
-  EXPECT_FALSE(tracks.nearest(7, 10.6, 0.05));
-  EXPECT_FALSE(tracks.nearest(8, 10.2, 0.05));
-  const auto v = tracks.velocity(7, 10.4, 0.2, 0.01);
-  ASSERT_TRUE(v);
-  EXPECT_NEAR(v->x, 1000.0, 1e-9);
-  EXPECT_FALSE(tracks.velocity(7, 10.0, 0.2, 0.01));
-  // A ghost with the robot's id 4 m away at 10.5 s: no velocity spans it, for the baselines
-  // as for the model (MotionFeatures::is_jump).
-  Formation ghost;
-  ghost.time_s = 10.5;
-  FormationRobot r;
-  r.robot_id = 7;
-  r.feed_position = {400.0, 4000.0};
-  ghost.robots.push_back(r);
-  tracks.add(ghost);
-  EXPECT_FALSE(tracks.velocity(7, 10.5, 0.2, 0.01));
-  EXPECT_TRUE(tracks.velocity(7, 10.4, 0.2, 0.01));
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // The table file's version 3: the motion model's table after the paper's counts (the layout in
-// table_file.hpp). Version 1 stays as it was; table_file_test.cpp holds that to its bytes.
+// table_file.hpp). Version 1 stays as it was; table_file_bytes_test.cpp holds both to their bytes.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -155,7 +155,7 @@ class MotionTableFile : public ::testing::Test {
     const fs::path v1 = dir_ / "v1.bin";
     EXPECT_TRUE(save_table(v1, training->table(), metadata));
     Saved saved{read_bytes(path), read_bytes(v1).size() - 4,
-                StoredTable{training->table(), metadata, training->motion()}};
+                StoredTable{training->table(), metadata, *training->motion()}};
     return saved;
   }
 

@@ -526,7 +526,7 @@ TEST(MotionPipeline, PredictsPositionsWithRadiiFromATrainedTable) {
     }
   });
   pipeline.set_table(std::make_shared<const sf::StoredTable>(
-      sf::StoredTable{training.table(), metadata, training.motion()}));
+      training.stored_table(metadata)));
   for (int i = 0; i < 600; ++i) pipeline.add(straight_lines(60 * 200 + i));
   EXPECT_GT(predictions, 500u);
   EXPECT_LT(worst_error, 50.0);
@@ -623,7 +623,7 @@ TEST(MotionPipeline, ATeamStandingStillForAMinuteIsSaidToStayAsOftenAsItDoes) {
   metadata.field = field;
   metadata.step_s = 0.5;
   const auto stored = std::make_shared<const sf::StoredTable>(
-      sf::StoredTable{training.table(), metadata, training.motion()});
+      training.stored_table(metadata));
   const auto standing = [](int i) {
     sf::DetectionFrameSpec spec;
     spec.frame_number = static_cast<std::uint32_t>(i);

@@ -131,6 +131,7 @@ struct HandBuilt {
   PredictionContext context;
 
   HandBuilt(AttackDirection attacks, double step_s) {
+    context.model = ModelKind::paper;
     sample.formation.time_s = 1700000123.4567891;
     sample.formation.frame_number = 4294967295u;
     sample.formation.robots.resize(2);
@@ -386,10 +387,10 @@ TEST(PredictionCsv, TheMotionModelsLinesOfThePipelineCarryItsPositionsAndRadii) 
   for (int k = 0; k < 60 * 60; ++k) {
     training.add(detection(100.0 + k / 60.0, static_cast<std::uint32_t>(k), circling(k / 60.0)));
   }
-  ASSERT_TRUE(training.motion().has_value());
+  ASSERT_NE(training.motion(), nullptr);
   ASSERT_GT(training.motion()->instances(), 0u);
   const auto table =
-      std::make_shared<const StoredTable>(StoredTable{training.table(), {}, training.motion()});
+      std::make_shared<const StoredTable>(training.stored_table(TableMetadata{}));
 
   std::vector<std::string> csv;
   std::size_t checked = 0;

@@ -1,4 +1,5 @@
 #include "ssl_formation/pipeline/prediction_message.hpp"
+#include "ssl_formation/paper_model/predictor.hpp"
 
 #include <gtest/gtest.h>
 
@@ -25,6 +26,7 @@ TEST(PredictionMessage, CarriesTheFormationAndEveryStepWithCellCentresInFeedCoor
   const Prediction prediction = predict(table, formation, 2);
 
   PredictionContext context;
+  context.model = ModelKind::paper;
   context.codec = &codec;
   context.field = field;
   context.opponent_attacks = AttackDirection::negative_x;

@@ -112,7 +112,7 @@ void expect_same_prediction(const Prediction& actual, const Prediction& expected
 
 TEST(PredictionPipeline, WithoutATableNothingIsPredictedButSamplesAreCounted) {
   int calls = 0;
-  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 2},
+  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 2, ModelKind::paper},
                               [&](const PredictedFormation&) { ++calls; });
   EXPECT_EQ(pipeline.table(), nullptr);
   pipeline.add(geometry(12000, 9000));
@@ -131,7 +131,7 @@ TEST(PredictionPipeline, EachPredictionIsThePredictorsOnTheSampledFormation) {
   ASSERT_GT(table->table.transitions(), 0u);
 
   Recorder out;
-  PredictionPipeline pipeline(PredictionConfig{config, 3}, out.handler());
+  PredictionPipeline pipeline(PredictionConfig{config, 3, ModelKind::paper}, out.handler());
   pipeline.set_table(table);
   EXPECT_EQ(pipeline.table(), table);
   pipeline.add(geometry(12000, 9000));
@@ -158,7 +158,7 @@ TEST(PredictionPipeline, EachPredictionIsThePredictorsOnTheSampledFormation) {
                 seen.sample.formation.robots[i].robot_id);
     }
     // The context: this table, the field from geometry, the step and the options.
-    EXPECT_EQ(seen.context.codec, &table->table.codec());
+    EXPECT_EQ(seen.context.codec->grid(), table->table.grid());
     EXPECT_EQ(seen.context.table_transitions, table->table.transitions());
     EXPECT_EQ(seen.context.field, (FieldSize{12000.0, 9000.0}));
     EXPECT_EQ(seen.context.step_s, 2.0);
@@ -188,7 +188,7 @@ TEST(PredictionPipeline, TheContextCarriesTheOptionsAndTheFieldOfTheOptionsWitho
   config.step_s = 1.5;
   const auto table = trained_table(config, 30);
   Recorder out;
-  PredictionPipeline pipeline(PredictionConfig{config, 1}, out.handler());
+  PredictionPipeline pipeline(PredictionConfig{config, 1, ModelKind::paper}, out.handler());
   pipeline.set_table(table);
   // Yellow robots are not the opponent: nothing.
   for (int k = 0; k < 4; ++k) pipeline.add(detection(1.5 * k, play(k), TeamColor::yellow));
@@ -207,7 +207,7 @@ TEST(PredictionPipeline, TheContextCarriesTheOptionsAndTheFieldOfTheOptionsWitho
 
 TEST(PredictionPipeline, ATableOfAnotherGridIsRefused) {
   Recorder out;
-  PredictionPipeline pipeline(PredictionConfig{sampler_config(Grid(3, 2)), 2}, out.handler());
+  PredictionPipeline pipeline(PredictionConfig{sampler_config(Grid(3, 2)), 2, ModelKind::paper}, out.handler());
   const auto wrong = trained_table(sampler_config(Grid(4, 3)), 10);
   EXPECT_THROW(pipeline.set_table(wrong), std::invalid_argument);
   EXPECT_EQ(pipeline.table(), nullptr);
@@ -227,21 +227,21 @@ TEST(PredictionPipeline, ATableOfAnotherGridIsRefused) {
 
 TEST(PredictionPipeline, HorizonBounds) {
   const auto ignore = [](const PredictedFormation&) {};
-  EXPECT_THROW(PredictionPipeline(PredictionConfig{sampler_config(), 0}, ignore),
+  EXPECT_THROW(PredictionPipeline(PredictionConfig{sampler_config(), 0, ModelKind::paper}, ignore),
                std::invalid_argument);
-  EXPECT_THROW(PredictionPipeline(PredictionConfig{sampler_config(), -1}, ignore),
+  EXPECT_THROW(PredictionPipeline(PredictionConfig{sampler_config(), -1, ModelKind::paper}, ignore),
                std::invalid_argument);
   EXPECT_THROW(PredictionPipeline(
-                   PredictionConfig{sampler_config(), PredictionConfig::max_horizon + 1}, ignore),
+                   PredictionConfig{sampler_config(), PredictionConfig::max_horizon + 1, ModelKind::paper}, ignore),
                std::invalid_argument);
   SamplerConfig bad_step = sampler_config();
   bad_step.step_s = 0.0;
-  EXPECT_THROW(PredictionPipeline(PredictionConfig{bad_step, 2}, ignore), std::invalid_argument);
+  EXPECT_THROW(PredictionPipeline(PredictionConfig{bad_step, 2, ModelKind::paper}, ignore), std::invalid_argument);
 
   const auto table = trained_table(sampler_config(), 20);
   for (int horizon : {1, PredictionConfig::max_horizon}) {
     Recorder out;
-    PredictionPipeline pipeline(PredictionConfig{sampler_config(), horizon}, out.handler());
+    PredictionPipeline pipeline(PredictionConfig{sampler_config(), horizon, ModelKind::paper}, out.handler());
     EXPECT_EQ(pipeline.config().horizon, horizon);
     pipeline.set_table(table);
     for (int k = 0; k < 4; ++k) pipeline.add(detection(2.0 * k, play(k)));
@@ -258,7 +258,7 @@ TEST(PredictionPipeline, HorizonBounds) {
 // if `break_at_6`.
 std::vector<Seen> run_with_break(const std::shared_ptr<const StoredTable>& table, bool break_at_6) {
   Recorder out;
-  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 2}, out.handler());
+  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 2, ModelKind::paper}, out.handler());
   pipeline.set_table(table);
   pipeline.add(geometry(12000, 9000));
   for (int k = 0; k < 5; ++k) {
@@ -327,7 +327,7 @@ TEST(PredictionPipeline, SetTableFromInsideTheHandlerIsSafe) {
   std::vector<Seen> seen;
   std::vector<Prediction> expected;
   bool alive_during_call = false;
-  PredictionPipeline pipeline(PredictionConfig{config, 2}, [&](const PredictedFormation& p) {
+  PredictionPipeline pipeline(PredictionConfig{config, 2, ModelKind::paper}, [&](const PredictedFormation& p) {
     if (seen.empty()) {
       self->set_table(second);
       // What this call was handed still refers to the first table, which must still exist.

@@ -25,7 +25,8 @@ struct ProducerOptions {
   std::string interface = app::default_interface;
   int ttl = net::kDefaultMulticastTtl;
   // Simulation (live and --write-log).
-  std::string simulation = "paper";  // paper | match
+  // match (the default: camera-rate frames, what the default motion model learns from) | paper
+  std::string simulation = "match";
   std::string division = "A";        // the match simulation's: A | B
   double frame_rate_hz = 60.0;       // the match simulation's frames per second
   std::string playbook = "wings";    // the match simulation's: a built-in name or a file

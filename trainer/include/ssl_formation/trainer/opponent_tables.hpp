@@ -28,11 +28,11 @@ class OpponentTables {
   const std::filesystem::path& path() const { return path_; }
   bool per_opponent() const { return !options_.table_dir.empty(); }
 
-  // A referee message, handed to the training. With --table-dir, when it names another
-  // opponent, the table is saved and the new opponent's resumed, which then takes the message
-  // too. A file that cannot be resumed is reported, and that opponent is trained into an empty
-  // table that is not saved (the file is left as it is).
-  RefereeChange add_referee(std::string_view payload, double receive_s);
+  // One of the match's events, handed to the training. With --table-dir, when a referee message
+  // names another opponent, the old table is saved and the new opponent's resumed, which then
+  // takes the message too. A file that cannot be resumed is reported, and that opponent is
+  // trained into an empty table that is not saved (the file is left as it is).
+  RefereeChange handle(const MatchEvent& event);
 
   // Saves the current table if it counted anything since it was opened or last saved (an
   // opponent only seen for a moment leaves no empty file behind). False if the save failed.
@@ -48,6 +48,7 @@ class OpponentTables {
   SamplerConfig config_;
   std::optional<MotionConfig> motion_;
   MatchRules rules_;
+  bool tracked_vision_;
   std::filesystem::path path_;
   std::unique_ptr<Training> training_;
   bool saving_ = true;  // false for a table whose file could not be resumed

@@ -20,10 +20,12 @@ namespace ssl_formation::trainer {
 // model's file, other motion settings) and `reset` is false. With `reset` the old file is left
 // alone until the first save replaces it. `rules`: how the training follows the referee (see
 // Training).
+// `tracked_vision`: --vision-source tracked (TrainingConfig).
 std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                         const SamplerConfig& config, bool reset,
                                         const std::optional<MotionConfig>& motion = std::nullopt,
-                                        const std::optional<MatchRules>& rules = std::nullopt);
+                                        const std::optional<MatchRules>& rules = std::nullopt,
+                                        bool tracked_vision = false);
 
 // Saves the training's table atomically (version 3 with its motion table, else version 1); logs
 // and returns false on failure. A save whose folder could not be synced after the rename is a

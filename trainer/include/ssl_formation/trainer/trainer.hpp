@@ -45,6 +45,10 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
 // The motion model's configuration the options ask for: none with --model paper. Throws
 // app::UsageError for a bad --model or --horizon.
 std::optional<MotionConfig> motion_config(const TrainerOptions& options);
+// A table file must be writable where it is asked for: a trainer that only finds out at its
+// first save has lost the match (or the logs' work) by then. Throws app::UsageError when
+// --table's folder does not exist.
+void check_table_option(const TrainerOptions& options);
 // How the training follows the referee, by --opponent-color, --opponent-attacks, --our-team,
 // --opponent-team and --learn-during. Throws app::UsageError.
 MatchRules match_rules(const TrainerOptions& options);

@@ -13,11 +13,14 @@
 #include <utility>
 #include <vector>
 
+#include "ssl_formation/app/options.hpp"
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/match/match.hpp"
+#include "ssl_formation/match/tracked_vision.hpp"
+#include "ssl_formation/net/live_match_events.hpp"
 #include "ssl_formation/net/multicast.hpp"
-#include "ssl_formation/net/tracked_vision_receiver.hpp"
 #include "ssl_formation/net/vision_receiver.hpp"
+#include "ssl_formation/pipeline/match_front_end.hpp"
 
 namespace ssl_formation::app {
 
@@ -32,21 +35,21 @@ net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_
 std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& text);
 std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& text);
 
-// --vision-source tracked: the geometry of a raw vision frame alone, into `out`; false for a frame
-// without geometry. The tracker's frames carry no field size, the raw feed's geometry does.
-bool geometry_only(const VisionFrame& frame, VisionFrame& out);
-
 // Seconds on the steady clock: the receive time the referee follower takes from a live feed.
 double steady_seconds();
 
-// Logs who the opponent is and the game state whenever either changes, and a warning when a
-// second game controller appears or referee messages arrive that cannot be used.
+// The network feeds the options ask for (--vision-address, --referee-address, --vision-source
+// and --tracker-address, --interface). Throws UsageError naming the option.
+net::LiveFeeds live_feeds(const NetworkOptions& network, int receive_buffer_bytes);
+
+// Logs who the opponent is and the game state whenever either changes, which tracker is followed
+// when that changes, and a warning when a second game controller appears or referee messages
+// arrive that cannot be used.
 class MatchLog {
  public:
-  // Cheap when nothing changed; call it after every referee message (and after frames with
-  // --opponent-attacks auto, whose side the sampler infers). `attacks_now`: the side in use.
-  void update(const MatchFollower& match, std::optional<AttackDirection> attacks_now,
-              const RefereeChange& change = {});
+  // Cheap when nothing changed; call it after every referee message, tracker packet (and after
+  // frames with --opponent-attacks auto, whose side the sampler infers).
+  void update(const MatchFrontEnd& front_end, const RefereeChange& change = {});
 
  private:
   // What was logged last, compared before anything is formatted: update() runs for every frame
@@ -55,6 +58,7 @@ class MatchLog {
   std::optional<AttackDirection> logged_attacks_;
   std::optional<GameState> logged_state_;
   RefereeCounters reported_;
+  std::string logged_tracker_;  // the uuid of the tracker followed, as last logged
 };
 
 // "opponent=blue (referee) game=running referee_messages=N referee_unused=N", for status lines:
@@ -115,8 +119,8 @@ class ReadyFile {
 // so a change in SSL-Vision's packets that moves everything to the slow path is visible.
 std::string describe_reception(const net::VisionReceiver& receiver);
 // " tracker_packets=N tracker_frames=N tracker_other_source=N tracker_undecodable=N" with
-// --vision-source tracked (none: empty), for status lines.
-std::string describe_tracked(const net::TrackedVisionReceiver* tracked);
+// --vision-source tracked (empty without), for status lines.
+std::string describe_tracked(const MatchFrontEnd& front_end);
 
 // Logs the field size sampling uses, once at start and once per change (geometry packets), with
 // the division it implies: a wrong field size silently moves every robot to other cells.

@@ -11,6 +11,7 @@
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/match/match.hpp"
+#include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/vision/sampler.hpp"
@@ -34,10 +35,8 @@ inline constexpr const char* default_table = "formation-table.bin";
 // The model's options: what the sampler and the table need to agree on.
 struct ModelOptions {
   std::string grid = "3x2";
-  // 0: the model's own, motion_step_s for the motion model and the paper's 2 s for paper.
+  // 0: the model's own (ModelDescription::default_step_s): 0.5 s, the paper's 2 s for paper.
   double step_s = 0.0;
-  static constexpr double motion_step_s = 0.5;
-  static constexpr double paper_step_s = 2.0;
   double step() const;  // the effective step; throws UsageError
   // "referee": from the referee feed (the colour by the team names and --our-team or
   // --opponent-team, the side by blue_team_on_positive_half); yellow attacking +x until it says.
@@ -48,7 +47,7 @@ struct ModelOptions {
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   bool ignore_geometry = false;
-  std::string model = "motion";
+  std::string model = std::string(to_string(default_model));
   // "auto": what the model needs, frame for motion and step (the paper's protocol) for paper.
   std::string sampling = "auto";
 

@@ -16,6 +16,10 @@ namespace ssl_formation {
 enum class TeamColor { yellow, blue };
 std::optional<TeamColor> parse_team_color(std::string_view text);
 std::string_view to_string(TeamColor color);
+// The other team's colour.
+constexpr TeamColor opposite(TeamColor color) {
+  return color == TeamColor::yellow ? TeamColor::blue : TeamColor::yellow;
+}
 
 struct FormationRobot {
   std::uint32_t robot_id = 0;

@@ -46,6 +46,11 @@ enum class AttackDirection { positive_x, negative_x };
 
 std::optional<AttackDirection> parse_attack_direction(std::string_view text);  // "+x" or "-x"
 std::string_view to_string(AttackDirection direction);
+// The other end: the side the opponent attacks after the teams changed ends.
+constexpr AttackDirection opposite(AttackDirection direction) {
+  return direction == AttackDirection::positive_x ? AttackDirection::negative_x
+                                                  : AttackDirection::positive_x;
+}
 
 // The rotation is its own inverse, so the same call undoes it for output.
 inline Point normalise(Point feed_point, AttackDirection opponent_attacks) {

@@ -1,7 +1,6 @@
 #pragma once
-// Evaluation of the model: the paper's §6 protocol, held-out accuracy against two baselines
-// (persistence and constant velocity), and the calibration of the formation confidence.
-// Pure: tables, formations and numbers in, numbers out.
+// The paper's §6 protocol, and the scores every evaluation keeps: accuracy on cells and the
+// calibration of a stated probability. Pure: tables, formations and numbers in, numbers out.
 
 #include <array>
 #include <cstdint>
@@ -45,24 +44,7 @@ struct PaperSummary {
 };
 void accumulate(PaperSummary& summary, const PaperTest& test);  // running means
 
-// ---- Held-out evaluation (§7.1) --------------------------------------------------------------
-
-enum class Method { model, persistence, constant_velocity };
-inline constexpr std::array<Method, 3> all_methods{Method::model, Method::persistence,
-                                                   Method::constant_velocity};
-const char* to_string(Method method);
-
-// A method's guess of the formation `horizon` steps after `current`: robot states by id.
-std::vector<RobotStateById> predict_with(Method method, const TransitionTable& table,
-                                         const Formation& current, int horizon,
-                                         const FieldSize& field, double* confidence = nullptr);
-
-// Persistence: every robot stays in its cell (velocity 0), the centroid stays.
-std::vector<RobotStateById> persistence(const StateCodec& codec, const Formation& current);
-// Constant velocity: every robot moves on by its last displacement each step, clamped into the
-// grid; the centroid is the cell of the mean of the predicted cells' centres.
-std::vector<RobotStateById> constant_velocity(const StateCodec& codec, const FieldSize& field,
-                                              const Formation& current, int horizon);
+// ---- Scores shared by every evaluation -----------------------------------------------------
 
 struct Accuracy {
   std::uint64_t formations = 0;
@@ -91,29 +73,5 @@ struct Calibration {
   // Bin b holds confidences in [b/10, (b+1)/10), the last one also 1.0.
   static int bin_of(double confidence);
 };
-
-struct HoldoutResult {
-  static constexpr int max_horizon = 3;
-  // accuracy[horizon - 1][method]
-  std::array<std::array<Accuracy, 3>, max_horizon> accuracy{};
-  // The model's confidence that the whole formation (every robot's state) is right, per horizon.
-  std::array<Calibration, max_horizon> calibration{};
-};
-
-// A test formation and the model's prediction from it, max_horizon steps ahead, as the
-// PredictionPipeline made it.
-struct PredictedTest {
-  Formation formation;
-  Prediction prediction;
-};
-
-// Scores every sample of `test` that starts a chain of `horizon` consecutive formations (no gap,
-// same robots), for horizons 1-3 and all three methods, on the same samples. The model's guess
-// at horizon h is step h of the test's prediction.
-HoldoutResult evaluate_holdout(const StateCodec& codec, const std::vector<PredictedTest>& test,
-                               const FieldSize& field);
-// The same for formations alone: predicts each from `table` first.
-HoldoutResult evaluate_holdout(const TransitionTable& table, const std::vector<Formation>& test,
-                               const FieldSize& field);
 
 }  // namespace ssl_formation::evaluation

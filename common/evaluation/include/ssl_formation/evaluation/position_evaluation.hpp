@@ -1,69 +1,30 @@
 #pragma once
 // Predictions judged as the field judges them: the distance in millimetres between where a
-// method said a robot would be `horizon_s` seconds later and where it was, against the robot's
-// own observed positions, and the calibration of every probability stated. Pure: formations,
-// predictions and numbers in, numbers out.
+// method said a robot would be `horizon_s` seconds later and where it was, and the calibration
+// of every probability the model states, by the phase of the game the prediction was made in.
 //
-// The baselines SSL teams use today, computed from each robot's own observed positions at the
-// same instants:
-//   persistence                 it stays where it is;
-//   constant velocity           it goes on at its velocity now, from its RobotTracker (as the
-//                               model's), once its track has run for half `velocity_window_s`;
-//   damped constant velocity    the same velocity scaled by one factor per horizon, fitted on
-//                               the training part by least squares (DampingFit).
+// Every method (the model and the baselines, models/model_factory.hpp) learns on the training
+// streams and predicts the test streams through the very Training and PredictionPipeline the
+// daemons run, each with the sampling it needs, following the referee as the daemons do. Every
+// method is scored on the same robots at the same instants: the model's instants, a baseline's
+// prediction taken at its own instant nearest (the same instant when both sample every frame).
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string_view>
 #include <vector>
 
 #include "ssl_formation/evaluation/evaluation.hpp"
-#include "ssl_formation/base/formation.hpp"
-#include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/motion_model/online_calibration.hpp"
-#include "ssl_formation/paper_model/predictor.hpp"
-#include "ssl_formation/vision/robot_tracker.hpp"
-#include "ssl_formation/vision/sampler.hpp"
-#include "ssl_formation/files/table_file.hpp"
-
-class SSL_WrapperPacket;
+#include "ssl_formation/match/game_phase.hpp"
+#include "ssl_formation/match/match_event.hpp"
+#include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 
 namespace ssl_formation::evaluation {
-
-// Where each robot was seen in one stream, on the data clock, in the feed's coordinates: every
-// sampled formation's robots by id, and each robot's velocity from a RobotTracker fed with its
-// observed positions (the model's own tracker: the baselines extrapolate what a team's tracker
-// would). Formations must come in time order.
-class RobotTracks {
- public:
-  void add(const Formation& formation);
-  // The position recorded nearest to `time_s`, if one lies within `tolerance_s` of it; with the
-  // time it was recorded at and the tracker's velocity then.
-  struct Seen {
-    double time_s = 0.0;
-    Point position;
-    Point velocity;               // valid if tracked_since_s is set
-    std::optional<double> tracked_since_s;  // when the robot's current track started
-  };
-  std::optional<Seen> nearest(std::uint32_t robot_id, double time_s, double tolerance_s) const;
-  // The robot's velocity at `time_s` (mm/s): its tracker's at the record nearest `time_s`
-  // (within `tolerance_s`), once that track had gone on for half of `window_s`, as the model's
-  // (MotionHistory). A track starts again where the robot jumped (MotionFeatures::is_jump: a
-  // ghost or a swapped id is no velocity, for the baselines as for the model), after
-  // RobotTracker::forget_after_s unseen, or where time went back.
-  std::optional<Point> velocity(std::uint32_t robot_id, double time_s, double window_s,
-                                double tolerance_s) const;
-
- private:
-  std::vector<std::vector<Seen>> by_id_;  // indexed by robot id, each in time order
-  struct Followed {
-    RobotTracker tracker;
-    Point last_position;  // observed, for the jump check
-  };
-  std::vector<Followed> followed_;  // indexed by robot id
-};
 
 // Errors in millimetres: mean, median and 90th percentile (linear interpolation between order
 // statistics, as numpy's default).
@@ -77,28 +38,7 @@ class ErrorStats {
 
  private:
   mutable std::vector<double> errors_;
-  mutable bool sorted_ = true;
 };
-
-// The least-squares damping factor k of `position + k * velocity * horizon`: the k minimising
-// the squared distance to where the robots really were, over the training part.
-class DampingFit {
- public:
-  // `displacement`: where the robot went minus where it was; `extrapolated`: velocity x horizon.
-  void add(Point displacement, Point extrapolated);
-  // 1 (plain constant velocity) when nothing moved in training.
-  double factor() const;
-
- private:
-  double dot_ = 0.0;
-  double norm_ = 0.0;
-};
-
-enum class PositionMethod { model, persistence, constant_velocity, damped_constant_velocity };
-inline constexpr std::array<PositionMethod, 4> all_position_methods{
-    PositionMethod::model, PositionMethod::persistence, PositionMethod::constant_velocity,
-    PositionMethod::damped_constant_velocity};
-std::string_view to_string(PositionMethod method);
 
 // How often the truth fell within the model's stated radii.
 struct RadiusCoverage {
@@ -109,73 +49,73 @@ struct RadiusCoverage {
   double share90() const { return robots ? double(within90) / double(robots) : 0.0; }
 };
 
-// Every method's score at one horizon in seconds.
+// The rows every table is broken into: every instant, then each phase of the game.
+inline constexpr std::size_t state_rows = 1 + all_game_phases.size();
+std::string_view state_row_name(std::size_t row);  // "all", then to_string(GamePhase)
+inline std::size_t state_row_of(GamePhase phase) { return 1 + static_cast<std::size_t>(phase); }
+
+// One method's score at one horizon.
+struct MethodScore {
+  ErrorStats error;
+  Accuracy cells;  // predicted state, cell and cell distance against the truth
+};
+
+// Every method's score at one horizon in seconds, in one row.
 struct HorizonScore {
   double horizon_s = 0.0;
-  std::array<ErrorStats, 4> error;  // by PositionMethod
-  std::array<Accuracy, 4> cells;    // predicted state, cell and cell distance against the truth
-  Calibration robot;                // the model's per-robot probability that its cell is right
-  Calibration formation;            // the model's formation probability that every cell is right
-  RadiusCoverage radii;             // the model's 50% and 90% radii
+  std::vector<MethodScore> methods;  // as PositionEvaluation::methods: the model first
+  Calibration robot;                 // the model's per-robot probability that its cell is right
+  Calibration formation;             // the model's probability that every cell is right
+  RadiusCoverage radii;              // the model's 50% and 90% radii
 };
-
-// How to read positions: the grid and field the formations were sampled with (each formation
-// carries its own attack direction).
-struct PositionSetup {
-  const StateCodec* codec = nullptr;
-  FieldSize field;
-  double velocity_window_s = 0.1;
-  double tolerance_s = 0.05;  // how far from an instant a position may be recorded to stand for it
-};
-
-// Scores one test instant: `now` (sampled at t), the model's step predicting t + horizon_s, and
-// `truth`, the formation sampled nearest t + horizon_s. Each robot of `now` that `truth` holds is
-// scored, every method on the same robots: its position error against the truth's position, its
-// predicted cell and state against the truth's. A baseline's predicted state is (the cell of the
-// mean of its predicted positions, the cell of its predicted position, the robot's cell now).
-// Velocities come from `tracks` (the stream's recorded positions).
-void score_instant(HorizonScore& score, const PositionSetup& setup, const RobotTracks& tracks,
-                   const Formation& now, const PredictedStep& model, const Formation& truth,
-                   double damping);
-
-// The formation of `formations` (in time order) sampled nearest `time_s`, within `tolerance_s`.
-const Formation* formation_near(const std::vector<Formation>& formations, double time_s,
-                                double tolerance_s);
-
-// Adds one stream of the training part to `fit`: for every formation and robot with a velocity,
-// the displacement to the robot's position in the formation nearest horizon_s later.
-void fit_damping(DampingFit& fit, const PositionSetup& setup, const RobotTracks& tracks,
-                 const std::vector<Formation>& formations, double horizon_s);
-
-// ---- The held-out evaluation in millimetres --------------------------------------------------
 
 struct PositionEvaluationConfig {
-  SamplerConfig sampler;  // the model's step, grid and sampling, for training and testing alike
-  ModelKind model = ModelKind::paper;
-  int steps = 1;          // horizons 1..steps, step k being k x step_s ahead
+  SamplerConfig sampler = sampler_config_for(default_model);  // the model's
+  ModelKind model = default_model;
+  std::vector<ModelKind> baselines{baseline_kinds.begin(), baseline_kinds.end()};
+  int steps = 1;  // horizons 1..steps, step k being k x step_s ahead
   double velocity_window_s = 0.1;
-  // How far from t + horizon the truth may be sampled (and from t the velocity's record).
+  // How far from t + horizon the truth may be sampled, and from t a baseline's instant.
   double tolerance_s = 0.05;
   // The motion model's recalibration while it predicts the test streams (PredictionConfig).
   std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
+  // How the methods follow the referee, as the daemons' --opponent-* and --learn-during do;
+  // none: the sampler's opponent, fixed, learning in running play.
+  std::optional<MatchRules> rules;
+  bool tracked_vision = false;  // --vision-source tracked
+  // Sees every prediction the model makes on the test streams, as the daemon would have sent it
+  // (and ssl-predictor --from-log written it): for tools and tests that want them as they are.
+  std::function<void(const PredictedFormation&)> on_model_prediction;
 };
 
 struct PositionEvaluation {
-  std::vector<HorizonScore> horizons;  // [k - 1]
-  std::vector<double> damping;         // the damped baseline's factor per horizon, from training
+  std::vector<ModelKind> methods;  // the model, then the baselines
+  // rows[row][step - 1], row as state_row_of / 0 for every instant.
+  std::vector<std::vector<HorizonScore>> rows;
   std::uint64_t train_formations = 0;
   std::uint64_t transitions = 0;
   std::size_t table_memory_bytes = 0;
   std::uint64_t test_formations = 0;
+  // Whether the test streams carried referee messages: without them every instant is running
+  // play, and only the rows "all" and "running" mean anything.
+  bool test_has_referee = false;
   std::shared_ptr<const StoredTable> table;  // what the model was trained to
+  // Why the model could not learn from the training streams (frames seconds apart), if so.
+  std::optional<std::string> feed_problem;
+
+  const std::vector<HorizonScore>& all() const { return rows.front(); }
 };
 
-// Trains the model on the training streams (each its own stream: nothing spans two), fits the
-// damping on them, then predicts every formation of the test streams through the
-// PredictionPipeline and scores every method at every horizon on the same robots.
+// Trains every method on the training streams (each its own stream: nothing spans two), then
+// predicts every test stream and scores every method at every horizon, by phase of the game.
+// Throws std::invalid_argument for a configuration a method cannot run with.
 PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
-                                      const std::vector<std::vector<SSL_WrapperPacket>>& train,
-                                      const std::vector<std::vector<SSL_WrapperPacket>>& test);
+                                      const std::vector<RecordedMatch>& train,
+                                      const std::vector<RecordedMatch>& test);
+
+// The formation of `formations` (in time order) sampled nearest `time_s`, within `tolerance_s`.
+const Formation* formation_near(const std::vector<Formation>& formations, double time_s,
+                                double tolerance_s);
 
 // Expected calibration error over the 10 equal-width bins: sum over bins of
 // (bin count / n) x |observed frequency - mean confidence|.

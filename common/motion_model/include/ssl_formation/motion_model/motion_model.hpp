@@ -19,6 +19,7 @@
 // merges exactly too) is what MotionModel fits its calibration on.
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -34,13 +35,6 @@
 #include "ssl_formation/vision/robot_tracker.hpp"
 
 namespace ssl_formation {
-
-// The models a table can serve.
-//   paper   the paper's Markov model on cells (DESIGN.md §3), bit for bit.
-//   motion  this file's model.
-enum class ModelKind { paper, motion };
-std::optional<ModelKind> parse_model(std::string_view text);
-std::string_view to_string(ModelKind model);
 
 // What a motion table's rows mean; saved with them, and equal for tables that merge.
 struct MotionConfig {
@@ -155,6 +149,15 @@ struct MotionKeyParts {
   friend bool operator==(const MotionKeyParts&, const MotionKeyParts&) = default;
 };
 using MotionKey = std::uint64_t;
+// The slot where `key`'s search starts in an open-addressing table of `mask + 1` slots (a power
+// of two), probed linearly from there: the key's bits mixed, then masked. MotionRowMap's index
+// and MotionModel's estimates both use it. Inline: every lookup in either table calls it.
+inline std::size_t motion_key_slot(MotionKey key, std::size_t mask) {
+  key ^= key >> 31;
+  key *= 0x7fb5d329728ea185ULL;
+  key ^= key >> 27;
+  return static_cast<std::size_t>(key) & mask;
+}
 // Packs the parts `level` keeps; decode(encode(p)) is p with the dropped parts zero.
 MotionKey encode_motion_key(MotionKeyParts parts);
 MotionKeyParts decode_motion_key(MotionKey key);

@@ -162,7 +162,6 @@ class MulticastReceiver {
 
   bool running() const;
   const MulticastEndpoint& endpoint() const;
-  const InterfaceChoice& interface() const;
 
   // The addresses the group was joined on (after start()).
   std::vector<address_v4> joined_interfaces() const;
@@ -172,7 +171,6 @@ class MulticastReceiver {
   // kernel then doubles it for bookkeeping and Asio halves the doubled value it reads back). A
   // warning is logged when this is below the request.
   int granted_receive_buffer() const;
-  int requested_receive_buffer() const;
 
   // Whether SO_RXQ_OVFL could be enabled, so counters().kernel_drops is meaningful.
   bool kernel_drops_supported() const;
@@ -203,18 +201,15 @@ class MulticastSender {
   // likely cause if a step fails (e.g. the interface is not an address of this machine).
   void open();
   bool is_open() const;
-  void close();
 
   // Sends one datagram synchronously (send_to; UDP does not wait for the receiver). Returns false
   // and counts a send error (logged, rate-limited) if the socket is not open or the send fails.
   bool send(std::span<const std::byte> data);
 
   const MulticastEndpoint& endpoint() const { return endpoint_; }
-  address_v4 interface() const { return interface_; }
   int ttl() const { return ttl_; }
 
   std::uint64_t sent() const { return sent_.load(std::memory_order_relaxed); }
-  std::uint64_t sent_bytes() const { return sent_bytes_.load(std::memory_order_relaxed); }
   std::uint64_t send_errors() const { return send_errors_.load(std::memory_order_relaxed); }
 
  private:
@@ -224,7 +219,6 @@ class MulticastSender {
   address_v4 interface_;
   int ttl_;
   std::atomic<std::uint64_t> sent_{0};
-  std::atomic<std::uint64_t> sent_bytes_{0};
   std::atomic<std::uint64_t> send_errors_{0};
 };
 

@@ -61,13 +61,8 @@ class ProtoMulticastReceiver {
       on_datagram(data, from);
     });
   }
-  void stop() { receiver_.stop(); }
-  bool running() const { return receiver_.running(); }
 
   const ReceiverCounters& counters() const { return receiver_.counters(); }
-  int granted_receive_buffer() const { return receiver_.granted_receive_buffer(); }
-  bool kernel_drops_supported() const { return receiver_.kernel_drops_supported(); }
-  const MulticastReceiver& bytes_receiver() const { return receiver_; }
 
  private:
   void on_datagram(std::span<const std::byte> data, const udp::endpoint& from) {
@@ -102,8 +97,6 @@ class ProtoMulticastSender {
 
   // Throws MulticastError on failure (see MulticastSender::open()).
   void open() { sender_.open(); }
-  bool is_open() const { return sender_.is_open(); }
-  void close() { sender_.close(); }
 
   // Returns false if the message cannot be encoded (a proto2 `required` field is missing, or it
   // is larger than one datagram: counted in encode_errors()) or the send fails (send_errors()).
@@ -127,7 +120,6 @@ class ProtoMulticastSender {
   std::uint64_t sent() const { return sender_.sent(); }
   std::uint64_t send_errors() const { return sender_.send_errors(); }
   std::uint64_t encode_errors() const { return encode_errors_.load(std::memory_order_relaxed); }
-  const MulticastSender& bytes_sender() const { return sender_; }
 
  private:
   MulticastSender sender_;

@@ -31,14 +31,10 @@ class VisionReceiver {
   // MulticastReceiver::start()).
   void start(FrameHandler on_frame);
   void stop() { receiver_.stop(); }
-  bool running() const { return receiver_.running(); }
 
   const ReceiverCounters& counters() const { return receiver_.counters(); }
   // Datagrams decoded without protobuf (the rest were parsed by protobuf or refused by it).
   std::uint64_t direct_decodes() const { return direct_decodes_.load(std::memory_order_relaxed); }
-  int granted_receive_buffer() const { return receiver_.granted_receive_buffer(); }
-  bool kernel_drops_supported() const { return receiver_.kernel_drops_supported(); }
-  const MulticastReceiver& bytes_receiver() const { return receiver_; }
 
  private:
   void on_datagram(std::span<const std::byte> data, const udp::endpoint& from);

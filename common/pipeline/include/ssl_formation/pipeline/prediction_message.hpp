@@ -5,10 +5,11 @@
 #include <string>
 
 #include "formation_prediction.pb.h"
-#include "ssl_formation/motion_model/motion_model.hpp"
-#include "ssl_formation/paper_model/predictor.hpp"
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/base/prediction.hpp"
+#include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/referee.hpp"
-#include "ssl_formation/vision/sampler.hpp"
+#include "ssl_formation/models/model_factory.hpp"
 
 namespace ssl_formation {
 
@@ -19,14 +20,10 @@ struct PredictionContext {
   TeamColor opponent_color = TeamColor::yellow;
   double step_s = 2.0;
   std::uint64_t table_transitions = 0;
-  ModelKind model = ModelKind::paper;
+  ModelKind model = default_model;
   GameState game_state = GameState::unknown;  // the referee's, when the prediction was made
+  GamePhase phase = GamePhase::running;       // the phase for the team predicted, then
 };
-
-// The context a predictor running `config` on `table` writes its messages with, for the current
-// field size (from geometry).
-PredictionContext prediction_context(const TransitionTable& table, const SamplerConfig& config,
-                                     const FieldSize& field);
 
 // Fills `out` (cleared first; reusing one message avoids allocation per packet). Every step
 // carries its horizon_seconds (step x context.step_s) and the message its model; a predicted

@@ -1,37 +1,38 @@
 #pragma once
-// Prediction: the sampler feeding the predictor, the twin of Training. The live predictor,
-// `ssl-predictor --from-log`, the evaluation, the benchmarks and the tests all run exactly this
-// code, fed from a socket, a file or a vector: vision frames in, each sampled formation with its
-// prediction out, on the data's own clock.
+// Prediction: the match's front end feeding a model's forecaster, the twin of Training. The live
+// predictor, `ssl-predictor --from-log`, the evaluation, the benchmarks and the tests all run
+// exactly this code, fed from sockets, a file, a match in memory or a vector: the match's events
+// in, each sampled formation with its prediction out, on the data's own clock.
 
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
 
-#include "ssl_formation/pipeline/live_score.hpp"
-#include "ssl_formation/match/match.hpp"
-#include "ssl_formation/motion_model/motion_predictor.hpp"
-#include "ssl_formation/motion_model/online_calibration.hpp"
-#include "ssl_formation/pipeline/prediction_message.hpp"
-#include "ssl_formation/paper_model/predictor.hpp"
-#include "ssl_formation/vision/sampler.hpp"
 #include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/match/match.hpp"
+#include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/motion_model/online_calibration.hpp"
+#include "ssl_formation/pipeline/live_score.hpp"
+#include "ssl_formation/pipeline/match_front_end.hpp"
+#include "ssl_formation/pipeline/prediction_message.hpp"
 
 class SSL_WrapperPacket;
 
 namespace ssl_formation {
 
 struct PredictionConfig {
-  SamplerConfig sampler;
+  SamplerConfig sampler = sampler_config_for(default_model);
   int horizon = 2;  // formations predicted ahead, 1 to max_horizon
-  ModelKind model = ModelKind::paper;
+  ModelKind model = default_model;
   // How the motion model's stated probabilities follow what the play lately did
   // (OnlineCalibration); none: as the table's calibration states them.
   std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
   // Who the opponent is, with the referee filling in what the options leave open; none: the
   // sampler's colour and side, fixed as if given by option.
   std::optional<OpponentChoice> opponent = std::nullopt;
+  bool tracked_vision = false;  // --vision-source tracked (FrontEndConfig)
   static constexpr int max_horizon = 100;
 };
 
@@ -44,32 +45,42 @@ struct PredictedFormation {
   const Formation& formation() const { return sample.formation; }
 };
 
-class PredictionPipeline {
+class PredictionPipeline final : public MatchEventSink {
  public:
   using Handler = std::function<void(const PredictedFormation&)>;
 
-  // Throws std::invalid_argument for a horizon out of range or a bad sampler configuration.
+  // Throws std::invalid_argument for a horizon out of range, a model that cannot run on the
+  // sampler's sampling, or a bad sampler or recalibration configuration.
   PredictionPipeline(PredictionConfig config, Handler on_prediction);
-  // The sampler's handler points at this object.
+  // The same with a forecaster of config.model made already (one a Learner made of what it
+  // learned, in the evaluation), which carries its own settings (config.recalibration is the
+  // learner's to give it).
+  PredictionPipeline(PredictionConfig config, std::unique_ptr<Forecaster> forecaster,
+                     Handler on_prediction);
   PredictionPipeline(const PredictionPipeline&) = delete;
   PredictionPipeline& operator=(const PredictionPipeline&) = delete;
 
-  // The table predictions come from; until one is set, formations are sampled (so the data
-  // clock and the chains run on) and counted, but nothing is predicted. Throws
-  // std::invalid_argument for a table of another grid than the sampler's, or without the
-  // counts the configured model needs (a version-1 table asked for the motion model).
+  // The table predictions come from. A model that needs one samples formations until it has one
+  // (so the data clock and the chains run on) and counts them, but predicts nothing. Throws
+  // std::invalid_argument for a table of another grid than the sampler's, or one the model
+  // cannot use (a version-1 table for the motion model), keeping the table it had.
   void set_table(std::shared_ptr<const StoredTable> table);
   const std::shared_ptr<const StoredTable>& table() const { return table_; }
+  // Whether the model needs a table to predict.
+  bool needs_table() const { return describe(config_.model).keeps_table; }
 
-  void add(const VisionFrame& frame) { sampler_.add(frame); }
-  void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
-  // A referee message (a datagram, or a log's type-3 payload) in its place among the frames,
-  // received at `receive_s`: the opponent's colour and side follow it as the options allow, and
-  // every prediction says the game state it was made in.
-  RefereeChange add_referee(std::string_view payload, double receive_s);
+  void on_event(const MatchEvent& event) override { front_end_.on_event(event); }
   // A new log file: its first formation follows nothing (no chain across two files), and its
   // referee is heard anew.
-  void start_new_stream();
+  void start_new_stream() override { front_end_.start_new_stream(); }
+  // on_event(), returning what a referee message changed: the opponent's colour and side follow
+  // it as the options allow, and every prediction says the game state it was made in.
+  RefereeChange handle(const MatchEvent& event) { return front_end_.handle(event); }
+  void add(const VisionFrame& frame) { front_end_.add(frame); }
+  void add(const SSL_WrapperPacket& packet) { front_end_.add(packet); }
+  RefereeChange add_referee(std::string_view payload, double receive_s) {
+    return front_end_.add_referee(payload, receive_s);
+  }
 
   // Predicts the last sampled formation again, as it was, counting nothing, and hands it to
   // `on_rehearsal` (not to the pipeline's handler). A daemon that waits ~16 ms between frames
@@ -79,38 +90,35 @@ class PredictionPipeline {
   bool rehearse(const Handler& on_rehearsal);
 
   const PredictionConfig& config() const { return config_; }
-  const FormationSampler& sampler() const { return sampler_; }
-  const MatchFollower& match() const { return match_; }
+  const MatchFrontEnd& front_end() const { return front_end_; }
+  const FormationSampler& sampler() const { return front_end_.sampler(); }
+  const MatchFollower& match() const { return front_end_.match(); }
   std::uint64_t predictions() const { return predictions_; }
   std::uint64_t samples_without_table() const { return samples_without_table_; }
   // How far the predictions have lately been, against "everyone stays" (LiveScore).
   const LiveScore& live_score() const { return live_score_; }
+  // Why the model cannot predict from this feed, with the option that fixes it (none: it can,
+  // or the pace is not known yet).
+  std::optional<std::string> feed_problem() const;
 
  private:
-  void on_sample(const FormationSample& sample);
-  // Fills prediction_ and context_ for `sample` from the current table; false without one.
-  bool predict_sample(const FormationSample& sample);
-  // Hands the match's opponent to the sampler; another colour also forgets what was followed of
-  // the old one (its robots share the ids).
-  void follow_opponent();
+  void on_sample(const MatchMoment& moment);
+  // What was followed of the match no longer holds (a new stream, another opponent's colour).
+  void forget_match();
+  // Fills prediction_ and context_ for `moment` from the forecaster; false when it cannot yet.
+  bool predict(const MatchMoment& moment, ForecastUse use);
 
   PredictionConfig config_;
   Handler on_prediction_;
+  std::unique_ptr<Forecaster> forecaster_;
   std::shared_ptr<const StoredTable> table_;
-  std::shared_ptr<const MotionModel> motion_model_;  // built from table_ for the motion model
-  MotionModel::Cache motion_cache_;
-  MotionHistory motion_history_;
-  OnlineCalibration online_calibration_;
   LiveScore live_score_;
-  FormationSampler sampler_;
-  MatchFollower match_;
-  // Reused from sample to sample, so that a steady stream allocates nothing once warmed up.
-  std::vector<RobotStateById> robot_states_;
-  std::vector<MotionRobot> motion_robots_;
-  Prediction prediction_;
+  MatchFrontEnd front_end_;
+  Prediction prediction_;  // reused from sample to sample
   PredictionContext context_;
-  // The sampler's last sample (its own buffer, unchanged until the next frame completes one).
-  const FormationSample* last_sample_ = nullptr;
+  // The last sample, as the front end handed it (the sampler's own buffer, unchanged until the
+  // next frame completes one), for rehearse().
+  std::optional<MatchMoment> last_moment_;
   std::uint64_t predictions_ = 0;
   std::uint64_t samples_without_table_ = 0;
 };

@@ -1,16 +1,19 @@
 #pragma once
-// Training: the sampler feeding the transition table. The live trainer, offline training from
-// logs and the tests all run exactly this code, fed from a socket, a file or a vector.
+// Training: the match's front end feeding a model's learner. The live trainer, offline training
+// from logs, the evaluation and the tests all run exactly this code, fed from sockets, a file, a
+// match in memory or a vector.
 
 #include <cstdint>
-#include <limits>
+#include <memory>
 #include <optional>
 #include <string_view>
 
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/match/match.hpp"
+#include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
-#include "ssl_formation/vision/sampler.hpp"
 #include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/pipeline/match_front_end.hpp"
 
 class SSL_WrapperPacket;
 
@@ -22,80 +25,94 @@ struct MatchRules {
   LearnDuring learn_during = LearnDuring::running;
 };
 
-class Training {
+struct TrainingConfig {
+  SamplerConfig sampler;
+  // None: the opponent is the sampler's, fixed as if given by option (the referee changes
+  // neither its colour nor its side), and learning is in running play.
+  std::optional<MatchRules> rules;
+  bool tracked_vision = false;  // --vision-source tracked (FrontEndConfig)
+};
+
+class Training final : public MatchEventSink {
  public:
-  // `table` may hold earlier counts (a resumed table); its grid must be the sampler's.
-  // Throws std::invalid_argument if the grids differ.
-  // With `motion` (which needs frame sampling: velocities come from the frames), the motion
-  // model's rows are counted too, from the same samples. Throws std::invalid_argument for a
-  // motion table with step sampling or another step than the sampler's.
-  // Without `rules`, the opponent is the sampler's, fixed as if given by option (the referee
-  // changes neither its colour nor its side), and learning is in running play.
+  // `learner` is a learner of `model` (model_factory.hpp); it may hold earlier counts (a resumed
+  // table) from `samples_before` formations. Throws std::invalid_argument when the model cannot
+  // run on the sampler's sampling, or a table's grid or step differs from the sampler's.
+  Training(TrainingConfig config, ModelKind model, std::unique_ptr<Learner> learner,
+           std::uint64_t samples_before = 0);
+  // A table model's training: the motion model's with `motion` (which needs frame sampling:
+  // velocities come from the frames, and its step must be the sampler's), the paper's without.
+  // `table` may hold earlier counts (a resumed table).
   Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before = 0,
            std::optional<MotionTable> motion = std::nullopt,
            std::optional<MatchRules> rules = std::nullopt);
-  // The sampler's handler points at this object's table.
   Training(const Training&) = delete;
   Training& operator=(const Training&) = delete;
 
-  void add(const SSL_WrapperPacket& packet) { sampler_.add(packet); }
-  void add(const VisionFrame& frame) { sampler_.add(frame); }
-  // A referee message (a datagram, or a log's type-3 payload) in its place among the frames,
-  // received at `receive_s`. The opponent's colour and side follow it as the rules allow; with
-  // LearnDuring::running only running play is counted, and no transition spans a new command.
-  // (A command takes effect from the next instant the vision completes: a frame held for a
-  // camera still to report when it came counts under the new one.)
-  RefereeChange add_referee(std::string_view payload, double receive_s);
+  void on_event(const MatchEvent& event) override { front_end_.on_event(event); }
   // A new log file: its first formation follows nothing (no transition across two files), and
   // its referee is heard anew.
-  void start_new_stream();
-  // Adds what `other` counted (another log's training, run apart: in another thread), as if this
-  // training had counted it too: the tables merge, and its formations add to samples(). Throws
-  // std::invalid_argument for tables of another grid, model or motion settings.
+  void start_new_stream() override { front_end_.start_new_stream(); }
+  // on_event(), returning what a referee message changed. The opponent's colour and side follow
+  // the referee as the rules allow; with LearnDuring::running only running play is learned, and
+  // nothing spans a new command (which takes effect from the next instant the vision completes).
+  RefereeChange handle(const MatchEvent& event) { return front_end_.handle(event); }
+  void add(const SSL_WrapperPacket& packet) { front_end_.add(packet); }
+  void add(const VisionFrame& frame) { front_end_.add(frame); }
+  RefereeChange add_referee(std::string_view payload, double receive_s) {
+    return front_end_.add_referee(payload, receive_s);
+  }
+
+  // Adds what `other` learned (another log's training, run apart: in another thread), as if this
+  // training had learned it too: the tables merge, and its formations add to samples(). Throws
+  // std::invalid_argument for another model or other settings.
   void absorb(const Training& other);
 
-  const TransitionTable& table() const { return table_; }
-  const std::optional<MotionTable>& motion() const { return motion_; }
-  const FormationSampler& sampler() const { return sampler_; }
-  const MatchFollower& match() const { return match_; }
+  ModelKind model() const { return model_; }
+  const Learner& learner() const { return *learner_; }
+  // The paper's counts, which every table model keeps (throws std::logic_error for a model that
+  // keeps no table).
+  const TransitionTable& table() const;
+  // The motion model's rows; none for the paper's model.
+  const MotionTable* motion() const { return learner_->motion(); }
+  // What a table file keeps of this training, with `metadata` (a copy: training may go on).
+  // Throws std::logic_error for a model that keeps no table.
+  StoredTable stored_table(const TableMetadata& metadata) const;
+  // The same with the metadata of this training: the field its sampler uses, its step, and the
+  // formations sampled.
+  StoredTable stored_table() const;
+  const MatchFrontEnd& front_end() const { return front_end_; }
+  const FormationSampler& sampler() const { return front_end_.sampler(); }
+  const MatchFollower& match() const { return front_end_.match(); }
   LearnDuring learn_during() const { return learn_during_; }
+  // Why the model cannot learn from this feed, with the option that fixes it (none: it can, or
+  // the pace is not known yet).
+  std::optional<std::string> feed_problem() const;
   // Samples not learned from: outside running play, by the rules.
   std::uint64_t samples_outside_play() const { return samples_outside_play_; }
   // Formations sampled, including those of the resumed table.
-  std::uint64_t samples() const { return samples_before_ + sampler_.counters().samples; }
+  std::uint64_t samples() const { return samples_before_ + sampler().counters().samples; }
   // Counts added since the last call to mark_saved(): lets a daemon skip saving an unchanged table.
   bool changed_since_save() const {
-    return table_.transitions() != saved_transitions_ || samples() != saved_samples_ ||
-           motion_instances() != saved_motion_instances_;
+    return learner_->progress() != saved_progress_ || samples() != saved_samples_;
   }
   void mark_saved() {
-    saved_transitions_ = table_.transitions();
+    saved_progress_ = learner_->progress();
     saved_samples_ = samples();
-    saved_motion_instances_ = motion_instances();
   }
 
  private:
-  void on_sample(const FormationSample& sample);
-  // Hands the match's opponent to the sampler; another colour also forgets the motion history.
-  void follow_opponent();
-  std::uint64_t motion_instances() const {
-    return motion_ ? motion_->instances() + motion_->held_out() : 0;
-  }
+  Training(TrainingConfig config, ResumedLearner resumed, std::uint64_t samples_before);
+  void on_sample(const MatchMoment& moment);
 
-  TransitionTable table_;
-  std::optional<MotionTable> motion_;
-  MotionHistory motion_history_;
-  FormationSampler sampler_;
-  MatchFollower match_;
+  ModelKind model_;
+  std::unique_ptr<Learner> learner_;
   LearnDuring learn_during_;
-  // The current command's first sample time (learning learns nothing from before it); +infinity
-  // from a new command until its first sample.
-  double segment_start_s_ = -std::numeric_limits<double>::infinity();
+  MatchFrontEnd front_end_;
   std::uint64_t samples_outside_play_ = 0;
   std::uint64_t samples_before_;
-  std::uint64_t saved_transitions_;
+  std::uint64_t saved_progress_;
   std::uint64_t saved_samples_;
-  std::uint64_t saved_motion_instances_;
 };
 
 }  // namespace ssl_formation

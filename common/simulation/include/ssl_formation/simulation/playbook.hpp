@@ -74,5 +74,7 @@ Result<Playbook> load_playbook(const std::string& path);
 std::vector<std::string> builtin_playbook_names();
 // The text of a built-in playbook; none for another name.
 std::optional<std::string_view> builtin_playbook_text(std::string_view name);
+// A built-in playbook by name, else the playbook file of that path.
+Result<Playbook> builtin_or_file_playbook(const std::string& name_or_path);
 
 }  // namespace ssl_formation::sim

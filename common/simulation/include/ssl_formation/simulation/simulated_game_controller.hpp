@@ -50,7 +50,7 @@ struct GameControllerConfig {
 };
 
 // What the match looks like at one moment.
-struct GamePhase {
+struct ControllerPhase {
   Referee::Stage stage = Referee::NORMAL_FIRST_HALF_PRE;
   Referee::Command command = Referee::HALT;
   double until_s = 0.0;  // data time the phase ends at (the next phase starts)
@@ -103,7 +103,7 @@ class SimulatedGameController {
   GameControllerConfig config_;
   std::mt19937_64 random_;
   Referee message_;
-  GamePhase phase_;
+  ControllerPhase phase_;
   // The phases queued after the current one (a stoppage's STOP, placement, restart).
   struct QueuedPhase {
     Referee::Command command;

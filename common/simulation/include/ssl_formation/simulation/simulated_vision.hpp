@@ -26,7 +26,6 @@ using TeamPositions = std::array<Point, robots_per_team>;  // index = robot id, 
 
 // Play p (0-based), formation f: positions with the opponent attacking +x on a 9 x 6 m field.
 const TeamPositions& play_formation(int play, int formation);
-const char* play_name(int play);
 
 struct SimulationConfig {
   std::uint64_t seed = 1;
@@ -132,7 +131,6 @@ class SimulatedVision {
   static Area camera_area(int camera, int cameras, const FieldSize& field, double overlap_mm);
 
  private:
-  void start_cycle();
   TeamPositions random_formation();
   void build_packets(SimulatedFormation& formation);
 

@@ -20,11 +20,20 @@ namespace ssl_formation::evaluate {
 struct EvaluateOptions {
   std::string mode;
   app::ModelOptions model;
+  app::NetworkOptions network;  // --vision-source: the logs' raw or tracked vision
+  std::string learn_during = "running";
   std::uint64_t seed = 1;
   std::uint64_t test_seed = 2;
   int train_formations = 15000;
   int test_formations = 5000;
   int tests = 5000;
+  // holdout without logs: the paper's simulated opponent (paper), a simulated match with its
+  // referee (match: --train-seconds of seed --seed, --test-seconds of --test-seed), or auto
+  // (paper for --model paper, match for the others).
+  std::string simulation = "auto";
+  double train_seconds = 600.0;
+  double test_seconds = 300.0;
+  std::string playbook = "wings";
   double jitter_mm = 0.0;
   int cameras = 1;
   // Logs, each its own stream; --split F trains on the first F of every --train-log and tests
@@ -38,7 +47,7 @@ struct EvaluateOptions {
   int chain_steps = 3;
   double velocity_window_s = 0.1;
   double recalibration_half_life_s = OnlineCalibrationSettings{}.half_life_s;  // 0: off
-  std::string output_dir = ".";
+  std::string output_dir;  // none: no CSV files
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
   // as-real-log: the recording, the log written and the mess (parse_real_log_mess); `seed`
   // places its ghosts and draws its noise.

@@ -1,0 +1,99 @@
+#pragma once
+// One interface for every model: a Learner learns from the match, a Forecaster predicts from it.
+// The paper's model, the motion model and the baselines (persistence, constant velocity, constant
+// acceleration and their damped forms) implement both; model_factory.hpp makes them by name, and
+// no code outside the factory asks which model it holds.
+//
+// Both see the match one sample at a time, as the front end (pipeline/match_front_end.hpp) hands
+// it on: observe() for every sample, in time order, so that each keeps what it needs of the
+// match so far (a robot's recent positions, its tracker); learn() or forecast() after it.
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+
+#include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/base/prediction.hpp"
+#include "ssl_formation/base/state.hpp"
+#include "ssl_formation/match/game_phase.hpp"
+#include "ssl_formation/match/referee.hpp"
+
+namespace ssl_formation {
+
+class MotionTable;
+class TransitionTable;
+struct StoredTable;
+struct TableMetadata;
+
+// One sample of the match and what the front end knows of it.
+struct MatchMoment {
+  const FormationSample& sample;
+  const StateCodec& codec;
+  FieldSize field;
+  // The side the sample's positions were normalised with (the opponent attacks it in the feed).
+  AttackDirection attacks = AttackDirection::positive_x;
+  GameState game_state = GameState::unknown;
+  // The phase of the game for the team predicted, and how long its referee command has held.
+  GamePhase phase = GamePhase::running;
+  double since_command_s = std::numeric_limits<double>::infinity();
+  // The data time a learner may learn from: the first sample under the current referee command
+  // when learning keeps the game's states apart, else -infinity (all of the stream so far). No
+  // instance spans it.
+  double learn_from_s = -std::numeric_limits<double>::infinity();
+
+  const Formation& formation() const { return sample.formation; }
+};
+
+class Forecaster;
+
+class Learner {
+ public:
+  virtual ~Learner() = default;
+
+  // Every sample, learned from or not, in time order.
+  virtual void observe(const MatchMoment& moment) = 0;
+  // After observe(): learn from this sample (the training's rules say when).
+  virtual void learn(const MatchMoment& moment) = 0;
+  // Forgets the match so far (another stream, or the opponent changed colour): nothing learned
+  // spans the two. What was learned stays.
+  virtual void forget_match() = 0;
+  // Adds what `other`, of the same model and settings, learned apart (another log, another
+  // thread), as if this learner had learned it too. Throws std::invalid_argument otherwise.
+  virtual void absorb(const Learner& other) = 0;
+  // Grows with everything learned or absorbed: a daemon saves only when it changed.
+  virtual std::uint64_t progress() const = 0;
+
+  // What a table file keeps of it: the paper's counts, and the motion model's rows. None for a
+  // model that keeps no table (the baselines).
+  virtual const TransitionTable* transitions() const { return nullptr; }
+  virtual const MotionTable* motion() const { return nullptr; }
+
+  // A forecaster of what was learned so far; `metadata` is the table's (its field and step).
+  virtual std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const = 0;
+};
+
+// What forecast() is for: a prediction that counts, or a rehearsal (the daemon runs the last one
+// again just before a frame is due, to bring its caches back; it must change nothing).
+enum class ForecastUse { predict, rehearse };
+
+class Forecaster {
+ public:
+  virtual ~Forecaster() = default;
+
+  // The table predictions come from (none: forget it). Throws std::invalid_argument, saying why,
+  // for a table this model cannot use; the forecaster keeps its previous one then. What the
+  // forecaster follows of the match (histories, recalibration) is kept across tables.
+  virtual void set_table(std::shared_ptr<const StoredTable> table) = 0;
+  // Whether it can forecast now: a model that needs a table has one.
+  virtual bool ready() const = 0;
+  // Every sample, in time order, forecast from or not.
+  virtual void observe(const MatchMoment& moment) = 0;
+  // After observe(): predicts `steps` steps of the step ahead into `out`, reusing its storage.
+  virtual void forecast(const MatchMoment& moment, int steps, Prediction& out,
+                        ForecastUse use = ForecastUse::predict) = 0;
+  // Forgets what it followed of the match (another stream, or the opponent changed colour).
+  virtual void forget_match() = 0;
+};
+
+}  // namespace ssl_formation

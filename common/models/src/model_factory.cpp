@@ -1,0 +1,152 @@
+#include "ssl_formation/models/model_factory.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "baselines.hpp"
+#include "table_models.hpp"
+
+namespace ssl_formation {
+
+namespace {
+
+// The data-clock gap between frames above which a model that reads velocities sees none: its
+// tracker needs frames within a few hundredths of a second (MotionConfig::velocity_window_s).
+constexpr double max_frame_gap_for_velocities_s = 0.25;
+
+const std::array<ModelDescription, all_model_kinds.size()> descriptions{{
+    {"paper", "paper", false, true, true, false, 2.0},
+    {"motion", "model", true, true, true, true, 0.5},
+    {"persistence", "persistence", true, false, false, true, 0.5},
+    {"constant-velocity", "constant velocity", true, false, false, true, 0.5},
+    {"damped-constant-velocity", "damped constant velocity", true, false, true, true, 0.5},
+    {"constant-acceleration", "constant acceleration", true, false, false, true, 0.5},
+    {"damped-constant-acceleration", "damped constant acceleration", true, false, true, true,
+     0.5},
+}};
+
+}  // namespace
+
+const ModelDescription& describe(ModelKind kind) {
+  return descriptions[static_cast<std::size_t>(kind)];
+}
+
+std::string_view to_string(ModelKind kind) { return describe(kind).name; }
+
+std::optional<ModelKind> parse_model(std::string_view name) {
+  for (const ModelKind kind : all_model_kinds) {
+    if (describe(kind).name == name) return kind;
+  }
+  return std::nullopt;
+}
+
+std::string model_names() {
+  std::string names;
+  for (const ModelKind kind : all_model_kinds) {
+    if (!names.empty()) names += ", ";
+    names += describe(kind).name;
+  }
+  return names;
+}
+
+SamplerConfig sampler_config_for(ModelKind kind) {
+  SamplerConfig config;
+  config.step_s = describe(kind).default_step_s;
+  config.sampling = describe(kind).needs_every_frame ? Sampling::frame : Sampling::step;
+  return config;
+}
+
+std::optional<std::string> sampling_problem(ModelKind kind, Sampling sampling) {
+  if (!describe(kind).needs_every_frame || sampling == Sampling::frame) return std::nullopt;
+  return "--model " + std::string(describe(kind).name) +
+         " reads every frame's velocities: it needs --sampling frame (or auto); --model paper "
+         "samples a formation every --step";
+}
+
+std::optional<std::string> feed_problem(ModelKind kind, double frame_gap_s) {
+  if (!describe(kind).needs_every_frame || frame_gap_s <= max_frame_gap_for_velocities_s) {
+    return std::nullopt;
+  }
+  char gap[32];
+  std::snprintf(gap, sizeof gap, "%.2g", frame_gap_s);
+  return "the vision frames come " + std::string(gap) +
+         " s apart on the data clock (t_capture), but --model " + std::string(describe(kind).name) +
+         " needs frames a few hundredths of a second apart to see how the robots move, as "
+         "SSL-Vision and grSim send them (and ssl-producer --simulation match): it learns and "
+         "predicts nothing from this feed. For a feed of one formation every few seconds (the "
+         "paper's, ssl-producer --simulation paper) use --model paper";
+}
+
+MotionConfig ModelSettings::motion_config() const {
+  MotionConfig config;
+  config.step_s = step_s;
+  config.horizons = horizons;
+  return config;
+}
+
+namespace {
+
+models::Extrapolation extrapolation_of(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::constant_velocity:
+    case ModelKind::damped_constant_velocity:
+      return models::Extrapolation::velocity;
+    case ModelKind::constant_acceleration:
+    case ModelKind::damped_constant_acceleration:
+      return models::Extrapolation::acceleration;
+    default:
+      return models::Extrapolation::stay;
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& settings) {
+  switch (kind) {
+    case ModelKind::paper:
+      return std::make_unique<models::PaperLearner>(TransitionTable(settings.grid));
+    case ModelKind::motion: {
+      const MotionConfig config = settings.motion_config();
+      if (!config.valid()) throw std::invalid_argument("invalid step or horizon for the motion model");
+      return std::make_unique<models::MotionLearner>(TransitionTable(settings.grid),
+                                                     MotionTable(config), settings.recalibration);
+    }
+    case ModelKind::persistence:
+    case ModelKind::constant_velocity:
+    case ModelKind::damped_constant_velocity:
+    case ModelKind::constant_acceleration:
+    case ModelKind::damped_constant_acceleration:
+      return std::make_unique<models::BaselineLearner>(kind, extrapolation_of(kind),
+                                                       describe(kind).learns, settings);
+  }
+  throw std::invalid_argument("unknown model");
+}
+
+ResumedLearner resume_learner(TransitionTable table, std::optional<MotionTable> motion) {
+  if (motion) {
+    return {ModelKind::motion,
+            std::make_unique<models::MotionLearner>(std::move(table), std::move(*motion))};
+  }
+  return {ModelKind::paper, std::make_unique<models::PaperLearner>(std::move(table))};
+}
+
+std::unique_ptr<Forecaster> make_forecaster(ModelKind kind, const ModelSettings& settings) {
+  switch (kind) {
+    case ModelKind::paper:
+      return std::make_unique<models::PaperForecaster>();
+    case ModelKind::motion:
+      return std::make_unique<models::MotionForecaster>(settings);
+    case ModelKind::persistence:
+    case ModelKind::constant_velocity:
+    case ModelKind::damped_constant_velocity:
+    case ModelKind::constant_acceleration:
+    case ModelKind::damped_constant_acceleration:
+      // Before any fit the damped ones extrapolate undamped.
+      return std::make_unique<models::BaselineForecaster>(extrapolation_of(kind), settings);
+  }
+  throw std::invalid_argument("unknown model");
+}
+
+}  // namespace ssl_formation

@@ -1,0 +1,160 @@
+#include "table_models.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace ssl_formation::models {
+
+namespace {
+
+// The history the motion model's predictions read velocities from: the step and horizons come
+// from the table, but velocities need only the window, which is the same for every table.
+MotionConfig prediction_history_config(const ModelSettings& settings) {
+  MotionConfig motion;
+  motion.step_s = settings.step_s;
+  motion.horizons = 1;
+  return motion;
+}
+
+}  // namespace
+
+// ---- The paper's model ----------------------------------------------------------------------
+
+void PaperLearner::learn(const MatchMoment& moment) {
+  for (const Transition& t : moment.sample.transitions) table_.add(t.from, t.to);
+}
+
+void PaperLearner::absorb(const Learner& other) {
+  const auto* paper = dynamic_cast<const PaperLearner*>(&other);
+  if (!paper) throw std::invalid_argument("a training of another model cannot be added");
+  table_.merge(paper->table_);  // checks the grid
+}
+
+std::unique_ptr<Forecaster> PaperLearner::forecaster(const TableMetadata& metadata) const {
+  auto forecaster = std::make_unique<PaperForecaster>();
+  forecaster->set_table(std::make_shared<const StoredTable>(StoredTable{table_, metadata}));
+  return forecaster;
+}
+
+void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out,
+                               ForecastUse) {
+  robot_states_.clear();
+  for (const FormationRobot& robot : moment.formation().robots) {
+    robot_states_.push_back({robot.robot_id, robot.state});
+  }
+  predict(table_->table, robot_states_, steps, out);
+  // The paper's model states cells: their centres stand for its positions.
+  const Grid& grid = moment.codec.grid();
+  for (PredictedStep& step : out.steps) {
+    for (RobotPrediction& robot : step.robots) {
+      robot.normalised_position = grid.centre_of(robot.position, moment.field);
+      robot.feed_position = normalise(robot.normalised_position, moment.attacks);
+    }
+  }
+}
+
+// ---- The motion model -----------------------------------------------------------------------
+
+MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
+                             std::optional<OnlineCalibrationSettings> recalibration)
+    : table_(std::move(table)),
+      motion_(std::move(motion)),
+      history_(motion_.config()),
+      recalibration_(recalibration) {}
+
+void MotionLearner::observe(const MatchMoment& moment) {
+  // Followed in every state, so that velocities are known when learning starts again.
+  history_.add(moment.formation());
+}
+
+void MotionLearner::learn(const MatchMoment& moment) {
+  for (const Transition& t : moment.sample.transitions) table_.add(t.from, t.to);
+  learn_motion(motion_, history_, moment.formation(), moment.learn_from_s);
+}
+
+void MotionLearner::absorb(const Learner& other) {
+  const auto* motion = dynamic_cast<const MotionLearner*>(&other);
+  if (!motion) throw std::invalid_argument("a training of another model cannot be added");
+  if (!(motion_.config() == motion->motion_.config())) {
+    throw std::invalid_argument("a training with other motion model settings cannot be added");
+  }
+  table_.merge(motion->table_);  // checks the grid
+  motion_.merge(motion->motion_);
+}
+
+std::unique_ptr<Forecaster> MotionLearner::forecaster(const TableMetadata& metadata) const {
+  ModelSettings settings;
+  settings.grid = table_.grid();
+  settings.step_s = motion_.config().step_s;
+  settings.horizons = motion_.config().horizons;
+  settings.recalibration = recalibration_;
+  auto forecaster = std::make_unique<MotionForecaster>(settings);
+  forecaster->set_table(
+      std::make_shared<const StoredTable>(StoredTable{table_, metadata, motion_}));
+  return forecaster;
+}
+
+MotionForecaster::MotionForecaster(const ModelSettings& settings)
+    : settings_(settings),
+      history_(prediction_history_config(settings)),
+      calibration_(settings.recalibration.value_or(OnlineCalibrationSettings{})) {
+  if (settings_.recalibration && !settings_.recalibration->valid()) {
+    throw std::invalid_argument(
+        "the recalibration's half-life must be positive seconds, its prior weight, tolerance and "
+        "remember interval finite and not negative");
+  }
+  // Allocated now rather than wherever the first sample leaves it: a daemon woken every 16 ms
+  // pays for every cold page its hot path touches.
+  robots_.reserve(16);
+}
+
+void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
+  std::shared_ptr<const MotionModel> model;
+  if (table) {
+    if (!table->motion) {
+      throw std::invalid_argument(
+          "the table holds only the paper's counts (a version-1 table): it serves --model paper; "
+          "train a table with --model motion to use the motion model");
+    }
+    if (std::abs(table->motion->config().step_s - settings_.step_s) > 1e-9) {
+      throw std::invalid_argument("the table's motion model was trained with another step");
+    }
+    model = std::make_shared<const MotionModel>(*table->motion, settings_.grid,
+                                                table->metadata.field);
+  }
+  model_ = std::move(model);
+  cache_.clear();
+  table_ = std::move(table);
+}
+
+void MotionForecaster::observe(const MatchMoment& moment) {
+  history_.add(moment.formation());
+  if (settings_.recalibration) calibration_.observe(moment.formation());
+}
+
+void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out,
+                                ForecastUse use) {
+  robots_.clear();
+  for (const FormationRobot& robot : moment.formation().robots) {
+    const MotionHistory::Entry* seen = history_.latest(robot.robot_id);
+    // The history has just taken this formation: `seen` is the robot's latest observation,
+    // this frame's or (a robot carried over from an earlier frame) the one before.
+    const bool moving = seen && seen->has_velocity;
+    robots_.push_back({robot.robot_id, robot.position,
+                       moving ? seen->kinematics : MotionKinematics{}, moving,
+                       moving ? seen->context : 0});
+  }
+  model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_);
+  if (!settings_.recalibration) return;
+  if (use == ForecastUse::predict) {
+    calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks);
+  }
+  calibration_.adjust(out);
+}
+
+void MotionForecaster::forget_match() {
+  history_.clear();
+  calibration_.clear();
+}
+
+}  // namespace ssl_formation::models

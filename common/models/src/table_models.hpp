@@ -1,0 +1,89 @@
+#pragma once
+// The two models that learn into a table file: the paper's (transition counts on cells) and the
+// motion model (the paper's counts at every frame, plus how each robot moves). Made by the
+// factory only.
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/model.hpp"
+#include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/motion_model/motion_predictor.hpp"
+#include "ssl_formation/motion_model/online_calibration.hpp"
+#include "ssl_formation/paper_model/predictor.hpp"
+
+namespace ssl_formation::models {
+
+class PaperLearner : public Learner {
+ public:
+  explicit PaperLearner(TransitionTable table) : table_(std::move(table)) {}
+  void observe(const MatchMoment&) override {}
+  void learn(const MatchMoment& moment) override;
+  void forget_match() override {}
+  void absorb(const Learner& other) override;
+  std::uint64_t progress() const override { return table_.transitions(); }
+  const TransitionTable* transitions() const override { return &table_; }
+  std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const override;
+
+ private:
+  TransitionTable table_;
+};
+
+class MotionLearner : public Learner {
+ public:
+  // `recalibration`: what the forecasters it makes recalibrate with.
+  MotionLearner(TransitionTable table, MotionTable motion,
+                std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{});
+  void observe(const MatchMoment& moment) override;
+  void learn(const MatchMoment& moment) override;
+  void forget_match() override { history_.clear(); }
+  void absorb(const Learner& other) override;
+  std::uint64_t progress() const override {
+    return table_.transitions() + motion_.instances() + motion_.held_out();
+  }
+  const TransitionTable* transitions() const override { return &table_; }
+  const MotionTable* motion() const override { return &motion_; }
+  std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const override;
+
+ private:
+  TransitionTable table_;
+  MotionTable motion_;
+  MotionHistory history_;
+  std::optional<OnlineCalibrationSettings> recalibration_;
+};
+
+class PaperForecaster : public Forecaster {
+ public:
+  void set_table(std::shared_ptr<const StoredTable> table) override { table_ = std::move(table); }
+  bool ready() const override { return table_ != nullptr; }
+  void observe(const MatchMoment&) override {}
+  void forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse use) override;
+  void forget_match() override {}
+
+ private:
+  std::shared_ptr<const StoredTable> table_;
+  std::vector<RobotStateById> robot_states_;  // reused from sample to sample
+};
+
+class MotionForecaster : public Forecaster {
+ public:
+  explicit MotionForecaster(const ModelSettings& settings);
+  void set_table(std::shared_ptr<const StoredTable> table) override;
+  bool ready() const override { return model_ != nullptr; }
+  void observe(const MatchMoment& moment) override;
+  void forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse use) override;
+  void forget_match() override;
+
+ private:
+  ModelSettings settings_;
+  std::shared_ptr<const StoredTable> table_;
+  std::shared_ptr<const MotionModel> model_;  // built from table_
+  MotionModel::Cache cache_;
+  MotionHistory history_;
+  OnlineCalibration calibration_;
+  std::vector<MotionRobot> robots_;  // reused from sample to sample
+};
+
+}  // namespace ssl_formation::models

@@ -1,0 +1,132 @@
+#pragma once
+// ssl-predictor's daemon as an object: the match's events in (from the network in the program,
+// from a test's hands in-process), each prediction out to a PredictionOutput, the table followed
+// as the trainer replaces it, and the live field view (--http-port). It reads time only from the
+// clock it is given, so a test drives it with a clock of its own and no sockets; run_daemon()
+// wires it to the network, the timers and the signals.
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "ssl_formation/app/clock.hpp"
+#include "ssl_formation/app/daemon.hpp"
+#include "ssl_formation/match/match_event.hpp"
+#include "ssl_formation/net/live_match_events.hpp"
+#include "ssl_formation/net/multicast.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
+#include "ssl_formation/predictor/predictor_options.hpp"
+#include "ssl_formation/predictor/table_watcher.hpp"
+// The field view's library (predictor/web).
+#include "field_view_json.hpp"
+#include "field_view_server.hpp"
+#include "team_robots.hpp"
+
+namespace ssl_formation::predictor {
+
+// Where the predictions go: the multicast group and standard output in the program, memory in
+// tests.
+class PredictionOutput {
+ public:
+  virtual ~PredictionOutput() = default;
+  // One FormationPrediction, encoded.
+  virtual void send(std::span<const std::byte> datagram) = 0;
+  // Its readable line (not called with --quiet).
+  virtual void print(std::string_view line) = 0;
+  virtual std::uint64_t sent() const = 0;
+};
+
+// The program's: --prediction-address from --prediction-interface, and standard output.
+class MulticastPredictionOutput final : public PredictionOutput {
+ public:
+  MulticastPredictionOutput(boost::asio::io_context& io, const PredictorOptions& options);
+  void open() { sender_.open(); }
+  void send(std::span<const std::byte> datagram) override { sender_.send(datagram); }
+  void print(std::string_view line) override;
+  std::uint64_t sent() const override { return sender_.sent(); }
+
+ private:
+  net::MulticastSender sender_;
+};
+
+class PredictorDaemon final : public MatchEventSink {
+ public:
+  // Throws app::UsageError for bad options (a --table in a folder that does not exist among
+  // them). `io` runs the field view and the warm-up timer; a test that drives the daemon by hand
+  // need not run it.
+  PredictorDaemon(boost::asio::io_context& io, const PredictorOptions& options,
+                  const PredictionConfig& config, const app::Clock& clock,
+                  PredictionOutput& output);
+  PredictorDaemon(const PredictorDaemon&) = delete;
+  PredictorDaemon& operator=(const PredictorDaemon&) = delete;
+
+  // Starts the field view (a busy port fails here) and loads the table there at start.
+  void start();
+  void stop();
+
+  void on_event(const MatchEvent& event) override;
+  void start_new_stream() override { pipeline_.start_new_stream(); }
+
+  // What the reload timer does: loads the table when the trainer replaced it, and says once, in
+  // plain words, when the model cannot predict from this feed.
+  void check_table();
+  // One status line, then a warning for each kind of bad input that arrived since the last one.
+  // `live`: the network's counters, when the events come from there.
+  void log_status(const net::LiveMatchEvents* live = nullptr);
+  // The field view's status message.
+  void publish_status(const net::LiveMatchEvents* live = nullptr);
+
+  bool serving_web() const;
+  // What the ready file says once the sockets are joined and the table there at start loaded.
+  std::vector<std::pair<std::string, std::string>> ready_facts() const;
+
+  const PredictionPipeline& pipeline() const { return pipeline_; }
+  const TableWatcher& watcher() const { return watcher_; }
+  const std::string& table_error() const { return table_error_; }
+  std::uint64_t warm_ups() const { return warm_ups_; }
+
+ private:
+  // The hot path, from the prediction to the datagram.
+  void on_prediction(const PredictedFormation& predicted);
+  // Rehearses the last prediction shortly before the next frame is due (see the .cpp).
+  void schedule_warm_up();
+  // --table-dir: the current opponent's table, loaded as soon as the referee names another.
+  void follow_opponent_table();
+  std::filesystem::path table_path(const std::string& opponent) const;
+  web::FieldViewSetup view_setup() const;
+
+  const PredictorOptions& options_;
+  const app::Clock& clock_;
+  PredictionOutput& output_;
+  SamplerConfig config_;
+  TableWatcher watcher_;
+  PredictionPipeline pipeline_;
+  std::string datagram_;                // FormationPrediction datagrams, by encode_prediction
+  proto::FormationPrediction message_;  // for the field view only
+  SamplerCounters reported_;            // counters at the last status line
+  app::FieldSizeLog field_log_;
+  app::MatchLog match_log_;
+  bool feed_problem_said_ = false;
+  std::string table_error_;
+  // The field view (--http-port), and what only it needs.
+  web::TeamRobots ours_;
+  std::optional<web::FieldViewServer> web_;
+  std::optional<double> last_packet_s_;  // on the clock
+  std::optional<double> last_rate_s_;
+  std::uint64_t last_rate_packets_ = 0;
+  std::optional<std::int64_t> table_loaded_unix_ms_;
+  // The warm-up before each expected frame (schedule_warm_up).
+  boost::asio::steady_timer warm_up_timer_;
+  std::optional<double> last_prediction_s_;
+  std::optional<double> frame_period_ms_;
+  std::uint64_t warm_ups_ = 0;
+};
+
+}  // namespace ssl_formation::predictor

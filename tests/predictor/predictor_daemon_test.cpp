@@ -1,0 +1,220 @@
+// The predictor's daemon driven in-process: events in the order a test chooses, a clock it moves,
+// the predictions kept in memory. What the process tests could only do with sleeps between two
+// sockets (the referee and the vision have no order on the network) is exact here.
+
+#include "ssl_formation/predictor/predictor_daemon.hpp"
+
+#include <gtest/gtest.h>
+
+#include <boost/asio/io_context.hpp>
+#include <cmath>
+
+#include "match_logs.hpp"
+#include "moving_robots.hpp"
+#include "recorded_output.hpp"
+#include "scratch_dir.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
+
+namespace ssl_formation::predictor {
+namespace {
+
+constexpr double start_s = 500.0;  // t_capture of the feed's first frame
+
+// Frame `f` of the feed: our team yellow (standing in a row), theirs blue, moving as
+// moving_robots.hpp's robots turned about the centre (they attack -x).
+SSL_WrapperPacket frame_packet(int f) {
+  const double t = f / 60.0;
+  DetectionFrameSpec spec;
+  spec.frame_number = static_cast<std::uint32_t>(f);
+  spec.t_capture = start_s + t;
+  for (int i = 0; i < 6; ++i) {
+    spec.yellow.push_back({static_cast<std::uint32_t>(i), Point{-3000.0, -2500.0 + 1000.0 * i}});
+    const Point p = testing::moving_robot_position(5, i, t);
+    spec.blue.push_back({static_cast<std::uint32_t>(i), Point{-p.x, -p.y}});
+  }
+  return make_detection_packet(spec);
+}
+
+testing::RefereeSpec referee_says(Referee::Command command, std::uint32_t counter,
+                                  const std::string& them = "Them") {
+  testing::RefereeSpec spec;
+  spec.command = command;
+  spec.command_counter = counter;
+  spec.yellow = "Us";
+  spec.blue = them;
+  spec.blue_on_positive_half = true;  // blue's goal on +x: blue attacks -x
+  return spec;
+}
+
+// A daemon with its own io_context (never run: no timers fire) and a clock the test moves.
+struct InProcess {
+  explicit InProcess(PredictorOptions o) : options(std::move(o)) {
+    daemon.emplace(io, options, prediction_config(options), clock, output);
+    daemon->start();
+  }
+  void frames(int from, int to) {
+    VisionFrame frame;
+    for (int f = from; f < to; ++f) {
+      to_vision_frame(frame_packet(f), frame);
+      clock.advance(1.0 / 60.0);
+      daemon->on_event(MatchEvent::vision(frame, clock.steady_s()));
+    }
+  }
+  void referee(const std::string& payload) {
+    daemon->on_event(MatchEvent::referee(payload, clock.steady_s()));
+  }
+
+  PredictorOptions options;
+  boost::asio::io_context io;
+  app::ManualClock clock;
+  testing::RecordedOutput output;
+  std::optional<PredictorDaemon> daemon;
+};
+
+// A table of robots like theirs, trained as the default opponent (yellow attacking +x).
+void train_table(const std::filesystem::path& path) {
+  testing::MovingRobots moving;
+  moving.seed = 5;
+  moving.seconds = 30.0;
+  SamplerConfig config = sampler_config_for(ModelKind::motion);
+  MotionConfig motion;
+  motion.step_s = config.step_s;
+  Training training(config, TransitionTable(config.grid), 0, MotionTable(motion));
+  for (const SSL_WrapperPacket& packet : testing::moving_robots_packets(moving)) {
+    training.add(packet);
+  }
+  ASSERT_TRUE(save_table(path, training.stored_table()));
+}
+
+TEST(PredictorDaemon, FollowsTheRefereesOpponentSideAndGameStateAndTheFirstGameController) {
+  testing::ScratchDir dir;
+  train_table(dir.path() / "t.table");
+  PredictorOptions options;
+  options.table = (dir.path() / "t.table").string();
+  options.model.our_team = "us";
+  options.quiet = true;
+  InProcess predictor(options);
+  ASSERT_TRUE(predictor.daemon->pipeline().table());
+
+  // STOP, then frames; a second game controller's FORCE_START, then more frames (still
+  // stopped); our game controller's NORMAL_START, then frames in running play.
+  predictor.referee(testing::referee_payload(referee_says(Referee::STOP, 7)));
+  predictor.frames(0, 90);
+  testing::RefereeSpec other = referee_says(Referee::FORCE_START, 1);
+  other.source = "another-game-controller";
+  predictor.referee(testing::referee_payload(other));
+  predictor.frames(90, 180);
+  // Messages it cannot use: counted, never fatal.
+  predictor.referee("not a referee message");
+  Referee unknown;
+  ASSERT_TRUE(unknown.ParseFromString(testing::referee_payload(referee_says(Referee::STOP, 7))));
+  unknown.clear_command();
+  // Command 99, which a newer game controller might send: field 4, varint 99.
+  predictor.referee(unknown.SerializePartialAsString() + std::string("\x20\x63", 2));
+  predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 8)));
+  predictor.frames(180, 300);
+
+  const auto messages = predictor.output.messages();
+  ASSERT_EQ(messages.size(), 300u);
+  for (const auto& message : messages) {
+    ASSERT_EQ(message.opponent_color(), "blue");
+    const int f = static_cast<int>(std::lround((message.t_capture() - start_s) * 60.0));
+    ASSERT_EQ(message.game_state(), f < 180 ? "stop" : "running") << "frame " << f;
+    // Their robots, as the feed has them.
+    const SSL_WrapperPacket sent = frame_packet(f);
+    ASSERT_EQ(message.robots_size(), 6);
+    for (const auto& robot : message.robots()) {
+      const auto& blue = sent.detection().robots_blue(static_cast<int>(robot.robot_id()));
+      ASSERT_NEAR(robot.position().x(), blue.x(), 0.5);
+      ASSERT_NEAR(robot.position().y(), blue.y(), 0.5);
+    }
+  }
+  const PredictionPipeline& pipeline = predictor.daemon->pipeline();
+  EXPECT_EQ(pipeline.match().opponent().name, "Them");
+  EXPECT_EQ(pipeline.match().opponent().color, TeamColor::blue);
+  EXPECT_EQ(pipeline.sampler().attacks(), AttackDirection::negative_x);
+  const RefereeCounters& counters = pipeline.match().referee().counters();
+  // STOP, the other's FORCE_START, garbage, the unknown command, NORMAL_START: 2 used.
+  EXPECT_EQ(counters.messages, 5u);
+  EXPECT_EQ(counters.used, 2u);
+  EXPECT_EQ(counters.other_source, 1u);
+  EXPECT_EQ(counters.undecodable, 1u);
+  EXPECT_EQ(counters.unknown_command, 1u);
+  EXPECT_EQ(pipeline.sampler().counters().samples, 300u);
+}
+
+TEST(PredictorDaemon, BaselinesPredictFromTheFirstFormationWithoutATable) {
+  testing::ScratchDir dir;
+  PredictorOptions options;
+  options.table = (dir.path() / "never-written.bin").string();
+  options.model.model = "constant-velocity";
+  InProcess predictor(options);
+  predictor.frames(0, 30);
+  ASSERT_EQ(predictor.output.sent(), 30u);
+  ASSERT_EQ(predictor.output.lines.size(), 30u);
+  const auto messages = predictor.output.messages();
+  EXPECT_EQ(messages.back().model(), "constant-velocity");
+  EXPECT_EQ(predictor.daemon->ready_facts().at(4), (std::pair<std::string, std::string>{"model", "constant-velocity"}));
+}
+
+TEST(PredictorDaemon, AFeedItCannotPredictFromIsNamedOnceWithTheOptionThatFixesIt) {
+  testing::ScratchDir dir;
+  PredictorOptions options;
+  options.table = (dir.path() / "t.bin").string();
+  options.model.model = "persistence";
+  InProcess predictor(options);
+  // One formation every 2 s of data time, as the paper's simulation sends them.
+  VisionFrame frame;
+  for (int f = 0; f < 6; ++f) {
+    to_vision_frame(frame_packet(f * 120), frame);
+    predictor.daemon->on_event(MatchEvent::vision(frame, predictor.clock.steady_s()));
+  }
+  const auto problem = predictor.daemon->pipeline().feed_problem();
+  ASSERT_TRUE(problem);
+  EXPECT_NE(problem->find("2 s apart"), std::string::npos) << *problem;
+  EXPECT_NE(problem->find("--model paper"), std::string::npos) << *problem;
+}
+
+TEST(PredictorDaemon, ATablePerOpponentIsLoadedAsTheRefereeNamesIt) {
+  testing::ScratchDir dir;
+  const auto tables = dir.path() / "tables";
+  std::filesystem::create_directories(tables);
+  train_table(tables / "alpha.bin");
+  train_table(tables / "beta.bin");
+  PredictorOptions options;
+  options.table_dir = tables.string();
+  options.model.our_team = "Us";
+  options.quiet = true;
+  InProcess predictor(options);
+  EXPECT_FALSE(predictor.daemon->pipeline().table());  // no opponent named yet
+  predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "BETA")));
+  EXPECT_EQ(predictor.daemon->watcher().path(), tables / "beta.bin");
+  EXPECT_TRUE(predictor.daemon->pipeline().table());
+  predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Alpha")));
+  EXPECT_EQ(predictor.daemon->watcher().path(), tables / "alpha.bin");
+  EXPECT_TRUE(predictor.daemon->pipeline().table());
+  predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Gamma")));
+  EXPECT_EQ(predictor.daemon->watcher().path(), tables / "gamma.bin");
+  EXPECT_FALSE(predictor.daemon->pipeline().table());  // waits for Gamma's table
+}
+
+TEST(PredictorDaemon, ATableFolderThatDoesNotExistIsRefusedAtStart) {
+  PredictorOptions options;
+  options.table = "/nonexistent-sslf-folder/x.bin";
+  boost::asio::io_context io;
+  app::ManualClock clock;
+  testing::RecordedOutput output;
+  try {
+    PredictorDaemon daemon(io, options, prediction_config(options), clock, output);
+    FAIL() << "a --table in a folder that does not exist was taken";
+  } catch (const app::UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("/nonexistent-sslf-folder does not exist"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace ssl_formation::predictor
