@@ -145,16 +145,21 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   // The paper's model states no positions or radii.
   EXPECT_EQ(prediction.find(R"("radius_90_mm")"), std::string::npos) << prediction;
 
-  // The feed ends: the age grows on the server's clock and stays positive.
+  // The feed ends: the age grows on the server's clock and stays positive. The statuses are
+  // read as they come until one is a second old (or the deadline passes).
   ASSERT_TRUE(producer.wait(20s).has_value());
-  std::this_thread::sleep_for(1500ms);
-  bytes = view.read_until("\x01", 1200ms);
-  const std::vector<std::string> later = json_messages(bytes, "status");
-  ASSERT_FALSE(later.empty()) << predictor.stderr_text();
-  const auto since_later = number_of(later.back(), "since_packet_s");
-  ASSERT_TRUE(since_later) << later.back();
-  EXPECT_GE(*since_later, 1.0) << later.back();
-  EXPECT_LT(*since_later, 30.0) << later.back();
+  std::optional<double> since_later;
+  std::string last_status;
+  for (const auto deadline = std::chrono::steady_clock::now() + 10s;
+       std::chrono::steady_clock::now() < deadline && !(since_later && *since_later >= 1.0);) {
+    const std::vector<std::string> later = json_messages(view.read_until("\x01", 200ms), "status");
+    if (later.empty()) continue;
+    last_status = later.back();
+    since_later = number_of(last_status, "since_packet_s");
+  }
+  ASSERT_TRUE(since_later) << last_status << predictor.stderr_text();
+  EXPECT_GE(*since_later, 1.0) << last_status;
+  EXPECT_LT(*since_later, 30.0) << last_status;
 
   predictor.signal(SIGTERM);
   EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
