@@ -106,7 +106,7 @@ latency_run() {
   local rate="$1" seconds="$2"
   local plog="$work/predictor-$rate.log" elog="$work/echo-$rate.log"
   # shellcheck disable=SC2086
-  start "$plog" "$predictor" --quiet --table "$work/table.bin" --vision-address "$vision" \
+  start "$plog" "$predictor" --quiet --referee-address none --table "$work/table.bin" --vision-address "$vision" \
     --prediction-address "$predictions" --interface 127.0.0.1 --ttl 1 ${SSLF_BENCH_PREDICTOR_OPTIONS:-}
   local ppid=$started
   start "$elog" "$bench" echo --echo-in "$echo_in" --echo-out "$echo_out" --interface 127.0.0.1 \
@@ -165,10 +165,10 @@ row "predictor work in-process, after 16.7 ms" "" "$(value "$pipeline" packets)"
 # Load: the trainer (fresh table) and the predictor on the same vision group.
 tlog="$work/trainer-load.log"
 plog="$work/predictor-load.log"
-start "$tlog" "$trainer" --table "$work/trained.bin" --reset --vision-address "$vision" \
+start "$tlog" "$trainer" --referee-address none --table "$work/trained.bin" --reset --vision-address "$vision" \
   --interface 127.0.0.1
 tpid=$started
-start "$plog" "$predictor" --quiet --table "$work/table.bin" --vision-address "$vision" \
+start "$plog" "$predictor" --quiet --referee-address none --table "$work/table.bin" --vision-address "$vision" \
   --prediction-address "$predictions" --interface 127.0.0.1 --ttl 1
 ppid=$started
 wait_for "$tlog" "listening on" "$tpid"

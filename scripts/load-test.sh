@@ -58,11 +58,11 @@ wait_for() {  # LOG TEXT PID
 field() { grep 'status:' "$1" | tail -1 | grep -o "$2=[0-9]*" | head -1 | cut -d= -f2; }
 
 "$bench" make-table --table "$work/fixed.bin" --formations 2000 >/dev/null
-"$trainer" --vision-address "$vision" --table "$work/trainer.bin" --flush-interval 1 \
+"$trainer" --referee-address none --vision-address "$vision" --table "$work/trainer.bin" --flush-interval 1 \
   --status-interval 1 --receive-buffer "$receive_buffer" 2>"$work/trainer.log" &
 pids+=($!)
 trainer_pid=$!
-"$predictor" --vision-address "$vision" --prediction-address "$predictions" --table "$work/fixed.bin" \
+"$predictor" --referee-address none --vision-address "$vision" --prediction-address "$predictions" --table "$work/fixed.bin" \
   --quiet --status-interval 1 --receive-buffer "$receive_buffer" >/dev/null 2>"$work/predictor.log" &
 pids+=($!)
 predictor_pid=$!

@@ -66,9 +66,7 @@ int main(int argc, char** argv) {
         "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str());
     sf::app::add_model_options(general, o.model);
     sf::app::add_learn_during_option(general, o.learn_during);
-    general.add_options()(
-        "vision-source", po::value(&o.network.vision_source)->default_value(o.network.vision_source),
-        "raw: the logs' SSL-Vision packets; tracked: their tracked vision (type 5) instead");
+    sf::app::add_vision_source_option(general, o.network);
     sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
     po::positional_options_description positional;
     positional.add("mode", 1);

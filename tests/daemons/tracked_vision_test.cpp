@@ -12,6 +12,7 @@
 #include "pipeline_support.hpp"
 #include "ssl_vision_wrapper_tracked.pb.h"
 #include "status_lines.hpp"
+#include "tracked_frames.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -27,42 +28,11 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
 constexpr double start_s = 700.0;
 
-// Robot i of the yellow team at frame f, millimetres.
-Point position(int i, int f, int seed) {
-  return testing::moving_robot_position(static_cast<std::uint64_t>(seed), i, f / 60.0);
-}
-
 std::string raw_frame(int f) {
-  DetectionFrameSpec spec;
-  spec.frame_number = static_cast<std::uint32_t>(f);
-  spec.t_capture = start_s + f / 60.0;
-  for (int i = 0; i < 6; ++i) spec.yellow.push_back({static_cast<std::uint32_t>(i), position(i, f, 7)});
-  return make_detection_packet(spec).SerializeAsString();
+  return testing::raw_frame_of_six(f, start_s, 7).SerializeAsString();
 }
-
 std::string tracked_frame(int f, const std::string& uuid, int seed) {
-  TrackerWrapperPacket packet;
-  packet.set_uuid(uuid);
-  packet.set_source_name("tracker " + uuid);
-  TrackedFrame& frame = *packet.mutable_tracked_frame();
-  frame.set_frame_number(static_cast<std::uint32_t>(f));
-  frame.set_timestamp(start_s + f / 60.0);
-  for (int i = 0; i < 6; ++i) {
-    TrackedRobot& robot = *frame.add_robots();
-    robot.mutable_robot_id()->set_id(static_cast<std::uint32_t>(i));
-    robot.mutable_robot_id()->set_team(YELLOW);
-    const Point p = position(i, f, seed);
-    robot.mutable_pos()->set_x(static_cast<float>(p.x / 1000.0));
-    robot.mutable_pos()->set_y(static_cast<float>(p.y / 1000.0));
-    robot.set_orientation(0.0F);
-  }
-  // A robot the tracker could not place in a team: left out.
-  TrackedRobot& stray = *frame.add_robots();
-  stray.mutable_robot_id()->set_id(9);
-  stray.mutable_pos()->set_x(0.0F);
-  stray.mutable_pos()->set_y(0.0F);
-  stray.set_orientation(0.0F);
-  return packet.SerializeAsString();
+  return testing::tracked_frame_of_six(f, start_s, uuid, seed, true);
 }
 
 TEST(TrackedVision, ATrackersFramesGiveTheFormationsOfRawVisionAndASecondTrackerIsNotMixedIn) {

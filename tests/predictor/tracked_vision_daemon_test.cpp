@@ -14,44 +14,20 @@
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/predictor/predictor_daemon.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
-#include "ssl_vision_wrapper_tracked.pb.h"
+#include "tracked_frames.hpp"
 
 namespace ssl_formation::predictor {
 namespace {
 
 constexpr double start_s = 700.0;
 
-Point position(int i, int f, int seed) {
-  return testing::moving_robot_position(static_cast<std::uint64_t>(seed), i, f / 60.0);
-}
-
 VisionFrame raw_frame(int f) {
-  DetectionFrameSpec spec;
-  spec.frame_number = static_cast<std::uint32_t>(f);
-  spec.t_capture = start_s + f / 60.0;
-  for (int i = 0; i < 6; ++i) spec.yellow.push_back({static_cast<std::uint32_t>(i), position(i, f, 7)});
   VisionFrame frame;
-  to_vision_frame(make_detection_packet(spec), frame);
+  to_vision_frame(testing::raw_frame_of_six(f, start_s, 7), frame);
   return frame;
 }
-
 std::string tracked_frame(int f, const std::string& uuid, int seed) {
-  TrackerWrapperPacket packet;
-  packet.set_uuid(uuid);
-  packet.set_source_name("tracker " + uuid);
-  TrackedFrame& frame = *packet.mutable_tracked_frame();
-  frame.set_frame_number(static_cast<std::uint32_t>(f));
-  frame.set_timestamp(start_s + f / 60.0);
-  for (int i = 0; i < 6; ++i) {
-    TrackedRobot& robot = *frame.add_robots();
-    robot.mutable_robot_id()->set_id(static_cast<std::uint32_t>(i));
-    robot.mutable_robot_id()->set_team(YELLOW);
-    const Point p = position(i, f, seed);
-    robot.mutable_pos()->set_x(static_cast<float>(p.x / 1000.0));
-    robot.mutable_pos()->set_y(static_cast<float>(p.y / 1000.0));
-    robot.set_orientation(0.0F);
-  }
-  return packet.SerializeAsString();
+  return testing::tracked_frame_of_six(f, start_s, uuid, seed);
 }
 
 TEST(TrackedVisionDaemon, ATrackersFramesGiveTheRawFeedsPredictionsWithItsGeometry) {

@@ -152,7 +152,16 @@ std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life
   return settings;
 }
 
+void add_vision_source_option(po::options_description& options, NetworkOptions& network) {
+  options.add_options()(
+      "vision-source", po::value(&network.vision_source)->default_value(network.vision_source),
+      "raw: SSL-Vision's detections (on --vision-address, or a log's type-4 messages); tracked: a "
+      "tracker's filtered frames (TrackerWrapperPacket, positions in metres; on "
+      "--tracker-address, or a log's type-5 messages) instead, one tracker followed by its uuid");
+}
+
 void add_vision_options(po::options_description& options, NetworkOptions& network) {
+  add_vision_source_option(options, network);
   options.add_options()("vision-address",
                         po::value(&network.vision_address)->default_value(network.vision_address),
                         "SSL-Vision multicast group:port to listen on (grSim: 224.5.23.2:10020)")(
@@ -160,10 +169,6 @@ void add_vision_options(po::options_description& options, NetworkOptions& networ
       po::value(&network.referee_address)->default_value(network.referee_address),
       "the game controller's referee multicast group:port, joined on --interface too: the "
       "opponent's name, colour and side and the game state follow it; none: no referee feed")(
-      "vision-source", po::value(&network.vision_source)->default_value(network.vision_source),
-      "raw: SSL-Vision's detections on --vision-address; tracked: a tracker's filtered frames "
-      "(TrackerWrapperPacket, positions in metres) on --tracker-address instead, one tracker "
-      "followed by its uuid")(
       "tracker-address",
       po::value(&network.tracker_address)->default_value(network.tracker_address),
       "the trackers' multicast group:port (auto-referees such as TIGERs' publish there)")(

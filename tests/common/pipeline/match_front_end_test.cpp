@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "match_logs.hpp"
+
 #include <cmath>
 #include <limits>
 #include <string>
@@ -63,32 +65,17 @@ SSL_WrapperPacket frame(int i, double start_s = 100.0) {
   return make_detection_packet(spec);
 }
 
-Referee::TeamInfo team(const std::string& name) {
-  Referee::TeamInfo info;
-  info.set_name(name);
-  info.set_score(0);
-  info.set_red_cards(0);
-  info.set_yellow_cards(0);
-  info.set_timeouts(4);
-  info.set_timeout_time(300000000);
-  info.set_goalkeeper(0);
-  return info;
-}
-
+// A game controller's message (match_logs.hpp builds it as the game controller sends it).
 std::string referee(Referee::Command command, std::uint32_t counter,
                     const std::string& yellow = "TIGERs Mannheim",
                     const std::string& blue = "ER-Force") {
-  Referee m;
-  m.set_packet_timestamp(1700000000000000);
-  m.set_stage(Referee::NORMAL_FIRST_HALF);
-  m.set_command(command);
-  m.set_command_counter(counter);
-  m.set_command_timestamp(1700000000000000);
-  *m.mutable_yellow() = team(yellow);
-  *m.mutable_blue() = team(blue);
-  m.set_source_identifier("gc");
-  EXPECT_TRUE(m.IsInitialized());
-  return m.SerializeAsString();
+  testing::RefereeSpec spec;
+  spec.command = command;
+  spec.command_counter = counter;
+  spec.yellow = yellow;
+  spec.blue = blue;
+  spec.source = "gc";
+  return testing::referee_payload(spec, 1700000000.0);
 }
 
 std::string tracked(std::uint32_t frame_number, double timestamp, float yellow_x_m) {

@@ -83,6 +83,8 @@ struct NetworkOptions {
   bool tracked() const;  // throws UsageError for a --vision-source other than raw or tracked
 };
 void add_vision_options(po::options_description& options, NetworkOptions& network);
+// --vision-source alone, for the programs that read logs only (ssl-evaluate).
+void add_vision_source_option(po::options_description& options, NetworkOptions& network);
 
 // What every long-running program offers its supervisor (a script, a test, systemd).
 struct DaemonOptions {
