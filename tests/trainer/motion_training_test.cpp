@@ -171,6 +171,8 @@ TEST_F(MotionTraining, HorizonOption) {
   EXPECT_FALSE(motion_config(parse({"--model", "paper", "--horizon", "0"})).has_value())
       << "--horizon means nothing to the paper's model";
   EXPECT_THROW((void)motion_config(parse({"--model", "markov"})), app::UsageError);
+  // A baseline keeps no table: nothing to train.
+  EXPECT_THROW((void)motion_config(parse({"--model", "persistence"})), app::UsageError);
 }
 
 TEST_F(MotionTraining, ResumesAVersionTwoTableAndGoesOn) {

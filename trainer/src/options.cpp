@@ -56,7 +56,13 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
 }
 
 std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
-  if (options.model.parsed_model() == ModelKind::paper) return std::nullopt;
+  const ModelDescription& model = describe(options.model.parsed_model());
+  if (!model.keeps_table) {
+    throw app::UsageError("--model " + std::string(model.name) +
+                          " keeps no table: there is nothing to train (ssl-predictor runs it "
+                          "without one, ssl-evaluate compares it)");
+  }
+  if (!model.keeps_motion_rows) return std::nullopt;
   if (options.horizon < 1 || options.horizon > MotionConfig::max_horizons) {
     throw app::UsageError("--horizon must be 1 to " + std::to_string(MotionConfig::max_horizons) +
                           ", not " + std::to_string(options.horizon));

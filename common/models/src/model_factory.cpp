@@ -17,14 +17,15 @@ namespace {
 constexpr double max_frame_gap_for_velocities_s = 0.25;
 
 const std::array<ModelDescription, all_model_kinds.size()> descriptions{{
-    {"paper", "paper", false, true, true, false, 2.0},
-    {"motion", "model", true, true, true, true, 0.5},
-    {"persistence", "persistence", true, false, false, true, 0.5},
-    {"constant-velocity", "constant velocity", true, false, false, true, 0.5},
-    {"damped-constant-velocity", "damped constant velocity", true, false, true, true, 0.5},
-    {"constant-acceleration", "constant acceleration", true, false, false, true, 0.5},
-    {"damped-constant-acceleration", "damped constant acceleration", true, false, true, true,
-     0.5},
+    // name, label, states positions, keeps a table, its motion rows, learns, every frame, step
+    {"paper", "paper", false, true, false, true, false, 2.0},
+    {"motion", "model", true, true, true, true, true, 0.5},
+    {"persistence", "persistence", true, false, false, false, true, 0.5},
+    {"constant-velocity", "constant velocity", true, false, false, false, true, 0.5},
+    {"damped-constant-velocity", "damped constant velocity", true, false, false, true, true, 0.5},
+    {"constant-acceleration", "constant acceleration", true, false, false, false, true, 0.5},
+    {"damped-constant-acceleration", "damped constant acceleration", true, false, false, true,
+     true, 0.5},
 }};
 
 }  // namespace

@@ -43,7 +43,7 @@ struct TrainerOptions {
 bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& options);
 
 // The motion model's configuration the options ask for: none with --model paper. Throws
-// app::UsageError for a bad --model or --horizon.
+// app::UsageError for a bad --model or --horizon, or a model that keeps no table (a baseline).
 std::optional<MotionConfig> motion_config(const TrainerOptions& options);
 // A table file must be writable where it is asked for: a trainer that only finds out at its
 // first save has lost the match (or the logs' work) by then. Throws app::UsageError when

@@ -61,6 +61,7 @@ struct ModelDescription {
   // stand for its positions).
   bool states_positions = true;
   bool keeps_table = false;  // learns into a table file, which ssl-trainer writes
+  bool keeps_motion_rows = false;  // its table holds the motion model's rows (version 3)
   bool learns = false;       // learns anything at all (a table, or the damped baselines' factors)
   // Samples a formation at every frame: it reads the robots' velocities, which need frames a few
   // hundredths of a second apart. False: it also takes a formation every --step.
