@@ -90,6 +90,20 @@ TEST(Defaults, ALogWrittenWithTheProducersDefaultsTrainsAndPredictsOffline) {
   EXPECT_GT(lines_in(text.str()), 30u * 60u * 11u) << predicted.err;
 }
 
+TEST(Defaults, ARunThatCouldReadNoLogWritesNoTable) {
+  TempDir dir;
+  {
+    std::ofstream text(dir / "notes.txt");
+    text << "root:x:0:0:root:/root:/bin/bash\n";
+  }
+  const auto trained = testing::run_to_end(
+      trainer_program, {"--from-log", (dir / "notes.txt").string()}, dir.path(), "train");
+  EXPECT_EQ(trained.exit_code, 1) << trained.err;
+  EXPECT_NE(trained.err.find("not an SSL log file"), std::string::npos) << trained.err;
+  EXPECT_NE(trained.err.find("no table written"), std::string::npos) << trained.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "formation-table.bin"));
+}
+
 TEST(Defaults, AFeedTheModelCannotLearnFromIsNamedWithTheOptionThatFixesIt) {
   TempDir dir;
   const testing::FeedGroups groups;
