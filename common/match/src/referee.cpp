@@ -1,6 +1,7 @@
 #include "ssl_formation/match/referee.hpp"
 
 #include <array>
+#include <cmath>
 #include <utility>
 
 #include "ssl_gc_referee_message.pb.h"
@@ -131,6 +132,14 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
       view_.blue_on_positive_half != message.blue_team_on_positive_half()) {
     change.sides = true;
     view_.blue_on_positive_half = message.blue_team_on_positive_half();
+  }
+  view_.designated_position.reset();
+  if (message.has_designated_position()) {
+    // Partially parsed: x and y are required, and may still be missing.
+    const Referee::Point& at = message.designated_position();
+    if (at.has_x() && at.has_y() && std::isfinite(at.x()) && std::isfinite(at.y())) {
+      view_.designated_position = Point{at.x(), at.y()};
+    }
   }
   return change;
 }

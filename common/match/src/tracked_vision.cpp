@@ -4,6 +4,11 @@
 
 namespace ssl_formation {
 
+namespace {
+// Metres (as the tracker sends them) to millimetres, in double.
+double mm(float metres) { return static_cast<double>(metres) * 1000.0; }
+}  // namespace
+
 void to_vision_frame(const TrackedFrame& tracked, VisionFrame& frame,
                      std::uint64_t& without_team) {
   frame.has_geometry = false;
@@ -14,6 +19,12 @@ void to_vision_frame(const TrackedFrame& tracked, VisionFrame& frame,
   d.camera_id = 0;
   d.robots_yellow.clear();
   d.robots_blue.clear();
+  d.balls.clear();
+  for (const TrackedBall& ball : tracked.balls()) {
+    d.balls.push_back({static_cast<float>(mm(ball.pos().x())),
+                       static_cast<float>(mm(ball.pos().y())),
+                       ball.has_visibility() ? ball.visibility() : 1.0F});
+  }
   for (const TrackedRobot& robot : tracked.robots()) {
     const RobotId& id = robot.robot_id();
     if (!id.has_id() || !(id.team() == YELLOW || id.team() == BLUE)) {
@@ -24,11 +35,32 @@ void to_vision_frame(const TrackedFrame& tracked, VisionFrame& frame,
     out.robot_id = id.id();
     out.has_robot_id = true;
     // Metres to the raw vision's millimetres (in float, as SSL-Vision sends them).
-    out.x = static_cast<float>(static_cast<double>(robot.pos().x()) * 1000.0);
-    out.y = static_cast<float>(static_cast<double>(robot.pos().y()) * 1000.0);
+    out.x = static_cast<float>(mm(robot.pos().x()));
+    out.y = static_cast<float>(mm(robot.pos().y()));
     out.confidence = robot.has_visibility() ? robot.visibility() : 1.0F;
     (id.team() == YELLOW ? d.robots_yellow : d.robots_blue).push_back(out);
   }
+}
+
+std::optional<BallState> tracked_ball(const TrackedFrame& tracked) {
+  const TrackedBall* best = nullptr;
+  float best_visibility = 0.0F;
+  for (const TrackedBall& ball : tracked.balls()) {
+    if (!std::isfinite(ball.pos().x()) || !std::isfinite(ball.pos().y())) continue;
+    const float visibility = ball.has_visibility() ? ball.visibility() : 1.0F;
+    if (best == nullptr || visibility > best_visibility) {
+      best = &ball;
+      best_visibility = visibility;
+    }
+  }
+  if (best == nullptr) return std::nullopt;
+  BallState state;
+  state.time_s = tracked.timestamp();
+  state.position = Point{mm(best->pos().x()), mm(best->pos().y())};
+  if (best->has_vel() && std::isfinite(best->vel().x()) && std::isfinite(best->vel().y())) {
+    state.velocity = Point{mm(best->vel().x()), mm(best->vel().y())};
+  }
+  return state;
 }
 
 bool TrackedVision::add(std::string_view payload, double receive_s, VisionFrame& frame) {
@@ -54,6 +86,7 @@ bool TrackedVision::add(std::string_view payload, double receive_s, VisionFrame&
     return false;
   }
   to_vision_frame(packet_.tracked_frame(), frame, counters_.robots_without_team);
+  ball_ = tracked_ball(packet_.tracked_frame());
   ++counters_.frames;
   return true;
 }

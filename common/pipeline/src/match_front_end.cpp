@@ -13,7 +13,8 @@ MatchFrontEnd::MatchFrontEnd(FrontEndConfig config, Handlers handlers)
       match_(config_.opponent ? *config_.opponent
                               : fixed_opponent(config_.sampler.opponent_color,
                                                config_.sampler.opponent_attacks,
-                                               config_.sampler.infer_attacks)) {
+                                               config_.sampler.infer_attacks)),
+      ball_(config_.ball) {
   follow_opponent();
 }
 
@@ -24,12 +25,17 @@ RefereeChange MatchFrontEnd::handle(const MatchEvent& event) {
     case MatchEventKind::tracked_vision:
       // The tracker's frames stand in for the raw ones with --vision-source tracked.
       if (config_.tracked_vision && tracked_.add(event.payload, event.receive_s, scratch_)) {
+        if (tracked_.ball()) ball_.set(*tracked_.ball());
         add_vision(scratch_);
       }
       return {};
     case MatchEventKind::vision:
       if (!event.frame) return {};
       if (!config_.tracked_vision) {
+        // The ball first: the frame that completes a sample is in it, as its robots are. (A
+        // sample a frame of a later instant hands on has that frame's ball, one frame newer
+        // than its robots: the sampler says which frames it used only inside.)
+        if (event.frame->has_detection) ball_.add(event.frame->detection);
         add_vision(*event.frame);
       } else if (event.frame->has_geometry) {
         // The raw vision's geometry alone: the field size the tracker's frames do not give.
@@ -73,6 +79,7 @@ void MatchFrontEnd::start_new_stream() {
   sampler_.start_new_stream();
   match_.reset();
   tracked_.reset();
+  ball_.reset();
   phases_.reset();
   pending_commands_.clear();
   if (handlers_.on_forget) handlers_.on_forget();
@@ -98,14 +105,26 @@ void MatchFrontEnd::on_sample(const FormationSample& sample) {
   for (const int command : pending_commands_) phases_.on_command(command, t);
   pending_commands_.clear();
   if (!handlers_.on_sample) return;
-  const MatchMoment moment{sample,
-                           sampler_.codec(),
-                           sampler_.field(),
-                           attacks(),
-                           match_.game_state(),
-                           phases_.phase(t, match_.opponent().color),
-                           phases_.since_command_s(t),
-                           learn_from_s_};
+  // The ball and the placement's target, turned as the sample's robots were.
+  const AttackDirection turned = sample.formation.opponent_attacks;
+  const std::optional<BallState> ball = ball_.at(t);
+  const RefereeView& referee = match_.referee().view();
+  std::optional<Point> designated_position;
+  if (referee.state == GameState::ball_placement && referee.designated_position) {
+    designated_position = normalise(*referee.designated_position, turned);
+  }
+  const MatchMoment moment{
+      sample,
+      sampler_.codec(),
+      sampler_.field(),
+      attacks(),
+      match_.game_state(),
+      phases_.phase(t, match_.opponent().color),
+      phases_.since_command_s(t),
+      learn_from_s_,
+      ball ? std::optional<Point>(normalise(ball->position, turned)) : std::nullopt,
+      ball ? normalise(ball->velocity, turned) : Point{},
+      designated_position};
   handlers_.on_sample(moment);
 }
 

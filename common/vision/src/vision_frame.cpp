@@ -20,6 +20,12 @@ void copy_robots(const google::protobuf::RepeatedPtrField<SSL_DetectionRobot>& f
   }
 }
 
+void copy_balls(const google::protobuf::RepeatedPtrField<SSL_DetectionBall>& from,
+                std::vector<VisionBall>& to) {
+  to.clear();
+  for (const SSL_DetectionBall& ball : from) to.push_back({ball.x(), ball.y(), ball.confidence()});
+}
+
 // The protobuf wire format (https://protobuf.dev/programming-guides/encoding/), read only as far
 // as the detection schema needs. Every read returns false at the first thing it does not handle;
 // the caller then gives the whole datagram to protobuf.
@@ -211,8 +217,25 @@ bool robot(Reader in, VisionRobot& out) {
   return seen.has_all({1, 3, 4, 6, 7});
 }
 
-// SSL_DetectionBall, checked only: confidence 1, area 2, x 3, y 4, z 5, pixel_x 6, pixel_y 7.
-bool ball(Reader in) {
+// A ball as protobuf writes it: every field once, in field-number order, area and z maybe
+// missing. Read in one pass; false for any other layout.
+bool ball_in_order(Reader in, VisionBall& out) {
+  std::uint32_t area = 0;
+  float ignored = 0.0F;
+  if (!in.take(tag(1, fixed32_type)) || !in.fixed(out.confidence)) return false;
+  if (in.take(tag(2, varint_type)) && !in.varint32(area)) return false;
+  if (!in.take(tag(3, fixed32_type)) || !in.fixed(out.x)) return false;
+  if (!in.take(tag(4, fixed32_type)) || !in.fixed(out.y)) return false;
+  if (in.take(tag(5, fixed32_type)) && !in.fixed(ignored)) return false;
+  if (!in.take(tag(6, fixed32_type)) || !in.fixed(ignored)) return false;
+  if (!in.take(tag(7, fixed32_type)) || !in.fixed(ignored)) return false;
+  return in.done();
+}
+
+// SSL_DetectionBall: confidence 1, area 2, x 3, y 4, z 5, pixel_x 6, pixel_y 7.
+bool ball(Reader in, VisionBall& out) {
+  if (ball_in_order(in, out)) return true;
+  out = VisionBall{};  // nothing of the attempt stays
   SeenFields seen;
   while (!in.done()) {
     std::uint32_t key = 0;
@@ -220,12 +243,18 @@ bool ball(Reader in) {
     std::uint32_t ignored = 0;
     bool ok = false;
     switch (key) {
+      case tag(1, fixed32_type):
+        ok = in.fixed(out.confidence);
+        break;
       case tag(2, varint_type):
         ok = in.varint32(ignored);
         break;
-      case tag(1, fixed32_type):
       case tag(3, fixed32_type):
+        ok = in.fixed(out.x);
+        break;
       case tag(4, fixed32_type):
+        ok = in.fixed(out.y);
+        break;
       case tag(5, fixed32_type):
       case tag(6, fixed32_type):
       case tag(7, fixed32_type):
@@ -250,7 +279,7 @@ bool detection_in_order(Reader in, VisionDetection& out) {
   if (!in.take(tag(4, varint_type)) || !in.varint32(out.camera_id)) return false;
   Reader nested(nullptr, nullptr);
   while (in.take(tag(5, bytes_type))) {
-    if (!in.nested(nested) || !ball(nested)) return false;
+    if (!in.nested(nested) || !ball(nested, out.balls.emplace_back())) return false;
   }
   while (in.take(tag(6, bytes_type))) {
     if (!in.nested(nested) || !robot(nested, out.robots_yellow.emplace_back())) return false;
@@ -267,9 +296,11 @@ bool detection_in_order(Reader in, VisionDetection& out) {
 bool detection(Reader in, VisionDetection& out) {
   out.robots_yellow.clear();
   out.robots_blue.clear();
+  out.balls.clear();
   if (detection_in_order(in, out)) return true;
   out.robots_yellow.clear();  // nothing of the attempt stays
   out.robots_blue.clear();
+  out.balls.clear();
   SeenFields seen;
   while (!in.done()) {
     std::uint32_t key = 0;
@@ -295,7 +326,7 @@ bool detection(Reader in, VisionDetection& out) {
         ok = in.varint32(out.camera_id);
         break;
       case tag(5, bytes_type):
-        ok = in.nested(nested) && ball(nested);
+        ok = in.nested(nested) && ball(nested, out.balls.emplace_back());
         break;
       case tag(6, bytes_type):
         ok = in.nested(nested) && robot(nested, out.robots_yellow.emplace_back());
@@ -324,6 +355,7 @@ void to_vision_frame(const SSL_WrapperPacket& packet, VisionFrame& frame) {
     frame.detection.camera_id = detection.camera_id();
     copy_robots(detection.robots_yellow(), frame.detection.robots_yellow);
     copy_robots(detection.robots_blue(), frame.detection.robots_blue);
+    copy_balls(detection.balls(), frame.detection.balls);
   }
   frame.has_geometry = packet.has_geometry();
   if (frame.has_geometry) {

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <limits>
+#include <optional>
 #include <string>
 
 #include "ssl_gc_referee_message.pb.h"
@@ -321,6 +323,47 @@ TEST(RefereeFollower, DescribeNamesTheStateTheStageTheTeamsAndTheSides) {
   m.set_blue_team_on_positive_half(false);
   referee.add(bytes(m), 1.1);
   EXPECT_NE(sf::describe(referee).find("-x"), std::string::npos) << sf::describe(referee);
+}
+
+TEST(RefereeFollower, TheDesignatedPositionIsTheLastUsedMessages) {
+  sf::RefereeFollower referee;
+  EXPECT_EQ(referee.view().designated_position, std::nullopt);
+  Referee placement = message(Referee::BALL_PLACEMENT_YELLOW, 4);
+  placement.mutable_designated_position()->set_x(-1250.5F);
+  placement.mutable_designated_position()->set_y(875.0F);
+  referee.add(bytes(placement), 1.0);
+  ASSERT_TRUE(referee.view().designated_position.has_value());
+  EXPECT_EQ(referee.view().designated_position->x, -1250.5);
+  EXPECT_EQ(referee.view().designated_position->y, 875.0);
+  // Repeats of the command carry it on, and a moved target moves it (no new command).
+  placement.mutable_designated_position()->set_x(-1000.0F);
+  EXPECT_FALSE(referee.add(bytes(placement), 1.1).any());
+  EXPECT_EQ(referee.view().designated_position->x, -1000.0);
+  // A message from a second game controller changes nothing.
+  Referee other = message(Referee::BALL_PLACEMENT_BLUE, 9, "gc-b");
+  other.mutable_designated_position()->set_x(3000.0F);
+  other.mutable_designated_position()->set_y(3000.0F);
+  referee.add(bytes(other), 1.2);
+  EXPECT_EQ(referee.view().designated_position->x, -1000.0);
+  // The next message without one has none.
+  referee.add(bytes(message(Referee::STOP, 5)), 1.3);
+  EXPECT_EQ(referee.view().designated_position, std::nullopt);
+  // Nor has one with a target that is not finite, or lacks a coordinate.
+  placement.set_command_counter(6);
+  placement.mutable_designated_position()->set_x(std::numeric_limits<float>::infinity());
+  referee.add(bytes(placement), 1.4);
+  EXPECT_EQ(referee.view().state, sf::GameState::ball_placement);
+  EXPECT_EQ(referee.view().designated_position, std::nullopt);
+  placement.mutable_designated_position()->clear_x();
+  referee.add(placement.SerializePartialAsString(), 1.5);
+  EXPECT_EQ(referee.view().state, sf::GameState::ball_placement);
+  EXPECT_EQ(referee.view().designated_position, std::nullopt);
+  // reset() forgets it.
+  placement.mutable_designated_position()->set_x(10.0F);
+  referee.add(bytes(placement), 1.6);
+  EXPECT_TRUE(referee.view().designated_position.has_value());
+  referee.reset();
+  EXPECT_EQ(referee.view().designated_position, std::nullopt);
 }
 
 }  // namespace

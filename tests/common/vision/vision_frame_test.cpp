@@ -301,6 +301,23 @@ bool same_bits(double a, double b) {
   return ::testing::AssertionSuccess();
 }
 
+::testing::AssertionResult same_balls(const std::vector<VisionBall>& expected,
+                                      const std::vector<VisionBall>& actual) {
+  if (expected.size() != actual.size()) {
+    return ::testing::AssertionFailure() << actual.size() << " balls, expected " << expected.size();
+  }
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const VisionBall& e = expected[i];
+    const VisionBall& a = actual[i];
+    if (!same_bits(e.x, a.x) || !same_bits(e.y, a.y) || !same_bits(e.confidence, a.confidence)) {
+      return ::testing::AssertionFailure()
+             << "ball " << i << " at (" << a.x << ", " << a.y << ") confidence " << a.confidence
+             << ", expected (" << e.x << ", " << e.y << ") confidence " << e.confidence;
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
 // Field by field, floats bit for bit (a NaN equals the same NaN).
 ::testing::AssertionResult same_frame(const VisionFrame& expected, const VisionFrame& actual) {
   if (expected.has_detection != actual.has_detection ||
@@ -326,7 +343,8 @@ bool same_bits(double a, double b) {
            << e.camera_id;
   }
   if (auto yellow = same_robots("yellow", e.robots_yellow, a.robots_yellow); !yellow) return yellow;
-  return same_robots("blue", e.robots_blue, a.robots_blue);
+  if (auto blue = same_robots("blue", e.robots_blue, a.robots_blue); !blue) return blue;
+  return same_balls(e.balls, a.balls);
 }
 
 bool has_unknown_fields(const SSL_WrapperPacket& packet) {
@@ -429,6 +447,10 @@ TEST(VisionFrameDecode, TheReferenceDatagramDecodesToItsValues) {
   EXPECT_EQ(frame.detection.robots_yellow[1].robot_id, 4u);
   EXPECT_EQ(frame.detection.robots_blue[0].robot_id, 9u);
   EXPECT_EQ(frame.detection.robots_blue[0].y, -20.0F);
+  ASSERT_EQ(frame.detection.balls.size(), 1u);
+  EXPECT_EQ(frame.detection.balls[0].x, 10.5F);
+  EXPECT_EQ(frame.detection.balls[0].y, -20.25F);
+  EXPECT_EQ(frame.detection.balls[0].confidence, 0.75F);
 }
 
 TEST(VisionFrameDecode, PacketsSerialisedByProtobufDecode) {
@@ -550,6 +572,18 @@ TEST(VisionFrameDecode, OptionalAndRepeatedFieldsMayBeLeftOut) {
   EXPECT_FALSE(frame.detection.robots_yellow[0].has_robot_id);
   EXPECT_EQ(frame.detection.robots_yellow[0].robot_id, 0u);
   EXPECT_TRUE(frame.detection.robots_yellow[1].has_robot_id);
+
+  // A ball without area and height still has its position and confidence.
+  const VisionFrame bare_ball = decoded_frame(
+      datagram_with(Level::ball, [](Message m) { return without(without(m, 2), 5); }));
+  ASSERT_EQ(bare_ball.detection.balls.size(), 1u);
+  EXPECT_EQ(bare_ball.detection.balls[0].x, 10.5F);
+  EXPECT_EQ(bare_ball.detection.balls[0].y, -20.25F);
+  EXPECT_EQ(bare_ball.detection.balls[0].confidence, 0.75F);
+  // A frame without balls has none.
+  const VisionFrame no_ball =
+      decoded_frame(datagram_with(Level::frame, [](Message m) { return without(m, 5); }));
+  EXPECT_TRUE(no_ball.detection.balls.empty());
 }
 
 TEST(VisionFrameDecode, ASingularFieldTwiceIsLeftToProtobuf) {
@@ -577,6 +611,7 @@ TEST(VisionFrameDecode, RepeatedFieldsMayComeAnyNumberOfTimesInAnyOrder) {
   const VisionFrame frame = decoded_frame(datagram);
   EXPECT_EQ(frame.detection.robots_yellow.size(), 3u);
   EXPECT_EQ(frame.detection.robots_blue.size(), 2u);
+  EXPECT_EQ(frame.detection.balls.size(), 2u);
 }
 
 TEST(VisionFrameDecode, UnknownFieldsAreLeftToProtobufAtEveryLevel) {
@@ -811,6 +846,39 @@ TEST(VisionFrameDecode, EveryByteOfARobotInACommonLayoutChangedStillAgreesWithPr
   }
 }
 
+// A ball as protobuf writes it (every field in order) is read in one pass; every byte of it changed
+// must still decode exactly as protobuf parses, or be left to it.
+TEST(VisionFrameDecode, EveryByteOfABallChangedStillAgreesWithProtobuf) {
+  DetectionFrameSpec spec = frame_spec(1, 9, 3.5, {}, {{2, {100, 200}}});
+  spec.balls = {{-1234.5, 678.25}};
+  const SSL_WrapperPacket packet = make_detection_packet(spec);
+  const std::string ball_bytes = packet.detection().balls(0).SerializeAsString();
+  const std::string datagram = packet.SerializeAsString();
+  const std::size_t at = datagram.find(ball_bytes);
+  ASSERT_NE(at, std::string::npos);
+
+  const VisionFrame frame = decoded_frame(datagram);
+  ASSERT_EQ(frame.detection.balls.size(), 1u);
+  EXPECT_EQ(frame.detection.balls[0].x, -1234.5F);
+  EXPECT_EQ(frame.detection.balls[0].y, 678.25F);
+  EXPECT_EQ(frame.detection.balls[0].confidence, 0.95F);
+
+  int still_decoded = 0;
+  int left_to_protobuf = 0;
+  for (std::size_t i = 0; i < ball_bytes.size(); ++i) {
+    for (const unsigned value : {0x00U, 0x05U, 0x0DU, 0x10U, 0x15U, 0x1DU, 0x25U, 0x2DU, 0x35U,
+                                 0x3DU, 0x45U, 0x7FU, 0x80U, 0xFFU}) {
+      std::string changed = datagram;
+      if (static_cast<unsigned char>(changed[at + i]) == value) continue;
+      changed[at + i] = static_cast<char>(value);
+      SCOPED_TRACE("byte " + std::to_string(i) + " = " + std::to_string(value));
+      (decodes(changed) ? still_decoded : left_to_protobuf) += 1;
+    }
+  }
+  EXPECT_GT(still_decoded, 100);
+  EXPECT_GT(left_to_protobuf, 30);
+}
+
 TEST(VisionFrameDecode, AReusedFrameKeepsNothingOfTheLastDatagram) {
   SSL_WrapperPacket small_packet = make_detection_packet(frame_spec(1, 9, 3.0, {{2, {1, 1}}}, {}));
   small_packet.mutable_detection()->mutable_robots_yellow(0)->clear_robot_id();
@@ -821,9 +889,11 @@ TEST(VisionFrameDecode, AReusedFrameKeepsNothingOfTheLastDatagram) {
   reused.has_geometry = true;
   ASSERT_TRUE(decode_detection_datagram(bytes_of(large), reused));
   EXPECT_FALSE(reused.has_geometry);
+  ASSERT_EQ(reused.detection.balls.size(), 2u);
   ASSERT_TRUE(decode_detection_datagram(bytes_of(small), reused));
   EXPECT_TRUE(same_frame(decoded_frame(small), reused));
   EXPECT_FALSE(reused.detection.robots_yellow[0].has_robot_id);
+  EXPECT_TRUE(reused.detection.balls.empty());
 
   // A refused datagram in between leaves the frame unspecified, but not the next one decoded.
   EXPECT_FALSE(decode_detection_datagram(bytes_of(large.substr(0, large.size() / 2)), reused));
@@ -863,6 +933,12 @@ TEST(VisionFrameConversion, DetectionAndGeometryInOnePacketGiveBoth) {
   EXPECT_EQ(robot.y, -300.25F);
   EXPECT_EQ(robot.confidence, 0.5F);
   EXPECT_EQ(frame.detection.robots_blue[0].robot_id, 11u);
+  ASSERT_EQ(frame.detection.balls.size(), 2u);
+  EXPECT_EQ(frame.detection.balls[0].x, 10.0F);
+  EXPECT_EQ(frame.detection.balls[0].y, 20.0F);
+  EXPECT_EQ(frame.detection.balls[0].confidence, 0.95F);
+  EXPECT_EQ(frame.detection.balls[1].x, -30.0F);
+  EXPECT_EQ(frame.detection.balls[1].y, 40.0F);
 }
 
 TEST(VisionFrameConversion, APacketWithNeitherClearsBothFlags) {
@@ -897,6 +973,7 @@ TEST(VisionFrameConversion, AReusedFrameGetsExactlyTheNewRobots) {
   to_vision_frame(fewer, fresh);
   EXPECT_TRUE(same_frame(fresh, reused));
   EXPECT_TRUE(reused.detection.robots_yellow.empty());
+  EXPECT_TRUE(reused.detection.balls.empty());
 }
 
 // ---- Many inputs: whenever the fast path decodes, protobuf agrees

@@ -13,6 +13,8 @@
 #include <string>
 #include <string_view>
 
+#include "ssl_formation/base/grid.hpp"
+
 class Referee;
 
 namespace ssl_formation {
@@ -53,6 +55,10 @@ struct RefereeView {
   // True when blue's goal is on the +x side of the vision frame; none while the game controller
   // has not said (older ones never do).
   std::optional<bool> blue_on_positive_half;
+  // Where the ball is to be placed (designated_position, millimetres, feed coordinates), as the
+  // last message used says: the game controller sends it with a ball placement's command. None
+  // when that message had none (or a part of it missing or not finite).
+  std::optional<Point> designated_position;
   std::string source;  // the source_identifier followed ("" from a game controller without one)
 };
 

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/grid.hpp"
@@ -41,6 +42,13 @@ struct MatchMoment {
   // when learning keeps the game's states apart, else -infinity (all of the stream so far). No
   // instance spans it.
   double learn_from_s = -std::numeric_limits<double>::infinity();
+  // The ball as the front end follows it, normalised like the robots (none: no ball seen lately),
+  // and its velocity (mm/s, normalised; zero until two sightings give one).
+  std::optional<Point> ball;
+  Point ball_velocity;
+  // Where a ball placement takes the ball (the referee's designated position), normalised; none
+  // outside placements or when the game controller does not say.
+  std::optional<Point> designated_position;
 
   const Formation& formation() const { return sample.formation; }
 };

@@ -1,9 +1,10 @@
 #pragma once
 // The front end every consumer of a match shares: the event stream in (match/match_event.hpp),
 // the vision source chosen (raw, or a tracker's frames), the opponent followed by the referee,
-// the formations sampled on the data clock, and each sample handed on with what is known of the
-// game then (models/model.hpp's MatchMoment). Training, PredictionPipeline and the evaluation all
-// run exactly this, fed by sockets, log files, a match in memory or a simulation.
+// the ball followed, the formations sampled on the data clock, and each sample handed on with
+// what is known of the game then (models/model.hpp's MatchMoment). Training, PredictionPipeline and
+// the evaluation all run exactly this, fed by sockets, log files, a match in memory or a
+// simulation.
 
 #include <array>
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include "ssl_formation/match/match_event.hpp"
 #include "ssl_formation/match/tracked_vision.hpp"
 #include "ssl_formation/models/model.hpp"
+#include "ssl_formation/vision/ball_tracker.hpp"
 #include "ssl_formation/vision/sampler.hpp"
 
 class SSL_WrapperPacket;
@@ -35,6 +37,9 @@ struct FrontEndConfig {
   // Learning in running play keeps the game's states apart: no transition spans a new command,
   // and MatchMoment::learn_from_s is the first sample under the current one.
   bool keep_commands_apart = false;
+  // How the ball is followed from the raw vision (with tracked vision the tracker's ball is
+  // taken as it is); a sample's ball is none when it was not seen within ball.forget_after_s.
+  BallTrackerSettings ball;
 };
 
 class MatchFrontEnd final : public MatchEventSink {
@@ -47,7 +52,7 @@ class MatchFrontEnd final : public MatchEventSink {
     std::function<void()> on_forget;
   };
 
-  // Throws std::invalid_argument for a bad sampler configuration.
+  // Throws std::invalid_argument for a bad sampler configuration or ball settings.
   MatchFrontEnd(FrontEndConfig config, Handlers handlers);
   // The sampler's handler points at this object.
   MatchFrontEnd(const MatchFrontEnd&) = delete;
@@ -70,6 +75,8 @@ class MatchFrontEnd final : public MatchEventSink {
   const FormationSampler& sampler() const { return sampler_; }
   const MatchFollower& match() const { return match_; }
   const TrackedVision& tracked_vision() const { return tracked_; }
+  // The ball as followed so far, in feed coordinates (raw vision's or the tracker's).
+  const BallTracker& ball() const { return ball_; }
   // The side the opponent attacks now: the sampler's (inferred, or as the options and referee
   // say).
   AttackDirection attacks() const {
@@ -92,6 +99,7 @@ class MatchFrontEnd final : public MatchEventSink {
   FormationSampler sampler_;
   MatchFollower match_;
   TrackedVision tracked_;
+  BallTracker ball_;
   GamePhaseTracker phases_;
   // The commands since the last sample, in effect from the next one, in order.
   std::vector<int> pending_commands_;

@@ -1,9 +1,9 @@
 #pragma once
-// The part of an SSL-Vision packet that sampling reads (frame number, capture time, camera,
-// robots, field size) as plain values. Filled from a parsed SSL_WrapperPacket, or decoded
-// straight from the datagram for the packets a live feed is made of (one detection frame each):
-// on the daemons' hot path that skips protobuf's general parser, whose code and message objects
-// cost microseconds when a daemon wakes with cold caches every 16 ms.
+// The part of an SSL-Vision packet that sampling and the ball follower read (frame number,
+// capture time, camera, robots, balls, field size) as plain values. Filled from a parsed
+// SSL_WrapperPacket, or decoded straight from the datagram for the packets a live feed is made of
+// (one detection frame each): on the daemons' hot path that skips protobuf's general parser, whose
+// code and message objects cost microseconds when a daemon wakes with cold caches every 16 ms.
 
 #include <cstddef>
 #include <cstdint>
@@ -24,12 +24,19 @@ struct VisionRobot {
   float confidence = 0.0F;
 };
 
+struct VisionBall {
+  float x = 0.0F;  // millimetres, feed coordinates
+  float y = 0.0F;
+  float confidence = 0.0F;
+};
+
 struct VisionDetection {
   std::uint32_t frame_number = 0;
   double t_capture = 0.0;
   std::uint32_t camera_id = 0;
   std::vector<VisionRobot> robots_yellow;
   std::vector<VisionRobot> robots_blue;
+  std::vector<VisionBall> balls;  // every ball candidate the camera saw, in the packet's order
 
   const std::vector<VisionRobot>& robots(TeamColor color) const {
     return color == TeamColor::yellow ? robots_yellow : robots_blue;
