@@ -85,9 +85,11 @@ OpponentChoice ModelOptions::opponent_choice() const {
 void add_learn_during_option(po::options_description& options, std::string& learn_during) {
   options.add_options()(
       "learn-during", po::value(&learn_during)->default_value(learn_during),
-      "running: learn only from running play (after NORMAL_START or FORCE_START and in free kicks, "
-      "until the next HALT, STOP, timeout, ball placement or kick-off or penalty preparation), "
-      "nothing across a change of command; all: every game state. Without a referee feed "
+      "all: learn in every game state, each filed under its state (the motion model keeps "
+      "HALT, STOP, placements, kick-offs and free kicks apart by team and by the seconds since "
+      "the command); running: learn only from running play (after NORMAL_START or FORCE_START "
+      "and in free kicks, until the next HALT, STOP, timeout, ball placement or kick-off or "
+      "penalty preparation), nothing across a change of command. Without a referee feed "
       "everything is learned either way");
 }
 

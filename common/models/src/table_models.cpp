@@ -1,5 +1,7 @@
 #include "table_models.hpp"
 
+#include "ssl_formation/models/game_rules.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -14,6 +16,11 @@ MotionConfig prediction_history_config(const ModelSettings& settings) {
   motion.step_s = settings.step_s;
   motion.horizons = 1;
   return motion;
+}
+
+// The game context a motion history files the moment's robots under.
+std::uint32_t game_context_of(const MatchMoment& moment) {
+  return MotionFeatures::game_context(moment.phase, moment.since_command_s);
 }
 
 }  // namespace
@@ -64,7 +71,7 @@ MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
 
 void MotionLearner::observe(const MatchMoment& moment) {
   // Followed in every state, so that velocities are known when learning starts again.
-  history_.add(moment.formation());
+  history_.add(moment.formation(), game_context_of(moment));
 }
 
 void MotionLearner::learn(const MatchMoment& moment) {
@@ -128,23 +135,26 @@ void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
 }
 
 void MotionForecaster::observe(const MatchMoment& moment) {
-  history_.add(moment.formation());
+  history_.add(moment.formation(), game_context_of(moment));
   if (settings_.recalibration) calibration_.observe(moment.formation());
 }
 
 void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out,
                                 ForecastUse use) {
   robots_.clear();
+  const std::uint32_t game = game_context_of(moment);
   for (const FormationRobot& robot : moment.formation().robots) {
     const MotionHistory::Entry* seen = history_.latest(robot.robot_id);
     // The history has just taken this formation: `seen` is the robot's latest observation,
-    // this frame's or (a robot carried over from an earlier frame) the one before.
+    // this frame's or (a robot carried over from an earlier frame) the one before. A robot
+    // without a velocity yet is filed under the game's context alone.
     const bool moving = seen && seen->has_velocity;
     robots_.push_back({robot.robot_id, robot.position,
                        moving ? seen->kinematics : MotionKinematics{}, moving,
-                       moving ? seen->context : 0});
+                       moving ? seen->context : MotionFeatures::context(0, 0, game)});
   }
-  model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_);
+  model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
+                  rules_of_the_game(moment));
   if (!settings_.recalibration) return;
   if (use == ForecastUse::predict) {
     calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks);

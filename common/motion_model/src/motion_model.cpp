@@ -208,6 +208,35 @@ std::uint32_t MotionFeatures::standing_context(double standing_s) {
   return bin;
 }
 
+std::uint32_t MotionFeatures::game_context(GamePhase phase, double since_command_s) {
+  if (phase == GamePhase::running) return running_game;
+  if (phase == GamePhase::halt) return halt_game;
+  // The other phases in all_game_phases' order after running and halt, three buckets each.
+  std::uint32_t index = 0;
+  for (const GamePhase p : all_game_phases) {
+    if (p == GamePhase::running || p == GamePhase::halt) continue;
+    if (p == phase) break;
+    ++index;
+  }
+  std::uint32_t bucket = 0;
+  while (bucket < since_command_limits_s.size() && !(since_command_s < since_command_limits_s[bucket])) {
+    ++bucket;
+  }
+  return 2 + index * since_command_buckets + bucket;
+}
+
+GamePhase MotionFeatures::phase_of_game_context(std::uint32_t game_context) {
+  if (game_context == running_game || game_context >= game_contexts) return GamePhase::running;
+  if (game_context == halt_game) return GamePhase::halt;
+  std::uint32_t index = (game_context - 2) / since_command_buckets;
+  for (const GamePhase p : all_game_phases) {
+    if (p == GamePhase::running || p == GamePhase::halt) continue;
+    if (index == 0) return p;
+    --index;
+  }
+  return GamePhase::running;
+}
+
 int MotionFeatures::zone_of_cell(int cell) {
   // The cell's centre decides (no cell straddles an edge: the edges are multiples of cell_mm).
   const auto band = [](double centre_mm, const auto& edges) {
@@ -249,7 +278,9 @@ MotionKey encode_motion_key(MotionKeyParts p) {
       [[fallthrough]];
     case MotionLevel::velocity:
       p.cell = 0;
-      p.context = 0;
+      // The coarse levels keep the game context alone: in HALT or STOP every robot's motion
+      // differs from running play's whatever its place.
+      p.context = MotionFeatures::robot_contexts * MotionFeatures::game_context_of(p.context);
       [[fallthrough]];
     case MotionLevel::zone:
       p.robot_slot = 0;
@@ -549,7 +580,7 @@ inline const MotionHistory::Entry* MotionHistory::nearest(const Track& track, st
   return best;
 }
 
-void MotionHistory::add(const Formation& formation) {
+void MotionHistory::add(const Formation& formation, std::uint32_t game_context) {
   const double t = formation.time_s;
   if (last_time_s_ && (t <= *last_time_s_ || t - *last_time_s_ > forget_after_gap_s ||
                        formation.opponent_attacks != attacks_)) {
@@ -668,7 +699,7 @@ void MotionHistory::add(const Formation& formation) {
     Track& track = tracks_[robot.robot_id];
     Entry& entry = track.at(track.end - 1);
     entry.kinematics.team_velocity = team;
-    entry.context = MotionFeatures::context(entry.context, team_phase);
+    entry.context = MotionFeatures::context(entry.context, team_phase, game_context);
   }
 }
 

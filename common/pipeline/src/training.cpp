@@ -14,7 +14,7 @@ FrontEndConfig front_end_config(const TrainingConfig& config) {
   front.opponent = config.rules ? std::optional<OpponentChoice>(config.rules->opponent)
                                 : std::nullopt;
   front.tracked_vision = config.tracked_vision;
-  const LearnDuring learn_during = config.rules ? config.rules->learn_during : LearnDuring::running;
+  const LearnDuring learn_during = config.rules ? config.rules->learn_during : LearnDuring::all;
   front.keep_commands_apart = learn_during == LearnDuring::running;
   return front;
 }
@@ -43,7 +43,7 @@ Training::Training(TrainingConfig config, ModelKind model, std::unique_ptr<Learn
                    std::uint64_t samples_before)
     : model_(model),
       learner_(checked(config, model, std::move(learner))),
-      learn_during_(config.rules ? config.rules->learn_during : LearnDuring::running),
+      learn_during_(config.rules ? config.rules->learn_during : LearnDuring::all),
       front_end_(front_end_config(config),
                  {[this](const MatchMoment& moment) { on_sample(moment); },
                   [this] { learner_->forget_match(); }}),

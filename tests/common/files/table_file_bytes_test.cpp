@@ -101,7 +101,8 @@ MotionTable motion_table(double step_s, int horizons, int rows, int held) {
     parts.robot_slot = static_cast<int>(random.next() % MotionFeatures::robot_slots);
     parts.cell = static_cast<int>(random.next() % MotionFeatures::cell_count);
     parts.velocity_class = static_cast<int>(random.next() % MotionFeatures::velocity_classes);
-    parts.context = random.next() % MotionFeatures::context_count;
+    // Running play's contexts: the bytes were fixed before the game's states came in.
+    parts.context = random.next() % MotionFeatures::robot_contexts;
     MotionRow row;
     for (std::int64_t& sum : row.sums) sum = signed_value(5'000'000'000LL);
     row.sums[0] = 1 + random.next() % 20;                   // n
@@ -121,7 +122,7 @@ MotionTable motion_table(double step_s, int horizons, int rows, int held) {
       for (const auto value : motion_instance_values) {
         instance.instance.*value = static_cast<std::int32_t>(signed_value(9000));
       }
-      instance.instance.context = random.next() % MotionFeatures::context_count;
+      instance.instance.context = random.next() % MotionFeatures::robot_contexts;
       table.add_held_out(h, instance);
     }
   }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <limits>
 #include <set>
 
 #include "ssl_formation/motion_model/motion_predictor.hpp"
@@ -120,15 +121,50 @@ TEST(MotionFeatures, TheContextTellsTheStandingTimeAndTheTeamPhaseApart) {
   EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}, still), 4);  // into the half it attacks
   EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}, moving), 5);
   std::set<std::uint32_t> contexts;
-  for (int phase = 0; phase < sf::MotionFeatures::team_phases; ++phase) {
-    for (std::uint32_t standing = 0; standing < sf::MotionFeatures::standing_contexts;
-         ++standing) {
-      contexts.insert(sf::MotionFeatures::context(standing, phase));
+  for (std::uint32_t game = 0; game < sf::MotionFeatures::game_contexts; ++game) {
+    for (int phase = 0; phase < sf::MotionFeatures::team_phases; ++phase) {
+      for (std::uint32_t standing = 0; standing < sf::MotionFeatures::standing_contexts;
+           ++standing) {
+        const std::uint32_t context = sf::MotionFeatures::context(standing, phase, game);
+        contexts.insert(context);
+        EXPECT_EQ(sf::MotionFeatures::game_context_of(context), game);
+      }
     }
   }
   EXPECT_EQ(contexts.size(), sf::MotionFeatures::context_count);
   EXPECT_EQ(*contexts.rbegin(), sf::MotionFeatures::context_count - 1);
+  // Running play keeps the contexts tables learned before the game's states came in.
+  EXPECT_EQ(sf::MotionFeatures::context(4, 5), 29u);
   EXPECT_EQ(sf::MotionFeatures::standing_context(99.0), sf::MotionFeatures::standing_contexts - 1);
+}
+
+TEST(MotionFeatures, EveryGamePhaseAndTimeSinceItsCommandHasItsOwnGameContext) {
+  using sf::GamePhase;
+  EXPECT_EQ(sf::MotionFeatures::game_context(GamePhase::running, 0.2),
+            sf::MotionFeatures::running_game);
+  EXPECT_EQ(sf::MotionFeatures::game_context(GamePhase::running, 30.0),
+            sf::MotionFeatures::running_game);
+  EXPECT_EQ(sf::MotionFeatures::game_context(GamePhase::halt, 0.1), sf::MotionFeatures::halt_game);
+  EXPECT_EQ(sf::MotionFeatures::game_context(GamePhase::halt, 9.0), sf::MotionFeatures::halt_game);
+  std::set<std::uint32_t> seen{sf::MotionFeatures::running_game, sf::MotionFeatures::halt_game};
+  for (const GamePhase phase : sf::all_game_phases) {
+    if (phase == GamePhase::running || phase == GamePhase::halt) continue;
+    const std::uint32_t early = sf::MotionFeatures::game_context(phase, 0.0);
+    // 1 s and 3 s since the command are the edges.
+    EXPECT_EQ(sf::MotionFeatures::game_context(phase, 0.999), early);
+    EXPECT_EQ(sf::MotionFeatures::game_context(phase, 1.0), early + 1);
+    EXPECT_EQ(sf::MotionFeatures::game_context(phase, 2.999), early + 1);
+    EXPECT_EQ(sf::MotionFeatures::game_context(phase, 3.0), early + 2);
+    EXPECT_EQ(sf::MotionFeatures::game_context(phase,
+                                               std::numeric_limits<double>::infinity()),
+              early + 2);
+    for (std::uint32_t g = early; g < early + 3; ++g) {
+      EXPECT_TRUE(seen.insert(g).second) << sf::to_string(phase);
+      EXPECT_EQ(sf::MotionFeatures::phase_of_game_context(g), phase);
+    }
+  }
+  EXPECT_EQ(seen.size(), sf::MotionFeatures::game_contexts);
+  EXPECT_EQ(*seen.rbegin(), sf::MotionFeatures::game_contexts - 1);
 }
 
 TEST(MotionKey, EachLevelKeepsItsFeaturesAndTheCoarserKeyDropsThem) {

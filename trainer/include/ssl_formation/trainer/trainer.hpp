@@ -21,7 +21,7 @@ struct TrainerOptions {
   app::DaemonOptions daemon;
   // --model motion: the steps ahead the motion model learns (--horizon, as the predictor's).
   int horizon = 3;
-  std::string learn_during = "running";
+  std::string learn_during = "all";
   std::string table = app::default_table;
   // One table file per opponent team in this folder instead of --table (live training).
   std::string table_dir;

@@ -80,7 +80,7 @@ struct PositionEvaluationConfig {
   // The motion model's recalibration while it predicts the test streams (PredictionConfig).
   std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
   // How the methods follow the referee, as the daemons' --opponent-* and --learn-during do;
-  // none: the sampler's opponent, fixed, learning in running play.
+  // none: the sampler's opponent, fixed, learning in every state.
   std::optional<MatchRules> rules;
   bool tracked_vision = false;  // --vision-source tracked
   // Sees every prediction the model makes on the test streams, as the daemon would have sent it

@@ -32,6 +32,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/interval_gate.hpp"
 #include "ssl_formation/base/probed_memory.hpp"
+#include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/vision/robot_tracker.hpp"
 
 namespace ssl_formation {
@@ -97,11 +98,30 @@ struct MotionFeatures {
   static constexpr double team_place_edge_mm = 1000.0;
   static constexpr int team_phases = 3 * 2;
   static int team_phase(Point normalised_centroid, Point team_velocity_mm_s);
-  // A row's context: the standing context and the team phase.
-  static constexpr std::uint32_t context_count = standing_contexts * team_phases;
-  static std::uint32_t context(std::uint32_t standing_context, int team_phase) {
-    return standing_context + standing_contexts * static_cast<std::uint32_t>(team_phase);
+  // The game as the referee runs it (match/game_phase.hpp's GamePhase for the team predicted)
+  // and how long its command has held: running play is one context; HALT and timeouts one
+  // (nobody may move); each other phase three, by the seconds since its command in
+  // `since_command_limits_s`, because a set play unfolds with time (a free kick is taken about
+  // 0.7 s after its command, DESIGN.md section 7; a halt's robots have 2 s to brake). The game
+  // context is part of the key rather than a regressor: the phases differ in which regressors
+  // matter (in HALT none does, in STOP the speed is capped), not by an offset a regressor adds.
+  static constexpr std::array<double, 2> since_command_limits_s{1.0, 3.0};
+  static constexpr std::uint32_t since_command_buckets = since_command_limits_s.size() + 1;
+  static constexpr std::uint32_t running_game = 0;
+  static constexpr std::uint32_t halt_game = 1;
+  static constexpr std::uint32_t game_contexts =
+      2 + (all_game_phases.size() - 2) * since_command_buckets;
+  static std::uint32_t game_context(GamePhase phase, double since_command_s);
+  static GamePhase phase_of_game_context(std::uint32_t game_context);
+  // A row's context: the standing context, the team phase and the game context.
+  static constexpr std::uint32_t robot_contexts = standing_contexts * team_phases;
+  static constexpr std::uint32_t context_count = robot_contexts * game_contexts;
+  static std::uint32_t context(std::uint32_t standing_context, int team_phase,
+                               std::uint32_t game_context = running_game) {
+    return standing_context + standing_contexts * static_cast<std::uint32_t>(team_phase) +
+           robot_contexts * game_context;
   }
+  static std::uint32_t game_context_of(std::uint32_t context) { return context / robot_contexts; }
   // Zones: where every robot's rows are pooled, 3 m across, numbered like cells. The length in
   // quarters (own half in two, the attacked half in two) and the width in a centre lane and two
   // wings, on a Division A field; beyond them, the edge zones. Set plays put each role at places
@@ -134,7 +154,9 @@ struct MotionFeatures {
 };
 
 // The back-off levels, finest first: the robot's own row (cell, velocity class, context), every
-// robot's in the cell's zone (velocity class, context), every robot's with the velocity class, all.
+// robot's in the cell's zone (velocity class, context), every robot's with the velocity class in
+// the game context, every robot's in the game context. Below them, the horizon's pooled root (or
+// for HALT the rules' prior: see MotionModel).
 enum class MotionLevel : std::uint8_t { robot = 0, zone = 1, velocity = 2, all = 3 };
 inline constexpr int motion_levels = 4;
 
@@ -392,7 +414,8 @@ class MotionHistory {
   // team's). Every robot's kinematics are then latest(id)->kinematics. A robot whose position
   // jumped (MotionFeatures::is_jump) starts its track again there: nothing is learned across
   // the jump and its velocity starts anew.
-  void add(const Formation& formation);
+  // `game_context` (MotionFeatures::game_context) goes into every new entry's context.
+  void add(const Formation& formation, std::uint32_t game_context = MotionFeatures::running_game);
   void clear();
 
   const Entry* latest(std::uint32_t robot_id) const;

@@ -6,6 +6,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -29,6 +31,35 @@ struct MotionModelSettings {
   double prior_error_mm_per_s = 450.0;
   // Fewer held-out instances than this: Gaussian radii and uncalibrated probabilities.
   std::size_t min_calibration_instances = 100;
+  // The rules' prior in HALT and timeouts (rows of those states shrink towards it): robots
+  // brake with this time constant and then stand, give or take the vision's noise.
+  double halt_brake_time_constant_s = 0.15;
+  double halt_error_mm = 20.0;
+};
+
+// What the rules of the game say of where the opponent's robots can go under the referee's
+// current command, normalised (the opponent attacks +x). The forecast is moved the least
+// distance that satisfies them; MotionRules{} says nothing.
+struct MotionRules {
+  // STOP and ball placement: "all robots have to slow down to less than 1.5 m/s" (SSL rules,
+  // Referee Commands: Stop): no robot's average speed to a predicted position is above this.
+  double max_speed_mm_s = std::numeric_limits<double>::infinity();
+  // STOP, ball placement, the defending team at a free kick or a kick-off: "at least 0.5 meters
+  // distance to the ball" (Stop; Direct Free Kick; Kick-Off's centre circle).
+  std::optional<Point> keep_away_from;
+  double keep_away_mm = 500.0;
+  // The robot the rules leave out: the placing robot, or the kicker at the team's own kick-off.
+  std::optional<std::uint32_t> exempt_robot_id;
+  // A kick-off: "all robots have to move to their own half of the field" (Kick-Off): a robot in
+  // its half (x <= 0) stays there. One still on its way back is left to the model: the rule
+  // says where it ends, not where it is half a second on.
+  bool own_half = false;
+  bool any() const {
+    return max_speed_mm_s < std::numeric_limits<double>::infinity() || keep_away_from ||
+           own_half;
+  }
+  // Where a robot at `from` may be `horizon_s` later, nearest to `to`.
+  Point apply(std::uint32_t robot_id, Point from, double horizon_s, Point to) const;
 };
 
 // One robot as the motion model sees it: normalised position and velocity (mm/s).
@@ -91,7 +122,7 @@ class MotionModel {
   MotionForecast forecast(int horizon_index, const MotionRobot& robot) const;
   // The same with the robot's keys at horizon 0, finest first (motion_keys), computed once for
   // every horizon: the hot path of predict().
-  using RobotKeys = std::array<MotionKey, motion_levels - 1>;
+  using RobotKeys = std::array<MotionKey, motion_levels>;
   static RobotKeys motion_keys(const MotionRobot& robot);
   MotionForecast forecast(int horizon_index, const MotionRobot& robot, const RobotKeys& keys) const;
   // The calibrated probability that the robot is in `cell` when it is forecast `forecast`.
@@ -104,12 +135,14 @@ class MotionModel {
   // Predicts `horizon` steps for every robot into `out` (reusing its storage), the states in
   // `codec`'s cells; positions are turned back into the feed's coordinates with `attacks`.
   // Steps beyond the table's horizons extrapolate the last two learned steps.
-  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
-               const FieldSize& field, AttackDirection attacks, Prediction& out) const;
-  // The same, looking the robots' estimates up through `cache` (see Cache).
+  // Every predicted position satisfies `rules`.
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out,
-               Cache& cache) const;
+               const MotionRules& rules = {}) const;
+  // The same, looking the robots' estimates up through `cache` (see Cache).
+  void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
+               const FieldSize& field, AttackDirection attacks, Prediction& out, Cache& cache,
+               const MotionRules& rules = {}) const;
 
  private:
   // A slot is the key and the estimate rounded to floats, padded to a cache line so that a
@@ -128,7 +161,12 @@ class MotionModel {
   };
   struct Horizon {
     double damping = 1.0;
-    Estimate root;
+    Estimate root;   // every game context's rows pooled
+    Estimate still;  // the rules' prior in HALT and timeouts
+    // What a row at the `all` level (or a robot with no row at all) is held towards.
+    const Estimate& prior_of(std::uint32_t context) const {
+      return MotionFeatures::game_context_of(context) == MotionFeatures::halt_game ? still : root;
+    }
     double z50 = 0.0, z90 = 0.0;  // radius / sqrt(mean square)
     // Isotonic map from the Gaussian mass to the observed hit rate: block upper bounds and
     // their rates, increasing. Empty: identity.
@@ -145,8 +183,8 @@ class MotionModel {
                               std::array<Resolved, MotionConfig::max_horizons>& scratch) const;
   MotionForecast forecast(int horizon_index, const MotionRobot& robot, const Resolved& e) const;
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
-               const FieldSize& field, AttackDirection attacks, Prediction& out,
-               Cache* cache) const;
+               const FieldSize& field, AttackDirection attacks, Prediction& out, Cache* cache,
+               const MotionRules& rules) const;
   void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
   void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
                  const FieldSize& field);

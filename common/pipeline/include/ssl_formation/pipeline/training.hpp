@@ -22,7 +22,7 @@ namespace ssl_formation {
 // How training follows the match: who the opponent is, and which game states it learns in.
 struct MatchRules {
   OpponentChoice opponent;
-  LearnDuring learn_during = LearnDuring::running;
+  LearnDuring learn_during = LearnDuring::all;
 };
 
 struct TrainingConfig {

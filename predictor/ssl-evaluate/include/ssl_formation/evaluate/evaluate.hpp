@@ -21,7 +21,7 @@ struct EvaluateOptions {
   std::string mode;
   app::ModelOptions model;
   app::NetworkOptions network;  // --vision-source: the logs' raw or tracked vision
-  std::string learn_during = "running";
+  std::string learn_during = "all";
   std::uint64_t seed = 1;
   std::uint64_t test_seed = 2;
   int train_formations = 15000;

@@ -1,0 +1,366 @@
+// The motion model in the game's states (models/src/game_rules.cpp, the game contexts of
+// motion_model and the rules' prior of motion_predictor): learned and predicted through the front
+// end from vision frames and referee messages, as the daemons do.
+
+#include "ssl_formation/models/game_rules.hpp"
+
+#include <gtest/gtest.h>
+
+#include "match_logs.hpp"
+
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/pipeline/match_front_end.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
+
+namespace ssl_formation {
+namespace {
+
+constexpr double start_s = 100.0;
+constexpr double step_s = 0.5;
+constexpr int steps = 3;
+
+double distance(Point a, Point b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+// Six yellow robots (the opponent, attacking +x), each circling its own spot at 1.2 m/s.
+Point circling(int id, double t) {
+  const Point centre{-2500.0 + 1000.0 * id, id % 2 == 0 ? 1000.0 : -1000.0};
+  const double angle = 2.0 * t + id;
+  return {centre.x + 600.0 * std::cos(angle), centre.y + 600.0 * std::sin(angle)};
+}
+
+// A match: the robots' path by the time into it, the ball (feed coordinates) and the referee's
+// command, each a function of the time.
+struct Script {
+  std::function<Point(int id, double t)> robot = circling;
+  std::function<std::optional<Point>(double t)> ball = [](double) {
+    return std::optional<Point>(Point{2000.0, 0.0});
+  };
+  std::function<Referee::Command(double t)> command = [](double) { return Referee::NORMAL_START; };
+};
+
+FrontEndConfig front_config() {
+  FrontEndConfig c;
+  c.sampler = sampler_config_for(ModelKind::motion);
+  c.sampler.grid = Grid(3, 2);
+  c.sampler.step_s = step_s;
+  c.sampler.opponent_color = TeamColor::yellow;
+  c.sampler.opponent_attacks = AttackDirection::positive_x;
+  return c;
+}
+
+// The game controller's side of a stream: its command counter.
+struct GameController {
+  std::uint32_t counter = 0;
+  int last_command = -1;
+};
+
+// Feeds `seconds` of the script from `from_s` (seconds into the match) to `run`'s front end:
+// frames at 60 Hz, the referee's message every tenth of a second (a new counter at each new
+// command).
+template <typename Run>
+void play(Run& run, const Script& script, double from_s, double seconds) {
+  MatchFrontEnd& front = run.front;
+  std::uint32_t& counter = run.game_controller.counter;
+  int& last_command = run.game_controller.last_command;
+  const int first = static_cast<int>(std::lround(from_s * 60.0));
+  const int last = static_cast<int>(std::lround((from_s + seconds) * 60.0));
+  for (int i = first; i < last; ++i) {
+    const double t = i / 60.0;
+    if (i % 6 == 0) {
+      const Referee::Command command = script.command(t);
+      if (command != last_command) ++counter;
+      last_command = command;
+      testing::RefereeSpec spec;
+      spec.command = command;
+      spec.command_counter = counter;
+      front.add_referee(testing::referee_payload(spec, start_s + t), start_s + t);
+    }
+    DetectionFrameSpec spec;
+    spec.frame_number = static_cast<std::uint32_t>(i);
+    spec.t_capture = start_s + t;
+    for (int id = 0; id < 6; ++id) {
+      spec.yellow.push_back({static_cast<std::uint32_t>(id), script.robot(id, t)});
+    }
+    if (const auto ball = script.ball(t)) spec.balls.push_back(*ball);
+    front.add(make_detection_packet(spec));
+  }
+}
+
+ModelSettings settings() {
+  ModelSettings s;
+  s.grid = Grid(3, 2);
+  s.step_s = step_s;
+  s.horizons = steps;
+  s.recalibration = std::nullopt;  // the table's own forecasts
+  return s;
+}
+
+// A motion model's learning: every sample of the front end learned from.
+struct Learning {
+  std::unique_ptr<Learner> learner = make_learner(ModelKind::motion, settings());
+  GameController game_controller;
+  MatchFrontEnd front{front_config(),
+                      {[this](const MatchMoment& m) {
+                         learner->observe(m);
+                         learner->learn(m);
+                       },
+                       [this] { learner->forget_match(); }}};
+};
+
+// What a forecaster predicted at each sample, with what it knew then.
+struct Forecast {
+  double time_s = 0.0;
+  GameState state = GameState::unknown;
+  std::optional<Point> ball;  // normalised
+  std::vector<FormationRobot> robots;
+  Prediction prediction;
+};
+
+struct Forecasting {
+  explicit Forecasting(const Learner& learner)
+      : forecaster(learner.forecaster(TableMetadata{FieldSize{9000.0, 6000.0}, step_s, 1})) {}
+  std::unique_ptr<Forecaster> forecaster;
+  std::vector<Forecast> seen;
+  GameController game_controller;
+  MatchFrontEnd front{front_config(),
+                      {[this](const MatchMoment& m) {
+                         forecaster->observe(m);
+                         Forecast f{m.formation().time_s, m.game_state, m.ball,
+                                    m.formation().robots, {}};
+                         forecaster->forecast(m, steps, f.prediction);
+                         seen.push_back(std::move(f));
+                       },
+                       [this] { forecaster->forget_match(); }}};
+};
+
+const FormationRobot& robot_of(const Forecast& f, std::uint32_t id) {
+  for (const FormationRobot& r : f.robots) {
+    if (r.robot_id == id) return r;
+  }
+  throw std::logic_error("no such robot");
+}
+
+// The greatest distance a forecast puts any robot from where it stands, over every step.
+double largest_move(const Forecast& f) {
+  double largest = 0.0;
+  for (const PredictedStep& step : f.prediction.steps) {
+    for (const RobotPrediction& p : step.robots) {
+      largest = std::max(largest,
+                         distance(p.normalised_position, robot_of(f, p.robot_id).position));
+    }
+  }
+  return largest;
+}
+
+// A robot creeping along a line at 200 mm/s: in HALT it should not, and its velocity is what an
+// extrapolation of running play would carry on.
+Point creeping(int id, double t) {
+  const Point from = circling(id, 0.0);
+  return {from.x + 200.0 * std::fmod(t, 4.0), from.y};
+}
+
+TEST(GameRules, AYoungTablePredictsStandingRobotsInHalt) {
+  // Learned in running play only: the table has no row of HALT.
+  Learning learning;
+  play(learning, Script{}, 0.0, 60.0);
+  ASSERT_GT(learning.learner->progress(), 0u);
+
+  Script script;
+  script.command = [](double t) { return t < 10.0 ? Referee::NORMAL_START : Referee::HALT; };
+  script.robot = [](int id, double t) { return t < 10.0 ? circling(id, t) : creeping(id, t); };
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 13.0);
+
+  int halted = 0, running = 0;
+  for (const Forecast& f : forecasting.seen) {
+    const double t = f.time_s - start_s;
+    if (f.state == GameState::running && t > 5.0) {
+      // Running play: the circles carry on, a metre in a second and a half.
+      EXPECT_GT(largest_move(f), 300.0) << t;
+      ++running;
+    }
+    if (f.state == GameState::halt && t > 11.0) {
+      // "No robot is allowed to move": with no HALT row yet, the rules' prior keeps every robot
+      // where it is, but for the braking of its 200 mm/s (15 ms of it, 30 mm).
+      EXPECT_LT(largest_move(f), 45.0) << t;
+      ++halted;
+    }
+  }
+  EXPECT_GT(running, 100);
+  EXPECT_GT(halted, 100);
+}
+
+TEST(GameRules, TheHaltRowsOfATeamThatKeepsMovingTakeOverFromThePrior) {
+  // A team whose robots creep on through every HALT: its own rows say so, and outweigh the prior.
+  Script halted;
+  halted.command = [](double t) { return std::fmod(t, 20.0) < 10.0 ? Referee::NORMAL_START
+                                                                    : Referee::HALT; };
+  const auto slow_circle = [](int id, double t) {
+    const Point centre{-2500.0 + 1000.0 * id, 0.0};
+    return Point{centre.x + 1200.0 * std::cos(0.35 * t + id), centre.y + 1200.0 * std::sin(0.35 * t + id)};
+  };
+  halted.robot = [slow_circle](int id, double t) {
+    return std::fmod(t, 20.0) < 10.0 ? circling(id, t) : slow_circle(id, t);
+  };
+  Learning learning;
+  play(learning, halted, 0.0, 200.0);
+
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, halted, 200.0, 20.0);
+  double moved = 0.0;
+  int seen = 0;
+  for (const Forecast& f : forecasting.seen) {
+    const double into_halt = std::fmod(f.time_s - start_s, 20.0) - 10.0;
+    if (f.state != GameState::halt || into_halt < 3.0) continue;
+    // Robot 2's forecast 1.5 s ahead: about 0.42 m/s x 1.5 s away, as the team really moves.
+    const RobotPrediction& p = f.prediction.steps[2].robots[2];
+    moved += distance(p.normalised_position, robot_of(f, p.robot_id).position);
+    ++seen;
+  }
+  ASSERT_GT(seen, 100);
+  EXPECT_GT(moved / seen, 400.0);
+}
+
+// A robot heading straight for the ball at 2.5 m/s from 1.5 m away, turning back 0.3 m short of it
+// (it disregards the rules, the forecast must not).
+Point charging(int id, double t) {
+  const Point ball{2000.0, 0.0};
+  const double angle = id * 1.0472;  // from every side
+  const double phase = std::fmod(t, 1.0);
+  const double along = 1500.0 - 1200.0 * (phase < 0.5 ? phase * 2.0 : 2.0 - phase * 2.0);
+  return {ball.x + along * std::cos(angle), ball.y + along * std::sin(angle)};
+}
+
+TEST(GameRules, AStopPredictionKeepsHalfAMetreFromTheBallAndUnderOneAndAHalfMetresASecond) {
+  Script script;
+  script.robot = charging;  // learned as running play: the table extrapolates into the ball
+  Learning learning;
+  play(learning, script, 0.0, 60.0);
+
+  script.command = [](double t) { return t < 5.0 ? Referee::NORMAL_START : Referee::STOP; };
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 15.0);
+  int checked = 0;
+  for (const Forecast& f : forecasting.seen) {
+    if (f.state != GameState::stop) continue;
+    ASSERT_TRUE(f.ball);
+    for (std::size_t k = 0; k < f.prediction.steps.size(); ++k) {
+      for (const RobotPrediction& p : f.prediction.steps[k].robots) {
+        const Point from = robot_of(f, p.robot_id).position;
+        EXPECT_GE(distance(p.normalised_position, *f.ball), 500.0 - 1e-6);
+        // A robot already closer than 0.5 m must leave, whatever its speed.
+        if (distance(from, *f.ball) >= 500.0) {
+          EXPECT_LE(distance(p.normalised_position, from), 1500.0 * (k + 1) * step_s + 1e-6);
+        }
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(GameRules, AtTheirOpponentsKickoffTheRobotsAreForecastInTheirHalfOutsideTheCentreCircle) {
+  Learning learning;
+  play(learning, Script{}, 0.0, 60.0);
+  Script script;
+  script.ball = [](double) { return std::optional<Point>(Point{0.0, 0.0}); };
+  // Every robot in its own half by the time of the kick-off, one of them about to cross it.
+  script.robot = [](int id, double t) {
+    const Point p = circling(id, t);
+    return Point{p.x - 3100.0, p.y};
+  };
+  // Blue (us) kicks off: every yellow robot stays in its half and out of the centre circle.
+  script.command = [](double t) {
+    return t < 5.0 ? Referee::NORMAL_START : Referee::PREPARE_KICKOFF_BLUE;
+  };
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 10.0);
+  int checked = 0;
+  for (const Forecast& f : forecasting.seen) {
+    if (f.state != GameState::kickoff_preparation) continue;
+    for (const PredictedStep& step : f.prediction.steps) {
+      for (const RobotPrediction& p : step.robots) {
+        EXPECT_LE(p.normalised_position.x, 1e-6);
+        EXPECT_GE(distance(p.normalised_position, Point{0.0, 0.0}), 500.0 - 1e-6);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(GameRules, AtOurFreeKickTheDefendersKeepTheirDistanceUntilTheBallMoves) {
+  Script script;
+  script.robot = charging;
+  Learning learning;
+  play(learning, script, 0.0, 60.0);
+  // Blue (us) takes a free kick at 5 s; the ball leaves at 2 m/s from 7 s.
+  script.command = [](double t) {
+    return t < 5.0 ? Referee::NORMAL_START : Referee::DIRECT_FREE_BLUE;
+  };
+  script.ball = [](double t) {
+    return std::optional<Point>(Point{2000.0 - 2000.0 * std::max(0.0, t - 7.0), 0.0});
+  };
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 8.0);
+  int kept = 0, free = 0;
+  for (const Forecast& f : forecasting.seen) {
+    if (f.state != GameState::free_kick) continue;
+    const double t = f.time_s - start_s;
+    bool all_clear = true;
+    for (const PredictedStep& step : f.prediction.steps) {
+      for (const RobotPrediction& p : step.robots) {
+        all_clear = all_clear && distance(p.normalised_position, *f.ball) >= 500.0 - 1e-6;
+      }
+    }
+    if (t < 6.9) {
+      EXPECT_TRUE(all_clear) << t;
+      ++kept;
+    } else if (t > 7.3 && !all_clear) {
+      ++free;  // in play: the rule no longer holds, the table's extrapolation goes on
+    }
+  }
+  EXPECT_GT(kept, 100);
+  EXPECT_GT(free, 0);
+}
+
+TEST(MotionRules, AnyForecastIsMovedTheLeastThatSatisfiesTheRules) {
+  MotionRules rules;
+  rules.max_speed_mm_s = 1500.0;
+  rules.keep_away_from = Point{0.0, 0.0};
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-2000.0, 2000.0);
+  for (int i = 0; i < 10000; ++i) {
+    const Point from{coordinate(random), coordinate(random)};
+    const Point to{coordinate(random), coordinate(random)};
+    const double horizon_s = 0.5 * (1 + i % 4);
+    const Point ruled = rules.apply(1, from, horizon_s, to);
+    EXPECT_GE(distance(ruled, {0.0, 0.0}), 500.0 - 1e-6);
+    if (distance(from, {0.0, 0.0}) >= 500.0) {
+      EXPECT_LE(distance(ruled, from), 1500.0 * horizon_s + 1e-6);
+    }
+    if (distance(to, {0.0, 0.0}) >= 500.0 && distance(to, from) <= 1500.0 * horizon_s) {
+      EXPECT_EQ(ruled, to);  // a forecast within the rules is left alone
+    }
+  }
+  // The exempt robot (the one placing the ball) goes where the model says.
+  rules.exempt_robot_id = 4;
+  EXPECT_EQ(rules.apply(4, {3000.0, 0.0}, 0.5, {10.0, 0.0}), (Point{10.0, 0.0}));
+  // A kick-off: its own half.
+  MotionRules kickoff;
+  kickoff.own_half = true;
+  EXPECT_EQ(kickoff.apply(1, {-100.0, 300.0}, 0.5, {800.0, 900.0}), (Point{0.0, 900.0}));
+  // A robot still in the other half is on its way back: the model says where it gets to.
+  EXPECT_EQ(kickoff.apply(1, {2500.0, 300.0}, 0.5, {1800.0, 300.0}), (Point{1800.0, 300.0}));
+}
+
+}  // namespace
+}  // namespace ssl_formation
