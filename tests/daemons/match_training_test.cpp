@@ -166,8 +166,8 @@ TEST(MatchTraining, NothingIsLearnedDuringStopHaltOrBallPlacement) {
   };
   ASSERT_EQ(testing::write_match_log(dir / "match.log", script), "");
 
-  const auto in_play = train(dir, dir / "match.log", dir / "running.table", {"--our-team", "us"},
-                             "running");
+  const auto in_play = train(dir, dir / "match.log", dir / "running.table",
+                             {"--our-team", "us", "--learn-during", "running"}, "running");
   ASSERT_EQ(in_play.exit_code, 0) << in_play.err;
   const auto everything = train(dir, dir / "match.log", dir / "all.table",
                                 {"--our-team", "us", "--learn-during", "all"}, "all");

@@ -87,7 +87,8 @@ TEST(SimulatedReferee, AWrittenMatchTrainsTheNamedOpponentThroughTheChangeOfEnds
   // Found by name, followed through every change of ends; what is counted outside running play.
   std::string err;
   const TransitionTable refereed_table =
-      train(dir, "match.log", "refereed.bin", {"--opponent-team", " away "}, &err);
+      train(dir, "match.log", "refereed.bin", {"--opponent-team", " away ", "--learn-during", "running"},
+            &err);
   EXPECT_NE(err.find("opponent 'Away' blue (referee), attacks "), std::string::npos) << err;
   EXPECT_NE(err.find("; 0 changes of colour, " + std::to_string(changes_of_ends) +
                      " changes of ends; 400 formations ("),
