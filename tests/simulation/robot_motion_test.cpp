@@ -155,5 +155,75 @@ TEST(TeamMotion, LimitsThatMakeNoSenseAndRobotsStartingInOneAnotherAreRefused) {
   EXPECT_THROW(robots.step(0.0, {Point{1.0, 1.0}}), std::invalid_argument);
 }
 
+// HALT: robots at full speed brake as hard as they may, straight on, and then stand exactly
+// where they stopped, however close they are to one another.
+TEST(TeamMotion, HaltedRobotsBrakeWithinTheLimitAndThenStandExactlyStill) {
+  // Two robots driving at full speed, and two standing closer than the clearance (which a step
+  // would push apart).
+  TeamMotion robots(MotionLimits{}, {Point{-3000.0, -3000.0}, Point{-3000.0, 3000.0},
+                                     Point{2000.0, 0.0}, Point{2000.0, 222.0}});
+  const std::vector<Point> targets{Point{5000.0, -3000.0}, Point{5000.0, 3000.0},
+                                   Point{2000.0, 0.0}, Point{2000.0, 222.0}};
+  for (int frame = 0; frame < 90; ++frame) robots.step(dt, targets);
+  ASSERT_GT(robots.velocity(0).x, 2900.0);
+  double hardest = 0.0;
+  const Point heading = robots.velocity(0);
+  for (int frame = 0; frame < 60; ++frame) {
+    const Point v = robots.velocity(0);
+    robots.halt(dt);
+    const Point now = robots.velocity(0);
+    hardest = std::max(hardest, length(Point{now.x - v.x, now.y - v.y}) / dt);
+    EXPECT_NEAR(now.x * heading.y - now.y * heading.x, 0.0, 1e-3) << "braking straight on";
+  }
+  EXPECT_LE(hardest, robots.limits().max_acceleration_mm_s2 * (1 + 1e-9));
+  std::vector<Point> stopped;
+  for (std::size_t i = 0; i < robots.size(); ++i) stopped.push_back(robots.position(i));
+  for (int frame = 0; frame < 600; ++frame) robots.halt(dt);
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    EXPECT_EQ(robots.position(i).x, stopped[i].x) << i;
+    EXPECT_EQ(robots.position(i).y, stopped[i].y) << i;
+    EXPECT_EQ(length(robots.velocity(i)), 0.0) << i;
+  }
+}
+
+// While the game is stopped, robots drive round the ball's disc and one inside it leaves; the
+// robot placing the ball goes to it, faster than the cap.
+TEST(TeamMotion, RobotsKeepOutOfTheDiscButForTheOnePlacingTheBall) {
+  const Point ball{0.0, 0.0};
+  TeamMotion robots(MotionLimits{},
+                    {Point{-2000.0, 10.0}, Point{2500.0, 2500.0}, Point{200.0, 0.0}});
+  // Across the disc, past it, and out of it.
+  const std::vector<Point> targets{Point{2000.0, 10.0}, Point{-2000.0, -2000.0},
+                                   Point{200.0, 1500.0}};
+  double fastest = 0.0;
+  for (int frame = 0; frame < 60 * 8; ++frame) {
+    robots.step(dt, targets, 1500.0, KeepOut{ball, 560.0, -1});
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      fastest = std::max(fastest, length(robots.velocity(i)));
+      // The one that started inside it is out within half a second; the others never come in.
+      if (i != 2 || frame > 30) {
+        EXPECT_GE(distance(robots.position(i), ball), 500.0) << i << " frame " << frame;
+      }
+    }
+  }
+  EXPECT_LE(fastest, 1500.0 * (1 + 1e-9));
+  // Round it, they got there.
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    EXPECT_LT(distance(robots.position(i), targets[i]), 5.0) << i;
+  }
+
+  // The placing robot (the disc's exception) drives at the ball at full speed.
+  TeamMotion placing(MotionLimits{}, {Point{-3000.0, 0.0}, Point{0.0, 3000.0}});
+  const std::vector<Point> to_ball{Point{-110.0, 0.0}, Point{0.0, 3000.0}};
+  double placer_fastest = 0.0;
+  for (int frame = 0; frame < 60 * 4; ++frame) {
+    placing.step(dt, to_ball, 1500.0, KeepOut{ball, 560.0, 0});
+    placer_fastest = std::max(placer_fastest, length(placing.velocity(0)));
+    EXPECT_LE(length(placing.velocity(1)), 1500.0);
+  }
+  EXPECT_GT(placer_fastest, 2000.0);
+  EXPECT_LT(distance(placing.position(0), to_ball[0]), 5.0);
+}
+
 }  // namespace
 }  // namespace ssl_formation::sim

@@ -1,14 +1,20 @@
 #include "ssl_formation/files/real_log_shape.hpp"
 
 #include <array>
+#include <cmath>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
+#include <string>
+#include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
+#include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation {
@@ -69,6 +75,95 @@ constexpr double second_half_after_s = 0.011;
 
 using Team = std::map<std::uint32_t, Point>;  // the last position seen of each robot id
 
+// The reshaped log's referee sends a message this often (a game controller sends about ten a
+// second), and one at each new command.
+constexpr double referee_interval_s = 0.1;
+constexpr std::string_view referee_source = "ssl-evaluate as-real-log";
+
+// What the recording's referee says of the teams (its first message naming one).
+struct RecordedTeams {
+  std::string yellow = "Yellow";
+  std::string blue = "Blue";
+  std::uint32_t yellow_goalkeeper = 0;
+  std::uint32_t blue_goalkeeper = 0;
+  std::optional<bool> blue_on_positive_half;
+  bool named = false;
+};
+
+void take_teams(std::string_view payload, RecordedTeams& teams) {
+  if (teams.named) return;
+  Referee referee;
+  if (!referee.ParsePartialFromArray(payload.data(), static_cast<int>(payload.size()))) return;
+  if (referee.yellow().name().empty() && referee.blue().name().empty()) return;
+  teams.named = true;
+  if (!referee.yellow().name().empty()) teams.yellow = referee.yellow().name();
+  if (!referee.blue().name().empty()) teams.blue = referee.blue().name();
+  teams.yellow_goalkeeper = referee.yellow().goalkeeper();
+  teams.blue_goalkeeper = referee.blue().goalkeeper();
+  if (referee.has_blue_team_on_positive_half()) {
+    teams.blue_on_positive_half = referee.blue_team_on_positive_half();
+  }
+}
+
+std::uint64_t microseconds(double t_s) {
+  return t_s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::llround(t_s * 1e6));
+}
+
+// The reshaped log's game controller: the command and stage it is told at each moment, sent as
+// a game controller sends them.
+class RefereeScript {
+ public:
+  explicit RefereeScript(const RecordedTeams& teams)
+      : blue_on_positive_half_(teams.blue_on_positive_half) {
+    for (auto [team, name, goalkeeper] :
+         {std::tuple{message_.mutable_yellow(), &teams.yellow, teams.yellow_goalkeeper},
+          std::tuple{message_.mutable_blue(), &teams.blue, teams.blue_goalkeeper}}) {
+      team->set_name(*name);
+      team->set_score(0);
+      team->set_red_cards(0);
+      team->set_yellow_cards(0);
+      team->set_timeouts(4);
+      team->set_timeout_time(300'000'000);
+      team->set_goalkeeper(goalkeeper);
+    }
+    message_.set_source_identifier(std::string(referee_source));
+  }
+
+  // `command` in `stage` holds from data time `t` on (the teams on the other ends once they
+  // have changed them): a message when either is new, else when the last is 0.1 s old.
+  void at(double t, Referee::Command command, Referee::Stage stage, bool ends_changed,
+          LogWriter& out, RealLogCounts& counts) {
+    const bool new_command = !started_ || command != message_.command();
+    const bool new_stage = !started_ || stage != message_.stage();
+    if (!new_command && !new_stage && t < last_sent_s_ + referee_interval_s - 1e-9) return;
+    if (new_command) {
+      message_.set_command(command);
+      message_.set_command_counter(message_.command_counter() + 1);
+      message_.set_command_timestamp(microseconds(t));
+    }
+    message_.set_stage(stage);
+    if (blue_on_positive_half_) {
+      message_.set_blue_team_on_positive_half(*blue_on_positive_half_ != ends_changed);
+    }
+    message_.set_packet_timestamp(microseconds(t));
+    message_.SerializeToString(&scratch_);
+    // Stamped as the vision packets are (write_halves), so a message and the pair it comes
+    // with are received at the same nanosecond.
+    out.write(static_cast<std::int32_t>(LogMessageType::referee),
+              static_cast<std::int64_t>(t * 1e9), scratch_);
+    started_ = true;
+    last_sent_s_ = t;
+    ++counts.referee_messages;
+  }
+
+ private:
+  Referee message_;
+  std::optional<bool> blue_on_positive_half_;
+  std::string scratch_;
+  double last_sent_s_ = 0.0;
+  bool started_ = false;
+};
+
 struct Ghost {
   int packets_left = 0;
   bool yellow = true;
@@ -77,12 +172,15 @@ struct Ghost {
 
 class Messer {
  public:
-  Messer(const RealLogMess& mess, double start_s, double length_s)
+  Messer(const RealLogMess& mess, double start_s, double length_s, const RecordedTeams& teams)
       : mess_(mess),
         start_s_(start_s),
         length_s_(length_s),
         ghosts_(mess.seed),
-        noise_(mess.seed + 1) {}
+        noise_(mess.seed + 1) {
+    // The stoppages come with the referee that says so.
+    if (mess_.stoppages) referee_.emplace(teams);
+  }
 
   // The packets of one pair at recording time `t` (none inside a cut), with the time every
   // packet is stamped with (stoppages and the half-time break push later times back).
@@ -98,22 +196,45 @@ class Messer {
     if (mess_.stoppages) {
       for (std::size_t i = 0; i < stoppages.size(); ++i) {
         if (stopped_[i] || fraction < stoppages[i].from) continue;
-        // Everyone stands where they are for the stoppage's length; the recording then goes on.
+        // Everyone stands where they are for the stoppage's length, in HALT; the recording then
+        // goes on, the referee restarting the play at once.
         stopped_[i] = true;
-        for (double s = 0.0; s < stoppages[i].length_s; s += pair_interval_s) {
+        // Counted, not summed: a sum of 1/45 s steps can fall a hair short of the length and
+        // put one pair more, on the time of the pair that follows.
+        const auto pairs =
+            static_cast<int>(std::ceil(stoppages[i].length_s / pair_interval_s - 1e-9));
+        for (int k = 0; k < pairs; ++k) {
+          const double s = k * pair_interval_s;
+          referee_at(t + shift_s_ + s, Referee::HALT, out, counts);
           write_halves(t + shift_s_ + s, yellow, blue, fraction, out, counts);
         }
         shift_s_ += stoppages[i].length_s;
+        running_command_ = Referee::FORCE_START;
       }
     }
     if (mess_.change_of_ends && !ends_changed_ && fraction >= change_of_ends_at) {
+      // The half-time break: no vision, the referee halting the game, and the teams back on the
+      // other ends.
+      stage_ = Referee::NORMAL_HALF_TIME;
+      const auto messages =
+          static_cast<int>(std::ceil(half_time_break_s / referee_interval_s - 1e-9));
+      for (int k = 0; k < messages; ++k) {
+        referee_at(t + shift_s_ + k * referee_interval_s, Referee::HALT, out, counts);
+      }
       ends_changed_ = true;
+      stage_ = Referee::NORMAL_SECOND_HALF;
+      running_command_ = Referee::FORCE_START;
       shift_s_ += half_time_break_s;
     }
+    referee_at(t + shift_s_, running_command_, out, counts);
     write_halves(t + shift_s_, yellow, blue, fraction, out, counts);
   }
 
  private:
+  void referee_at(double t, Referee::Command command, LogWriter& out, RealLogCounts& counts) {
+    if (referee_) referee_->at(t, command, stage_, ends_changed_, out, counts);
+  }
+
   void write_halves(double t, const Team& yellow, const Team& blue, double fraction, LogWriter& out,
                     RealLogCounts& counts) {
     start_ghost_maybe();
@@ -176,6 +297,9 @@ class Messer {
   std::array<bool, stoppages.size()> stopped_{};
   bool ends_changed_ = false;
   double shift_s_ = 0.0;
+  std::optional<RefereeScript> referee_;
+  Referee::Command running_command_ = Referee::NORMAL_START;
+  Referee::Stage stage_ = Referee::NORMAL_FIRST_HALF;
   std::uint32_t frame_number_ = 0;
   Ghost ghost_;
 };
@@ -190,14 +314,18 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
     return fail(out.string() + ": is the recording itself; writing it would destroy it");
   }
   SSL_WrapperPacket packet;
-  // First pass: the recording's length, which places the mess.
+  // First pass: the recording's length, which places the mess, and its referee's team names.
   double first_s = 0.0;
   double last_s = 0.0;
+  RecordedTeams teams;
   {
     auto reader = LogReader::open(recording);
     if (!reader) return fail(reader.error().message);
-    while (reader->next_vision(packet)) {
-      if (!packet.has_detection()) continue;
+    LogReader::MatchInput kind = LogReader::MatchInput::vision;
+    std::string_view payload;
+    while (reader->next_match_input(kind, packet, payload)) {
+      if (kind == LogReader::MatchInput::referee) take_teams(payload, teams);
+      if (kind != LogReader::MatchInput::vision || !packet.has_detection()) continue;
       const double t = packet.detection().t_capture();
       if (counts.packets_read++ == 0) first_s = t;
       last_s = std::max(last_s, t);
@@ -211,7 +339,7 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
   if (!reader) return fail(reader.error().message);
   auto writer = LogWriter::create(out);
   if (!writer) return fail(writer.error().message);
-  Messer messer(mess, first_s, std::max(counts.recording_s, 1e-9));
+  Messer messer(mess, first_s, std::max(counts.recording_s, 1e-9), teams);
   Team yellow;
   Team blue;
   double next_pair_s = 0.0;

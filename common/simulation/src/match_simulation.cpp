@@ -25,7 +25,8 @@ constexpr double kKeeperFollow = 0.4;
 constexpr double kKeeperRangeMm = 450.0;
 // Our markers stand between their opponent and our goal, this far from the opponent.
 constexpr double kMarkingMm = 350.0;
-// The share of shots that score; the others go wide, for a free kick.
+// The share of shots that score in the plain game (GameShape has its own); the others go wide,
+// for a free kick.
 constexpr double kGoalShare = 0.4;
 // Of the shots wide, the share a defender touched last: a corner for the opponent; the others
 // give us a goal kick.
@@ -34,12 +35,19 @@ constexpr double kCornerShare = 0.5;
 // (the rules: 0.5 m and 1.5 m/s).
 constexpr double kStopDistanceMm = 600.0;
 constexpr double kStopSpeedMmS = 1500.0;
+// On their way robots keep out of this disc around the ball (the rules' 0.5 m and a margin).
+constexpr double kKeepOutMm = 560.0;
+// A foul the referee calls (GameShape): the ball is placed this far from where it was, and at
+// least this far inside the field lines.
+constexpr double kFoulPlacementMinMm = 1000.0;
+constexpr double kFoulPlacementMaxMm = 3000.0;
+constexpr double kPlacementMarginMm = 300.0;
 // A kick-off: the kicking team's other robots, and all of the other team, stay out of the
 // centre circle (radius 0.5 m) and in their own halves.
 constexpr double kCentreCircleMm = 650.0;
 constexpr double kOwnHalfMarginMm = 150.0;
 // Ball placement carries the ball at this speed once the placing robot has it.
-constexpr double kPlacementSpeedMmS = 1000.0;
+constexpr double kPlacementSpeedMmS = 1500.0;
 // Our possession, after a goal kick or our kick-off, lasts this long before the opponent wins
 // the ball back.
 constexpr double kOurPossessionMinS = 2.0;
@@ -54,6 +62,23 @@ Point away_from(Point p, Point centre, double distance) {
   if (l >= distance) return p;
   if (l == 0.0) return Point{centre.x - distance, centre.y};
   return Point{centre.x + dx / l * distance, centre.y + dy / l * distance};
+}
+// `p` moved out to `distance` from the segment from `a` to `b` if it is closer: off the path a
+// robot placing the ball takes.
+Point away_from_segment(Point p, Point a, Point b, double distance) {
+  const double dx = b.x - a.x;
+  const double dy = b.y - a.y;
+  const double l2 = dx * dx + dy * dy;
+  const double t =
+      l2 > 0.0 ? std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / l2, 0.0, 1.0) : 0.0;
+  const Point closest{a.x + t * dx, a.y + t * dy};
+  if (std::hypot(p.x - closest.x, p.y - closest.y) >= distance) return p;
+  if (p.x == closest.x && p.y == closest.y && l2 > 0.0) {
+    // On the path: out to its right.
+    const double l = std::sqrt(l2);
+    return Point{closest.x + dy / l * distance, closest.y - dx / l * distance};
+  }
+  return away_from(p, closest, distance);
 }
 // The team a team command (a kick-off, a free kick, a placement) is for: its yellow value is
 // even, its blue one odd.
@@ -290,16 +315,20 @@ void MatchSimulation::restart(double now_s) {
   }
 }
 
-void MatchSimulation::update_targets() {
+void MatchSimulation::update_targets(double now_s) {
   const double half_length = field_.length_mm / 2.0;
   const auto keeper_y = [&](double ball_y) {
     return std::clamp(ball_y * kKeeperFollow, -kKeeperRangeMm, kKeeperRangeMm);
   };
   const auto robot = [this](int i) { return robot_position(i); };
-  if (mode_ == Mode::half_time) {
-    // The teams walk to the other end, to where the next kick-off lines them up.
+  if (mode_ == Mode::halted) return;  // nobody moves, whatever the targets
+  if (mode_ == Mode::lining_up) {
+    // The teams walk to where the next kick-off lines them up (after half time, at the end they
+    // now defend), away from the ball.
     const std::vector<Point> shape = line_up(field_, team_size_);
-    for (std::size_t i = 0; i < targets_.size(); ++i) targets_[i] = Point{-shape[i].x, -shape[i].y};
+    for (std::size_t i = 0; i < targets_.size(); ++i) {
+      targets_[i] = inside_field(away_from(shape[i], ball_.position, kStopDistanceMm));
+    }
     return;
   }
   // The opponent: its keeper on its line, the others where the play puts them. Ours: the
@@ -314,12 +343,18 @@ void MatchSimulation::update_targets() {
   }
   switch (mode_) {
     case Mode::opponent_play:
+      // A free kick is taken a moment after its command: until then the taker waits.
+      if (ball_.holder >= 0 && !ours(ball_.holder) && now_s < kick_at_s_) {
+        targets_[static_cast<std::size_t>(ball_.holder)] = robot(ball_.holder);
+      }
       break;
     case Mode::our_possession: {
       // Our holder drives at the opponent's goal; the opponent's nearest field player presses.
       if (ball_.holder >= 0 && ours(ball_.holder)) {
+        // A free kick is taken a moment after its command: until then the taker waits.
         const Point p = robot(ball_.holder);
-        targets_[ball_.holder] = inside_field(Point{p.x - 1500.0, p.y * 0.8});
+        targets_[ball_.holder] =
+            now_s < kick_at_s_ ? p : inside_field(Point{p.x - 1500.0, p.y * 0.8});
       }
       targets_[nearest_of(1, team_size_, ball_.position, robot)] = ball_.position;
       break;
@@ -351,16 +386,36 @@ void MatchSimulation::update_targets() {
             away_from(targets_[static_cast<std::size_t>(i)], ball_.position, kStopDistanceMm));
       }
       if (mode_ == Mode::ball_placement && ball_.receiver >= 0) {
+        // The others make way for the robot placing the ball: off its way to the ball and off
+        // the ball's way to its spot (the rules: 0.5 m).
+        // A robot standing in the way steps aside, on its own side.
+        const Point placer = robot(ball_.receiver);
+        const auto off_the_way = [&](Point p) {
+          p = away_from_segment(p, placer, ball_.position, kStopDistanceMm);
+          return inside_field(away_from_segment(p, ball_.position, placement_, kStopDistanceMm));
+        };
+        for (int i = 0; i < 2 * team_size_; ++i) {
+          if (i == ball_.receiver) continue;
+          const Point at = robot(i);
+          const Point aside = off_the_way(at);
+          targets_[static_cast<std::size_t>(i)] =
+              aside == at ? off_the_way(targets_[static_cast<std::size_t>(i)]) : aside;
+        }
+        // Behind the ball as it carries it; once it is on its spot, where the robot takes the
+        // free kick from (its team's goal side, the ball at its feet).
         const Point to_spot = minus(placement_, ball_.position);
         const double l = length(to_spot);
-        const Point behind =
-            l > 1.0 ? Point{-to_spot.x / l * kBallAheadMm, -to_spot.y / l * kBallAheadMm}
-                    : Point{0.0, 0.0};
+        if (l > 1.0) {
+          placement_behind_ = Point{-to_spot.x / l * kBallAheadMm, -to_spot.y / l * kBallAheadMm};
+        } else {
+          placement_behind_ = Point{ours(ball_.receiver) ? kBallAheadMm : -kBallAheadMm, 0.0};
+        }
         targets_[static_cast<std::size_t>(ball_.receiver)] =
-            Point{ball_.position.x + behind.x, ball_.position.y + behind.y};
+            Point{ball_.position.x + placement_behind_.x, ball_.position.y + placement_behind_.y};
       }
       break;
-    case Mode::half_time:
+    case Mode::halted:
+    case Mode::lining_up:
       break;
   }
   // A robot sent to fetch a loose ball goes to it (in running play).
@@ -427,9 +482,19 @@ void MatchSimulation::call_stoppage(double now_s) {
   ball_.velocity = Point{0.0, 0.0};
   ball_.shot = false;
   std::uniform_real_distribution<double> draw(0.0, 1.0);
-  if (draw(random_) < kGoalShare) {
+  const std::optional<GameShape>& shape = game_->config().shape;
+  const double kind = draw(random_);
+  if (kind < (shape ? shape->shot_goal_share : kGoalShare)) {
     ++goals_;
     game_->stop_for_goal(config_.opponent_color, now_s);
+    return;
+  }
+  if (shape && kind < shape->shot_goal_share + shape->shot_saved_share) {
+    // Our keeper saves it and throws the ball to a team mate: play goes on.
+    const Point keeper = robot_position(team_size_);
+    ball_.position = inside_field(Point{keeper.x - kBallAheadMm, keeper.y});
+    start_our_possession(now_s);
+    ball_.rolling = true;
     return;
   }
   if (draw(random_) < kCornerShare) {
@@ -437,11 +502,14 @@ void MatchSimulation::call_stoppage(double now_s) {
     // starts.
     start_play(now_s, PlayRestart::free_kick);
     holding_play_ = true;
+    taker_kicks_ = true;
     const PlayStep& first = config_.playbook.plays[play_].steps.front();
     Point spot = on_field(Point{0.9, ball_.position.y < 0 ? -0.9 : 0.9});
     if (first.ball_robot) {
-      const Point taker = play_targets_[static_cast<std::size_t>(receiver_for(first))];
+      // The taker places the ball: it goes to fetch it, then carries it to where it starts.
+      Point& taker = play_targets_[static_cast<std::size_t>(receiver_for(first))];
       spot = inside_field(Point{taker.x + kBallAheadMm, taker.y});
+      taker = ball_.position;
     }
     game_->stop_for_ball_out(config_.opponent_color, now_s, normalise(spot, attacks_));
     return;
@@ -451,9 +519,38 @@ void MatchSimulation::call_stoppage(double now_s) {
   game_->stop_for_ball_out(opposite(config_.opponent_color), now_s, normalise(spot, attacks_));
 }
 
+void MatchSimulation::call_foul(double now_s) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const bool opponents_kick = unit(random_) < 0.5;
+  const double angle = unit(random_) * 2.0 * kPi;
+  const double distance =
+      kFoulPlacementMinMm + (kFoulPlacementMaxMm - kFoulPlacementMinMm) * unit(random_);
+  const double half_length = field_.length_mm / 2.0 - kPlacementMarginMm;
+  const double half_width = field_.width_mm / 2.0 - kPlacementMarginMm;
+  const Point spot{
+      std::clamp(ball_.position.x + distance * std::cos(angle), -half_length, half_length),
+      std::clamp(ball_.position.y + distance * std::sin(angle), -half_width, half_width)};
+  // Play stops where it is; nobody kicks until the restart.
+  ball_.velocity = Point{0.0, 0.0};
+  ball_.holder = -1;
+  ball_.receiver = -1;
+  ball_.rolling = false;
+  ball_.shot = false;
+  if (opponents_kick) {
+    // A play from where the foul was, waiting (a playbook's free-kick plays are set pieces near
+    // the goal, such as corners). The robot nearest to the ball places it and kicks.
+    start_play(now_s, PlayRestart::any);
+    holding_play_ = true;
+    taker_kicks_ = false;
+  }
+  const TeamColor team = opponents_kick ? config_.opponent_color : opposite(config_.opponent_color);
+  game_->stop_for_foul(team, now_s, normalise(spot, attacks_));
+}
+
 void MatchSimulation::start_our_possession(double now_s) {
   mode_ = Mode::our_possession;
   holding_play_ = false;
+  kick_at_s_ = now_s;
   // Our robot nearest to the ball fetches it; the opponent falls back and presses.
   const int nearest = nearest_of(team_size_ + 1, 2 * team_size_, ball_.position,
                                  [this](int i) { return robot_position(i); });
@@ -497,15 +594,21 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
     ball_.rolling = false;
     ball_.shot = false;
   };
+  const std::optional<GameShape>& game_shape = game_->config().shape;
   switch (*state) {
     case GameState::halt:
+    case GameState::timeout:
       freeze_ball();
-      mode_ = message.stage() == Referee::NORMAL_HALF_TIME || message.stage() == Referee::POST_GAME
-                  ? Mode::half_time
-                  : Mode::stopped;
+      mode_ = Mode::halted;
       return;
     case GameState::stop:
-    case GameState::timeout:
+      freeze_ball();
+      // Before a half's kick-off (after the break), the teams line up for it.
+      mode_ = message.stage() == Referee::NORMAL_FIRST_HALF_PRE ||
+                      message.stage() == Referee::NORMAL_SECOND_HALF_PRE
+                  ? Mode::lining_up
+                  : Mode::stopped;
+      return;
     case GameState::penalty_preparation:
       freeze_ball();
       mode_ = Mode::stopped;
@@ -515,6 +618,7 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
       mode_ = Mode::kickoff_preparation;
       kickoff_by_opponent_ = for_opponent;
       holding_play_ = true;
+      taker_kicks_ = true;
       if (for_opponent) {
         start_play(now_s, PlayRestart::kickoff);
         ball_.receiver = -1;  // nobody touches the ball before NORMAL_START
@@ -534,10 +638,15 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
                                          message.designated_position().y()},
                                    attacks_)
                        : ball_.position;
-      // The placing team's robot nearest to the ball carries it (keepers stay home).
+      // The placing team's robot nearest to the ball carries it (keepers stay home); for the
+      // opponent's set play, the robot that will take the free kick.
       const int first = for_opponent ? 1 : team_size_ + 1;
       ball_.receiver = nearest_of(first, first + team_size_ - 1, ball_.position,
                                   [this](int i) { return robot_position(i); });
+      if (for_opponent && holding_play_ && play_ >= 0 && taker_kicks_) {
+        const PlayStep& step = config_.playbook.plays[play_].steps.front();
+        if (step.ball_robot) ball_.receiver = receiver_for(step);
+      }
       return;
     }
     case GameState::running:
@@ -551,19 +660,39 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
                                           mode_ == Mode::kickoff_preparation &&
                                           !kickoff_by_opponent_;
       ball_.receiver = -1;
+      // A shaped game's free kick is taken its kick delay after the command.
+      const bool kick_after_delay = game_shape && *state == GameState::free_kick;
+      const double kick_at_s = kick_after_delay ? now_s + game_shape->kick_delay_s : now_s;
       if (ours_to_take) {
         start_our_possession(now_s);
+        kick_at_s_ = kick_at_s;
         return;
       }
+      kick_at_s_ = kick_at_s;
       mode_ = Mode::opponent_play;
       if (play_ < 0) {
         start_play(now_s, PlayRestart::any);
       } else if (holding_play_) {
-        // The restart's play goes: its first step was held until now.
-        aim_at_step();
-        step_ends_s_ =
-            now_s + hold_scale_ *
-                        config_.playbook.plays[play_].steps[static_cast<std::size_t>(step_)].hold_s;
+        // The restart's play goes: its first step was held until now. Unless its own taker
+        // stands at the ball, the robot nearest to the ball (after a placement, the one that
+        // placed it) takes the kick: a pass to the play's first receiver, which starts the play.
+        const int kicker =
+            nearest_of(1, team_size_, ball_.position, [this](int i) { return robot_position(i); });
+        const PlayStep& first = config_.playbook.plays[play_].steps.front();
+        if (!taker_kicks_ && first.ball_robot && receiver_for(first) != kicker) {
+          ball_.receiver = kicker;
+          step_ = -1;
+          const double fetch_s =
+              length(minus(robot_position(kicker), ball_.position)) / kStopSpeedMmS;
+          step_ends_s_ = std::max(kick_at_s_, now_s + fetch_s);
+        } else {
+          aim_at_step();
+          step_ends_s_ = kick_after_delay
+                             ? kick_at_s_
+                             : now_s + hold_scale_ * config_.playbook.plays[play_]
+                                                         .steps[static_cast<std::size_t>(step_)]
+                                                         .hold_s;
+        }
       }
       holding_play_ = false;
       return;
@@ -595,10 +724,24 @@ MatchFrame MatchSimulation::next() {
         possession_ends_s_ = frame.t_capture + 1.0;  // not ours yet
       }
     }
-    update_targets();
-    const bool slow = mode_ == Mode::stopped || mode_ == Mode::ball_placement;
-    robots_.step(dt_s, targets_, slow ? kStopSpeedMmS : 0.0);
+    update_targets(frame.t_capture);
+    if (mode_ == Mode::halted) {
+      robots_.halt(dt_s);
+    } else {
+      // While the game is stopped: 1.5 m/s at most, and 0.5 m from the ball but for the robot
+      // placing it.
+      const bool slow =
+          mode_ == Mode::stopped || mode_ == Mode::ball_placement || mode_ == Mode::lining_up;
+      std::optional<KeepOut> keep_out;
+      if (slow) {
+        keep_out = KeepOut{ball_.position, kKeepOutMm,
+                           mode_ == Mode::ball_placement ? ball_.receiver : -1};
+      }
+      robots_.step(dt_s, targets_, slow ? kStopSpeedMmS : 0.0, keep_out);
+    }
     move_ball(dt_s, frame.t_capture);
+    const bool running = mode_ == Mode::opponent_play || mode_ == Mode::our_possession;
+    if (game_ && running && game_->stoppage_due(frame.t_capture)) call_foul(frame.t_capture);
   }
   ++frames_;
   for (int id = 0; id < team_size_; ++id) {

@@ -104,16 +104,34 @@ void TeamMotion::mirror() {
   for (Point& v : velocities_) v = Point{-v.x, -v.y};
 }
 
-void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double speed_cap_mm_s) {
+void TeamMotion::halt(double dt_s) {
+  if (!positive_finite(dt_s)) throw std::invalid_argument("halt needs a positive time");
+  const double most_change = limits_.max_acceleration_mm_s2 * dt_s;
+  for (std::size_t i = 0; i < positions_.size(); ++i) {
+    const double speed = length(velocities_[i]);
+    // Braking straight on only lowers the speed towards every neighbour and wall: what kept two
+    // robots apart at full speed keeps them apart while they stop.
+    velocities_[i] =
+        speed <= most_change ? Point{0.0, 0.0} : scaled(velocities_[i], 1.0 - most_change / speed);
+    positions_[i] = plus(positions_[i], scaled(velocities_[i], dt_s));
+  }
+}
+
+void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double speed_cap_mm_s,
+                      const std::optional<KeepOut>& keep_out) {
   if (targets.size() != positions_.size()) {
     throw std::invalid_argument("step needs one target per robot");
   }
   if (!positive_finite(dt_s)) throw std::invalid_argument("step needs a positive time");
   const double a = limits_.max_acceleration_mm_s2;
   const double most_change = a * dt_s;
-  const double top_speed = speed_cap_mm_s > 0.0 ? std::min(speed_cap_mm_s, limits_.max_speed_mm_s)
-                                                : limits_.max_speed_mm_s;
+  const double capped_speed = speed_cap_mm_s > 0.0
+                                  ? std::min(speed_cap_mm_s, limits_.max_speed_mm_s)
+                                  : limits_.max_speed_mm_s;
   for (std::size_t i = 0; i < positions_.size(); ++i) {
+    // The robot placing the ball is held to the limit only, not to the cap.
+    const bool placing = keep_out && keep_out->except == static_cast<int>(i);
+    const double top_speed = placing ? limits_.max_speed_mm_s : capped_speed;
     Point wanted = wanted_velocity(i, targets[i], dt_s, top_speed);
     // The fastest a robot may go towards a neighbour (or a wall) with `gap` of free space
     // between them. Inside the clearance (a negative gap, left over from a crowd) it has to
@@ -136,8 +154,23 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double spe
       const double excess = dot(wanted, towards) - approach_bound(gap);
       if (excess > 0.0) wanted = minus(wanted, scaled(towards, excess));
     });
+    // The keep-out disc, as a neighbour: what is taken off the approach turns the robot round it.
+    const auto keep_out_of_disc = [&](Point& velocity, bool turn) {
+      if (!keep_out || keep_out->except == static_cast<int>(i)) return;
+      const Point between = minus(keep_out->centre, positions_[i]);
+      const double distance = length(between);
+      const Point towards = distance > 0.0 ? scaled(between, 1.0 / distance) : Point{1.0, 0.0};
+      const double excess = dot(velocity, towards) - approach_bound(distance - keep_out->radius_mm);
+      if (excess <= 0.0) return;
+      velocity = minus(velocity, scaled(towards, excess));
+      if (turn) velocity = plus(velocity, scaled(Point{towards.y, -towards.x}, 0.5 * excess));
+    };
+    keep_out_of_disc(wanted, true);
     wanted = at_most(wanted, top_speed);
     Point next = plus(velocities_[i], at_most(minus(wanted, velocities_[i]), most_change));
+    // The disc gives way to the neighbours: robots never touching matters more than keeping
+    // 0.5 m from the ball.
+    keep_out_of_disc(next, false);
     // The turn to the right may point at another neighbour: within the acceleration still left,
     // take off any approach beyond a bound.
     for_each_neighbour(i, [&](Point towards, double gap) {
@@ -156,6 +189,13 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double spe
       if (excess > 0.0) next = minus(next, scaled(towards, excess));
     });
     next = plus(velocities_[i], at_most(minus(next, velocities_[i]), most_change));
+    // Whatever pushed it (a crowd, the disc), a robot keeps to the cap, or brakes towards it if
+    // it was above it, within the acceleration limit.
+    const double most_speed = std::max(top_speed, length(velocities_[i]) - most_change);
+    if (length(next) > most_speed) {
+      next = plus(velocities_[i],
+                  at_most(minus(at_most(next, most_speed), velocities_[i]), most_change));
+    }
     next_velocities_[i] = at_most(next, limits_.max_speed_mm_s);
   }
   for (std::size_t i = 0; i < positions_.size(); ++i) {

@@ -12,9 +12,13 @@
 #include <set>
 #include <vector>
 
+#include "match_logs.hpp"
 #include "moving_robots.hpp"
 #include "scratch_dir.hpp"
 #include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/match/game_phase.hpp"
+#include "ssl_formation/match/referee.hpp"
+#include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace sf = ssl_formation;
@@ -177,6 +181,224 @@ TEST_F(RealLogShape, EachPartOfTheMessIsWhereItWasAsked) {
   }
   ASSERT_GT(n, 1000);
   EXPECT_NEAR(std::sqrt(sum_square / n), 3.0, 0.2);
+}
+
+// A reshaped log read back in the file's order: each vision packet with the referee message in
+// force when it came (none before the first).
+struct ReadBack {
+  struct Packet {
+    SSL_WrapperPacket packet;
+    double receive_s = 0.0;
+    std::optional<Referee> referee;
+  };
+  std::vector<Packet> packets;
+  std::vector<std::pair<Referee, double>> referee;  // every message, with its receive time
+};
+
+ReadBack read_back(const std::filesystem::path& path) {
+  ReadBack out;
+  auto reader = sf::LogReader::open(path);
+  EXPECT_TRUE(reader.has_value());
+  if (!reader) return out;
+  sf::LogReader::MatchInput kind = sf::LogReader::MatchInput::vision;
+  SSL_WrapperPacket packet;
+  std::string_view payload;
+  std::int64_t receive_ns = 0;
+  std::optional<Referee> last;
+  while (reader->next_match_input(kind, packet, payload, &receive_ns)) {
+    const double receive_s = static_cast<double>(receive_ns) / 1e9;
+    if (kind == sf::LogReader::MatchInput::referee) {
+      Referee message;
+      EXPECT_TRUE(message.ParseFromArray(payload.data(), static_cast<int>(payload.size())));
+      out.referee.emplace_back(message, receive_s);
+      last = message;
+    } else if (kind == sf::LogReader::MatchInput::vision) {
+      out.packets.push_back({packet, receive_s, last});
+    }
+  }
+  EXPECT_TRUE(reader->error().empty()) << reader->error();
+  return out;
+}
+
+bool same_robots(const SSL_WrapperPacket& a, const SSL_WrapperPacket& b) {
+  const auto& x = a.detection();
+  const auto& y = b.detection();
+  if (x.robots_yellow_size() != y.robots_yellow_size() ||
+      x.robots_blue_size() != y.robots_blue_size()) {
+    return false;
+  }
+  for (int r = 0; r < x.robots_yellow_size(); ++r) {
+    if (x.robots_yellow(r).x() != y.robots_yellow(r).x() ||
+        x.robots_yellow(r).y() != y.robots_yellow(r).y()) {
+      return false;
+    }
+  }
+  for (int r = 0; r < x.robots_blue_size(); ++r) {
+    if (x.robots_blue(r).x() != y.robots_blue(r).x() ||
+        x.robots_blue(r).y() != y.robots_blue(r).y()) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// The inserted stoppages come with a referee, as a game controller sends one: HALT through each,
+// running play everywhere else, so the evaluation and the daemons see the states real logs have.
+TEST_F(RealLogShape, StoppagesComeWithTheRefereesHaltAndRunningPlayElsewhere) {
+  sf::RealLogMess stoppages;
+  stoppages.stoppages = true;
+  const auto counts = sf::write_as_real_log(recording_, out_, stoppages);
+  ASSERT_TRUE(counts.has_value()) << counts.error().message;
+  const ReadBack log = read_back(out_);
+  ASSERT_GT(log.packets.size(), 10000U);
+  EXPECT_EQ(counts->referee_messages, log.referee.size());
+
+  // About ten messages a second, over the whole log, each whole; the counter counts commands.
+  const double log_s = log.packets.back().receive_s - log.packets.front().receive_s;
+  EXPECT_NEAR(static_cast<double>(log.referee.size()), 10.0 * log_s, 0.1 * 10.0 * log_s);
+  std::vector<Referee::Command> commands;
+  for (std::size_t i = 0; i < log.referee.size(); ++i) {
+    const auto& [message, at_s] = log.referee[i];
+    ASSERT_TRUE(message.IsInitialized()) << message.InitializationErrorString();
+    EXPECT_EQ(message.source_identifier(), "ssl-evaluate as-real-log");
+    EXPECT_EQ(message.stage(), Referee::NORMAL_FIRST_HALF);
+    EXPECT_EQ(message.yellow().name(), "Yellow") << "the recording has no referee to name them";
+    EXPECT_EQ(message.blue().name(), "Blue");
+    EXPECT_FALSE(message.has_blue_team_on_positive_half()) << "nobody said which half";
+    EXPECT_EQ(message.packet_timestamp(), static_cast<std::uint64_t>(std::llround(at_s * 1e6)));
+    if (i == 0) {
+      EXPECT_EQ(message.command_counter(), 1U);
+      EXPECT_LE(at_s, log.packets.front().receive_s) << "the referee speaks before the vision";
+      commands.push_back(message.command());
+      continue;
+    }
+    const Referee& before = log.referee[i - 1].first;
+    EXPECT_LE(at_s - log.referee[i - 1].second, 0.12);
+    if (message.command() != before.command()) {
+      EXPECT_EQ(message.command_counter(), before.command_counter() + 1);
+      EXPECT_EQ(message.command_timestamp(), message.packet_timestamp());
+      commands.push_back(message.command());
+    } else {
+      EXPECT_EQ(message.command_counter(), before.command_counter());
+      EXPECT_EQ(message.command_timestamp(), before.command_timestamp());
+    }
+  }
+  EXPECT_EQ(commands, (std::vector<Referee::Command>{
+                          Referee::NORMAL_START, Referee::HALT, Referee::FORCE_START, Referee::HALT,
+                          Referee::FORCE_START, Referee::HALT, Referee::FORCE_START}));
+
+  // The HALTs cover the stoppages exactly: every packet in one shows the robots where the
+  // stoppage's first pair has them, 25 s of them; every packet outside is in running play, and
+  // the robots move from pair to pair (but for the first pair after a stoppage, where the
+  // recording goes on from where it stopped). The game phase reads the same.
+  sf::RefereeFollower follower;
+  sf::GamePhaseTracker phases;
+  std::size_t next_message = 0;
+  std::vector<double> halts_s;
+  std::vector<int> halt_packets;
+  const SSL_WrapperPacket* first_still[2] = {nullptr, nullptr};
+  int moving_pairs = 0;
+  int standing_outside = 0;
+  for (std::size_t i = 0; i < log.packets.size(); ++i) {
+    const auto& [packet, at_s, referee] = log.packets[i];
+    while (next_message < log.referee.size() && log.referee[next_message].second <= at_s) {
+      const sf::RefereeChange change =
+          follower.add(log.referee[next_message].first, log.referee[next_message].second);
+      if (change.command) phases.on_command(follower.view(), log.referee[next_message].second);
+      ++next_message;
+    }
+    ASSERT_TRUE(referee.has_value());
+    const sf::GamePhase phase = phases.phase(at_s, sf::TeamColor::yellow);
+    if (referee->command() == Referee::HALT) {
+      EXPECT_EQ(phase, sf::GamePhase::halt);
+      EXPECT_EQ(follower.view().state, sf::GameState::halt);
+      if (halts_s.empty() || at_s - halts_s.back() > 26.0) {
+        halts_s.push_back(at_s);
+        halt_packets.push_back(0);
+        first_still[0] = first_still[1] = nullptr;
+      }
+      ++halt_packets.back();
+      const SSL_WrapperPacket*& first = first_still[i % 2];
+      if (first == nullptr) first = &packet;
+      EXPECT_TRUE(same_robots(packet, *first)) << "a robot moved in HALT at " << at_s;
+      EXPECT_LT(at_s - halts_s.back(), 25.0);
+      continue;
+    }
+    EXPECT_TRUE(referee->command() == Referee::NORMAL_START ||
+                referee->command() == Referee::FORCE_START);
+    EXPECT_EQ(phase, sf::GamePhase::running);
+    if (i >= 2 && log.packets[i - 2].referee &&
+        log.packets[i - 2].referee->command() != Referee::HALT) {
+      const bool standing = same_robots(packet, log.packets[i - 2].packet);
+      moving_pairs += standing ? 0 : 1;
+      standing_outside += standing ? 1 : 0;
+    }
+  }
+  ASSERT_EQ(halts_s.size(), 3U);
+  for (const int packets : halt_packets) EXPECT_NEAR(packets, 25 * 90, 2);
+  EXPECT_GT(moving_pairs, 10000);
+  EXPECT_EQ(standing_outside, 0);
+  EXPECT_EQ(follower.counters().undecodable, 0U);
+  EXPECT_EQ(follower.counters().commands, 7U);
+}
+
+// A recording with a referee lends the reshaped log its team names and sides; the teams change
+// ends at half time, the break halted, and the recording's own messages are not copied.
+TEST(RealLogShapeReferee, TheRecordingsTeamsAndSidesAreKeptAndTurnAtTheChangeOfEnds) {
+  st::ScratchDir dir;
+  const auto recording = dir.path() / "refereed.log";
+  st::MatchScript script;
+  script.seconds = 120.0;
+  script.frame = [](double t) {
+    sf::DetectionFrameSpec spec;
+    for (std::uint32_t id = 0; id < 6; ++id) {
+      spec.yellow.push_back({id, {-2000.0 + 300.0 * id + 100.0 * std::sin(t), -1000.0}});
+      spec.blue.push_back({id, {2000.0 - 300.0 * id, 1000.0 + 100.0 * std::cos(t)}});
+    }
+    return std::optional<sf::DetectionFrameSpec>(spec);
+  };
+  script.referee = [](double) {
+    st::RefereeSpec spec;
+    spec.yellow = "RobôCIn";
+    spec.blue = "TIGERs Mannheim";
+    spec.blue_on_positive_half = true;
+    spec.command = Referee::STOP;
+    return std::optional<st::RefereeSpec>(spec);
+  };
+  ASSERT_EQ(st::write_match_log(recording, script), "");
+  sf::RealLogMess mess;
+  mess.stoppages = true;
+  mess.change_of_ends = true;
+  const auto out = dir.path() / "real.log.gz";
+  ASSERT_TRUE(sf::write_as_real_log(recording, out, mess).has_value());
+  const ReadBack log = read_back(out);
+  ASSERT_FALSE(log.referee.empty());
+  std::vector<Referee::Stage> stages;
+  double break_s = 0.0;
+  for (const auto& [message, at_s] : log.referee) {
+    EXPECT_EQ(message.source_identifier(), "ssl-evaluate as-real-log");
+    EXPECT_NE(message.command(), Referee::STOP) << "the recording's own commands are not copied";
+    EXPECT_EQ(message.yellow().name(), "RobôCIn");
+    EXPECT_EQ(message.blue().name(), "TIGERs Mannheim");
+    ASSERT_TRUE(message.has_blue_team_on_positive_half());
+    // Blue defends +x, as the recording says, until the teams change ends for the second half.
+    EXPECT_EQ(message.blue_team_on_positive_half(), message.stage() != Referee::NORMAL_SECOND_HALF);
+    if (message.stage() == Referee::NORMAL_HALF_TIME) {
+      EXPECT_EQ(message.command(), Referee::HALT);
+      break_s += 0.1;
+    }
+    if (stages.empty() || stages.back() != message.stage()) stages.push_back(message.stage());
+  }
+  EXPECT_EQ(stages,
+            (std::vector<Referee::Stage>{Referee::NORMAL_FIRST_HALF, Referee::NORMAL_HALF_TIME,
+                                         Referee::NORMAL_SECOND_HALF}));
+  EXPECT_NEAR(break_s, 60.0, 0.5);
+  // Each vision packet after the break sees the teams on their new ends.
+  for (const auto& packet : log.packets) {
+    ASSERT_TRUE(packet.referee.has_value());
+    const bool second_half = packet.referee->stage() == Referee::NORMAL_SECOND_HALF;
+    EXPECT_EQ(packet.referee->blue_team_on_positive_half(), !second_half);
+  }
 }
 
 TEST(RealLogMess, ParsesNamesAllAndNone) {

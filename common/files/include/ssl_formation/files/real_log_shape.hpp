@@ -25,7 +25,10 @@ struct RealLogMess {
   // Robot 4 of each team plays on as id 12 from a third of the recording, robot 7 as id 14 from
   // 63% (a substitution: one id leaves, another appears where it was).
   bool substitutions = false;
-  // Three stoppages of 25 s (from 10%, 40% and 83%) in which every robot stands where it was.
+  // Three stoppages of 25 s (from 10%, 40% and 83%) in which every robot stands where it was,
+  // with a game controller's referee messages (type 3): HALT through each stoppage, running play
+  // elsewhere (NORMAL_START, FORCE_START after each stoppage), the teams named as the
+  // recording's referee names them ("Yellow" and "Blue" without one). See write_as_real_log.
   bool stoppages = false;
   // Two stretches missing (15 s from 25%, 20 s from 70%): recordings cut into pieces.
   bool cuts = false;
@@ -48,10 +51,17 @@ struct RealLogCounts {
   std::uint64_t packets_read = 0;     // vision packets with a detection in the recording
   std::uint64_t packets_written = 0;  // half-field packets written
   std::uint64_t ghost_detections = 0;
+  std::uint64_t referee_messages = 0;  // written (with stoppages)
   double recording_s = 0.0;  // the recording's first to last capture time
 };
 
 // Writes `recording`'s vision reshaped (and messed up) to `out` (gzip if its name ends in .gz).
+// The recording's own referee messages are not copied; with stoppages the log gets a referee of
+// its own, as a game controller sends it: a message about every 0.1 s and one at each new
+// command (its counter counting up), stage NORMAL_FIRST_HALF (with the change of ends,
+// NORMAL_HALF_TIME through the break and NORMAL_SECOND_HALF after it), the recording's team
+// names and goalkeepers and, where the recording's referee gives it, which half blue defends
+// (turned at the change of ends). Nothing is sent inside a cut.
 // Errors: the recording cannot be read or holds no detection, `out` is the recording itself or
 // cannot be written.
 Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,

@@ -6,6 +6,13 @@
 // acceleration (TeamMotion), so nothing jumps; frames come at the frame rate, as SSL-Vision
 // sends them, split among cameras, with noise and lost packets if asked.
 //
+// With a game controller the match follows its referee as the rules have robots do: in HALT and
+// timeouts every robot brakes and stands exactly still, in STOP and ball placement robots drive
+// at 1.5 m/s at most and keep out of 0.5 m around the ball (but the robot placing it), free kicks
+// are taken the shape's kick delay after their command. With a GameShape (the default) the
+// referee also stops the play for what the match does not play out (a foul): the match then says
+// where the ball is to be placed.
+//
 // Deterministic for a seed. Positions are normalised (the opponent attacks +x) until they are
 // put on the wire, where the opponent attacks `opponent_attacks`.
 //
@@ -55,7 +62,8 @@ struct MatchSimulationConfig {
   double loose_play_min_s = 1.5;
   double loose_play_max_s = 4.0;
   // The match's game controller, its stoppages called by the play (a goal, the ball out of the
-  // field); its colour, side and start time are the match's. None: no referee, and restarts
+  // field) and, with its shape (the default: a game shaped like real ones, DESIGN.md §7), by
+  // the referee; its colour, side and start time are the match's. None: no referee, and restarts
   // happen at once.
   std::optional<GameControllerConfig> game;
 };
@@ -68,7 +76,7 @@ struct MatchFrame {
   std::vector<Point> ours;      // normalised mm, by robot id
   Point ball;                   // normalised mm
   std::string play;             // what the opponent runs now; "" in loose play
-  int play_step = -1;
+  int play_step = -1;           // -1 in loose play, and before a restart's kick
   AttackDirection opponent_attacks = AttackDirection::positive_x;  // in the feed, now
   // The game controller's message, sent before the frame's packets; none without one.
   std::optional<Referee> referee;
@@ -101,10 +109,11 @@ class MatchSimulation {
   enum class Mode {
     opponent_play,        // running play, the opponent's ball (or nobody's)
     our_possession,       // running play, our ball until the opponent wins it back
-    stopped,              // STOP (and HALT): slow, away from the ball
+    stopped,              // STOP: slow, away from the ball
+    halted,               // HALT and timeouts: every robot brakes and stands still
     kickoff_preparation,  // both teams in their halves, the kicker at the ball
     ball_placement,       // the ball carried to where the free kick will be
-    half_time,            // the break: the teams change ends
+    lining_up,            // a STOP before a half's kick-off: the teams walk to their places
   };
 
   struct Ball {
@@ -124,7 +133,7 @@ class MatchSimulation {
   // Who has the ball after `step` (it names one): its robot, or for one the division does not
   // field, the robot nearest to that robot's target.
   int receiver_for(const PlayStep& step) const;
-  void update_targets();
+  void update_targets(double now_s);
   void move_ball(double dt_s, double now_s);
   // A shot over the goal line: a goal and a kick-off, or wide and a free kick.
   void restart(double now_s);
@@ -133,6 +142,9 @@ class MatchSimulation {
   // The ball over the goal line after a shot, with a game controller: a goal, a corner for the
   // opponent or a goal kick for us, each called as the stoppage it is.
   void call_stoppage(double now_s);
+  // The referee stops the play for what the match does not play out (GameShape): a foul, a
+  // free kick for either team, the ball placed a few metres from where it is.
+  void call_foul(double now_s);
   // Our side wins the ball (a goal kick, our kick-off): it keeps it for a while.
   void start_our_possession(double now_s);
   bool ours(int robot) const { return robot >= team_size_; }
@@ -151,8 +163,14 @@ class MatchSimulation {
   int stage_ = -1;                     // the last stage followed
   double possession_ends_s_ = 0.0;     // our possession: when the opponent wins the ball
   bool holding_play_ = false;          // a restart's play waits at its first step
+  // The held play's own taker kicks (a kick-off, or a corner: it places the ball where it
+  // starts); else the robot nearest to the ball (after a foul, it places it) kicks, a pass to
+  // the play's first receiver.
+  bool taker_kicks_ = true;
   bool kickoff_by_opponent_ = true;    // whose kick-off is being prepared
   Point placement_;                    // where the ball is being placed (normalised)
+  Point placement_behind_;             // where the placing robot stands from the ball it carries
+  double kick_at_s_ = 0.0;             // a free kick: its taker waits with the ball until then
   FieldSize field_;
   int team_size_ = 0;
   std::mt19937_64 random_;

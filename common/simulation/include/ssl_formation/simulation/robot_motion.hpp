@@ -20,6 +20,7 @@
 //   robots.position(i), robots.velocity(i)
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "ssl_formation/base/grid.hpp"
@@ -39,6 +40,16 @@ struct MotionLimits {
   double area_half_width_mm = 0.0;
 };
 
+// A disc robots keep out of, as the rules keep them 0.5 m from the ball while the game is
+// stopped: kept to as a neighbour is (robots brake for it in time and pass it on their right),
+// and a robot inside it is pushed out. One robot, the one placing the ball, may enter it and is
+// not held to the speed cap (the rules cap the speed in STOP; a placement has to be quick).
+struct KeepOut {
+  Point centre;
+  double radius_mm = 0.0;
+  int except = -1;  // the robot that may enter; -1: none
+};
+
 class TeamMotion {
  public:
   // Robots at rest at `positions` (mm). Throws std::invalid_argument for limits that are not
@@ -49,7 +60,12 @@ class TeamMotion {
   // target inside another robot's shell is driven towards as far as the shells allow.
   // `speed_cap_mm_s` (0: the limit) caps the speed robots aim for, as the rules do while the
   // game is stopped (1.5 m/s); robots above it brake to it within the acceleration limit.
-  void step(double dt_s, const std::vector<Point>& targets, double speed_cap_mm_s = 0.0);
+  // `keep_out`: a disc no robot but its exception drives into.
+  void step(double dt_s, const std::vector<Point>& targets, double speed_cap_mm_s = 0.0,
+            const std::optional<KeepOut>& keep_out = std::nullopt);
+  // HALT: every robot brakes straight on as hard as the acceleration limit lets it and then
+  // stands exactly where it stopped, whatever its target (no creeping, no pushing apart).
+  void halt(double dt_s);
   // The same robots seen from the other end of the field: every position and velocity turned
   // about the centre.
   void mirror();

@@ -7,6 +7,13 @@
 // the paper's opponent, which has no ball, it stops the play at random; a match calls the
 // stoppages its ball makes.
 //
+// With a GameShape (the default for a match) the game spends its time as recorded Division A
+// matches do (DESIGN.md §7): running play in stretches mostly of a few seconds with a long tail,
+// and each stoppage a STOP, now and then a HALT or a team's timeout (then STOP again), most
+// restarts after a ball placement of a few seconds, a few with FORCE_START. The referee then also
+// stops the play for what a match does not play out (a foul, a robot to take off): the match
+// asks stoppage_due() and calls the stoppage with where the ball is to be placed.
+//
 // Time is the simulation's data time (t_capture). The game controller decides at each formation
 // what holds from that formation on, so every command starts at a formation and no formation
 // straddles two. Deterministic for a seed, from a random stream of its own: the vision of a seed
@@ -29,6 +36,64 @@
 
 namespace ssl_formation::sim {
 
+// A duration drawn from bands by weight, each band uniform: a typical length and a long tail.
+struct DurationBands {
+  struct Band {
+    double weight = 1.0;
+    double min_s = 0.0;
+    double max_s = 0.0;
+  };
+  std::vector<Band> bands;
+  // Throws std::invalid_argument, naming `what`, unless there is a band, every weight is >= 0
+  // and some > 0, and every band has 0 < min <= max, finite.
+  void check(const std::string& what) const;
+  double draw(std::mt19937_64& random) const;
+};
+
+// How a game spends its time, shaped like recorded Division A matches (DESIGN.md §7: running
+// play 32-43% of the time, halt 13-20%, timeout 0-4%, ball placement 26-29%, stop 11-14%, free
+// kicks 2-3%, kick-offs under 1%; running stretches of a median 1-3 s, 90th percentile 10-14 s;
+// placements of 4-6 s, halts of 5-6 s; a free kick taken 0.7 s after its command). The defaults
+// give a simulated match about those shares (tests/simulation/match_shape_test.cpp measures
+// them); the long tails make the means longer than the medians, as in the recordings.
+struct GameShape {
+  // Running play from its restart to the next stoppage the referee calls (a match's own, a shot
+  // out of the field, may come first).
+  DurationBands running{{{0.5, 0.4, 3.0}, {0.28, 3.0, 14.0}, {0.22, 14.0, 60.0}}};
+  // A STOP before what follows it (a HALT, a placement, the restart).
+  DurationBands stop{{{1.0, 0.7, 1.8}}};
+  // A STOP after a goal, while the teams go back to their halves.
+  DurationBands goal_stop{{{1.0, 4.0, 8.0}}};
+  DurationBands halt{{{0.75, 4.5, 6.5}, {0.25, 8.0, 25.0}}};
+  DurationBands timeout{{{1.0, 10.0, 30.0}}};
+  // A ball placement lasts at least this; with a match, until the ball is on its spot (30 s at
+  // most, as the rules give it).
+  DurationBands ball_placement{{{0.85, 4.0, 6.0}, {0.15, 6.0, 12.0}}};
+  // Of the stoppages: the share with a HALT after their STOP, and with a team's timeout.
+  double halt_share = 0.27;
+  double timeout_share = 0.01;
+  // Of the restarts after a foul: the share with FORCE_START (the referee restarts at once, no
+  // placement); of the others, the share placed before their free kick (the ball out of the
+  // field is always placed).
+  double force_start_share = 0.12;
+  double placement_share = 0.95;
+  // Of the stoppages the game controller makes itself without a match (the paper's opponent
+  // has no ball to score with): the share that are goals. Of a match's shots, the share that
+  // score (kick-offs take under 1% of a real match) and the share the keeper saves, play going
+  // on; the others go out of the field.
+  double goal_share = 0.05;
+  double shot_goal_share = 0.15;
+  double shot_saved_share = 0.4;
+  double kickoff_preparation_s = 2.0;
+  // The STOP in which the teams walk to their kick-off places after the half-time break.
+  double line_up_s = 8.0;
+  // A free kick is taken this long after its command (the match takes it).
+  double kick_delay_s = 0.7;
+  // Throws std::invalid_argument for a shape that makes no game (a share outside 0-1, a band
+  // with no length).
+  void check() const;
+};
+
 struct GameControllerConfig {
   std::uint64_t seed = 1;
   std::string opponent_name = "Simulated Opponent";
@@ -39,7 +104,8 @@ struct GameControllerConfig {
   double start_time_s = 0.0;
   double half_s = 300.0;      // of data time: Division B's five minutes
   double half_time_s = 20.0;  // the break, shortened: nobody wants to watch robots stand
-  // The play between two stoppages lasts a uniform time in this range (data seconds).
+  // Without a shape: the play between two stoppages lasts a uniform time in this range (data
+  // seconds).
   double play_min_s = 30.0;
   double play_max_s = 90.0;
   std::string source_identifier = "ssl-producer";
@@ -47,6 +113,10 @@ struct GameControllerConfig {
   // ball to go out of the field. A simulated match calls its stoppages (stop_for_goal() and the
   // others) and leaves this off.
   bool random_stoppages = true;
+  // How the game spends its time; none: the plain game of earlier versions (STOP, placement,
+  // restart; no HALT or timeout outside the breaks). RefereedSimulation (the paper's opponent,
+  // which moves on whatever the referee says) plays the plain game.
+  std::optional<GameShape> shape = GameShape{};
 };
 
 // What the match looks like at one moment.
@@ -59,7 +129,7 @@ struct ControllerPhase {
 class SimulatedGameController {
  public:
   // Throws std::invalid_argument for a config that makes no match (a non-positive half, an
-  // empty play range, team names that are the same).
+  // empty play range, team names that are the same, a shape that makes no game).
   explicit SimulatedGameController(GameControllerConfig config);
 
   // The message the game controller sends at data time `t_s`, the script advanced to it. Calls
@@ -71,14 +141,21 @@ class SimulatedGameController {
   // running play; each queues the restart the rules give:
   // - the ball out of the field: STOP, the restarting team places the ball at `placement` (feed
   //   coordinates, mm; the message's designated_position), then its free kick;
-  // - a foul: STOP, then the other team's free kick (`restart_team`'s);
+  // - a foul: STOP, then the other team's free kick (`restart_team`'s), after a placement at
+  //   `placement` if one is given and the shape draws one;
   // - a goal for `scorer`: STOP, then the other team's kick-off.
+  // With a shape, a HALT or a timeout may come after the STOP, and a restart may be FORCE_START.
   void stop_for_ball_out(TeamColor restart_team, double at_s, std::optional<Point> placement);
-  void stop_for_foul(TeamColor restart_team, double at_s);
+  void stop_for_foul(TeamColor restart_team, double at_s,
+                     std::optional<Point> placement = std::nullopt);
   void stop_for_goal(TeamColor scorer, double at_s);
   // With stoppages called by the match, a ball placement lasts until the match says the ball
-  // is on its spot: the restart follows from `at_s`.
+  // is on its spot (and, with a shape, at least its drawn length): the restart follows.
   void ball_placed(double at_s);
+  // With stoppages called by the match and a shape: whether the referee stops the running play
+  // at `t_s` (not before the last message_at()'s) for what the match does not play out, its
+  // drawn length being over. The match then calls stop_for_foul().
+  bool stoppage_due(double t_s) const;
 
   // The side the opponent attacks at the last message_at() time (the ends change at half time).
   AttackDirection opponent_attacks() const { return opponent_attacks_; }
@@ -95,10 +172,18 @@ class SimulatedGameController {
   // A stoppage drawn at random, starting with its STOP at `at_s`: a ball out of the field, a
   // foul or a goal, with the restart queued after it.
   void start_stoppage(double at_s);
+  // A stoppage's STOP at `at_s` lasting `stop_s`, and with a shape now and then a HALT or a
+  // timeout after it (then STOP again); what follows is queued after.
+  void begin_stoppage(double at_s, double stop_s);
+  // A free kick for `team` (or with a shape now and then FORCE_START), after a placement at
+  // `placement` when `place` (a spot, or none when nobody knows where the ball is).
+  void queue_free_kick(TeamColor team, bool place, std::optional<Point> placement);
   void issue(Referee::Command command, double at_s);
   void set_sides();
   TeamColor our_color() const;
   Referee::Command for_team(Referee::Command yellow_command, TeamColor team) const;
+  Referee::TeamInfo& team_info(TeamColor team);
+  double draw_unit();
 
   GameControllerConfig config_;
   std::mt19937_64 random_;
@@ -108,6 +193,9 @@ class SimulatedGameController {
   struct QueuedPhase {
     Referee::Command command;
     double duration_s;
+    // A placement the match carries out: it lasts until the ball is placed, and at least
+    // duration_s.
+    bool until_placed = false;
   };
   std::vector<QueuedPhase> queued_;
   double half_ends_s_ = 0.0;  // when the running half's play stops for good
@@ -115,6 +203,12 @@ class SimulatedGameController {
   bool second_half_ = false;
   AttackDirection opponent_attacks_;
   std::optional<Point> placement_;  // where the queued ball placement puts the ball
+  double placement_at_least_until_s_ = 0.0;  // a placement the match carries out lasts this long
+  // With a shape and stoppages called by the match: when the referee stops the running play.
+  double play_stops_s_ = 1e300;
+  // A timeout running: the team's timeout time left when it started, and when it started.
+  std::uint32_t timeout_time_at_start_us_ = 0;
+  double timeout_started_s_ = 0.0;
   std::uint32_t matches_ = 0;
   std::uint32_t yellow_score_ = 0;
   std::uint32_t blue_score_ = 0;
