@@ -51,6 +51,7 @@ void OnlineCalibration::clear() {
   correcting_.reset();
   remembering_.reset();
   checked_ = 0;
+  formations_checked_ = 0;
 }
 
 std::size_t OnlineCalibration::pending() const {
@@ -68,10 +69,12 @@ void OnlineCalibration::observe(const Formation& formation) {
   last_time_s_ = t;
   for (Step& step : steps_) {
     if (fade != 1.0) {
-      for (Bin& bin : step.bins) {
-        bin.weight *= fade;
-        bin.hits *= fade;
-        bin.stated *= fade;
+      for (auto* bins : {&step.bins, &step.formation_bins}) {
+        for (Bin& bin : *bins) {
+          bin.weight *= fade;
+          bin.hits *= fade;
+          bin.stated *= fade;
+        }
       }
     }
     // The predictions due by now, front first. Those waiting for their robot (not seen in this
@@ -84,18 +87,35 @@ void OnlineCalibration::observe(const Formation& formation) {
     std::size_t walk = 0;
     for (; due < step.size && step.at(due).due_s <= t; ++due) {
       const Pending& p = step.at(due);
-      if (p.attacks != formation.opponent_attacks) continue;  // its cells mean another side
-      if (t - p.due_s > settings_.tolerance_s) continue;       // passed unseen
+      FormationCheck* check = step.formation(p.formation);
+      const auto undecidable = [check] {
+        if (!check) return;
+        --check->remaining;
+        check->decidable = false;
+      };
+      if (p.attacks != formation.opponent_attacks) {  // its cells mean another side
+        undecidable();
+        continue;
+      }
+      if (t - p.due_s > settings_.tolerance_s) {  // passed unseen
+        undecidable();
+        continue;
+      }
       if (walk > 0 && (walk == robots.size() || robots[walk].robot_id > p.robot_id)) walk = 0;
       while (walk < robots.size() && robots[walk].robot_id < p.robot_id) ++walk;
       const FormationRobot* robot =
           walk < robots.size() && robots[walk].robot_id == p.robot_id ? &robots[walk] : nullptr;
       if (robot && robot->observed) {
         Bin& bin = step.bins[p.bin];
+        const bool hit = robot->cell.x == p.cell_x && robot->cell.y == p.cell_y;
         bin.weight += 1.0;
-        bin.hits += robot->cell.x == p.cell_x && robot->cell.y == p.cell_y ? 1.0 : 0.0;
+        bin.hits += hit ? 1.0 : 0.0;
         bin.stated += p.probability;
         ++checked_;
+        if (check) {
+          --check->remaining;
+          check->all_hit = check->all_hit && hit;
+        }
       } else {
         step.at(kept++) = p;
       }
@@ -105,6 +125,21 @@ void OnlineCalibration::observe(const Formation& formation) {
     for (std::size_t i = kept; i-- > 0;) step.at(handled + i) = step.at(i);
     if (!step.ring.empty()) step.head = (step.head + handled) & (step.ring.size() - 1);
     step.size -= handled;
+    // The formations every robot of which is decided, in order; one whose instant passed long
+    // ago with robots undecided lost them (dropped from a full ring): it decides nothing.
+    while (!step.formations.empty()) {
+      const FormationCheck& first = step.formations.front();
+      if (first.remaining > 0 && t - first.due_s <= settings_.tolerance_s) break;
+      if (first.remaining == 0 && first.decidable) {
+        Bin& bin = step.formation_bins[bin_of(first.stated)];
+        bin.weight += 1.0;
+        bin.hits += first.all_hit ? 1.0 : 0.0;
+        bin.stated += first.stated;
+        ++formations_checked_;
+      }
+      step.formations.pop_front();
+      ++step.first_formation;
+    }
   }
   if (!correcting_.pass(t, correction_refresh_s)) return;
   for (Step& step : steps_) {
@@ -113,6 +148,15 @@ void OnlineCalibration::observe(const Formation& formation) {
       step.correction[b] =
           bin.weight > 0.0
               ? (bin.hits - bin.stated) / (bin.weight + settings_.prior_weight)  // evidence x shift
+              : 0.0;
+      const Bin& formations = step.formation_bins[b];
+      step.formation_checked[b] = formations.weight > 0.0;
+      // A formation is one check where a robot is one of 6-11: the same prior weight in
+      // formations lets a bin's rate count after about as many seconds of play.
+      step.formation_correction[b] =
+          formations.weight > 0.0
+              ? (formations.hits - formations.stated) /
+                    (formations.weight + settings_.prior_weight)
               : 0.0;
     }
   }
@@ -125,12 +169,24 @@ void OnlineCalibration::remember(const Prediction& prediction, double time_s, do
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
     Step& step = steps_[s];
     const double due_s = time_s + static_cast<double>(s + 1) * step_s;
+    FormationCheck check{due_s, 1.0, 0, true, true};
+    const std::uint64_t number = step.first_formation + step.formations.size();
     for (const RobotPrediction& robot : prediction.steps[s].robots) {
-      if (!std::isfinite(robot.probability)) continue;  // nothing to learn of it
-      step.push({due_s, robot.robot_id, static_cast<float>(robot.probability),
+      if (!std::isfinite(robot.probability)) {
+        check.decidable = false;  // a formation with a robot nobody can check
+        continue;
+      }
+      check.stated *= robot.probability;
+      ++check.remaining;
+      step.push({due_s, number, robot.robot_id, static_cast<float>(robot.probability),
                  static_cast<std::int16_t>(robot.position.x),
                  static_cast<std::int16_t>(robot.position.y),
                  static_cast<std::uint8_t>(bin_of(robot.probability)), attacks});
+    }
+    step.formations.push_back(check);
+    if (step.formations.size() > max_pending_per_step) {  // as the robots' ring: the oldest goes
+      step.formations.pop_front();
+      ++step.first_formation;
     }
   }
 }
@@ -142,16 +198,27 @@ double OnlineCalibration::adjusted(std::size_t step, double stated) const {
   return std::clamp(stated + correction, min_probability, max_probability);
 }
 
+double OnlineCalibration::adjusted_formation(std::size_t step, double stated,
+                                             double fallback) const {
+  if (step >= steps_.size() || !std::isfinite(stated)) return fallback;
+  const std::size_t bin = bin_of(stated);
+  if (!steps_[step].formation_checked[bin]) return fallback;
+  return std::clamp(stated + steps_[step].formation_correction[bin], 0.0, 1.0);
+}
+
 void OnlineCalibration::adjust(Prediction& prediction) const {
   if (checked_ == 0) return;
   double confidence = 1.0;
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
     PredictedStep& step = prediction.steps[s];
-    double formation = 1.0;
+    double stated = 1.0;
+    double robots = 1.0;
     for (RobotPrediction& robot : step.robots) {
+      stated *= robot.probability;
       robot.probability = adjusted(s, robot.probability);
-      formation *= robot.probability;
+      robots *= robot.probability;
     }
+    const double formation = adjusted_formation(s, stated, robots);
     step.formation_probability = formation;
     confidence *= formation;
     step.confidence = confidence;

@@ -734,13 +734,9 @@ TEST(MotionPipeline, ATeamStandingStillForAMinuteIsSaidToStayAsOftenAsItDoes) {
     stated_at_end = std::max(stated_at_end, robot.probability);
   }
   EXPECT_LT(stated_at_end, 0.95) << "the table alone already said the team stays";
-  EXPECT_NEAR(recalibrated.back().steps[0].formation_probability,
-              [&] {
-                double product = 1.0;
-                for (const auto& robot : recalibrated.back().steps[0].robots) {
-                  product *= robot.probability;
-                }
-                return product;
-              }(),
-              1e-12);
+  // The whole formation stayed every time, and its probability is checked as a whole: it rises
+  // from what the table stated towards the formations' hit rate.
+  EXPECT_GT(recalibrated.back().steps[0].formation_probability, 0.9);
+  EXPECT_GT(recalibrated.back().steps[0].formation_probability,
+            as_stated.back().steps[0].formation_probability + 0.1);
 }

@@ -235,3 +235,53 @@ TEST(OnlineCalibration, AClockGoingBackStartsOver) {
   EXPECT_EQ(calibration.pending(), 0u);
   EXPECT_EQ(calibration.adjusted(0, 0.33), 0.33);
 }
+
+TEST(OnlineCalibration, AFormationWhoseRobotsMoveTogetherIsStatedAsLikelyAsItTurnsOut) {
+  // Four robots each stated at 0.5, and always all four in their cells or all four out (they
+  // move together), half the time each way: every robot's 0.5 is right, but the formation's
+  // product, 1/16, is far below the 0.5 it hits.
+  sf::OnlineCalibration calibration(quick);
+  const std::vector<Stated> robots{
+      {1, home, 0.5}, {2, home, 0.5}, {3, home, 0.5}, {4, home, 0.5}};
+  for (int i = 0; i < 8 * 120; ++i) {
+    const double t = 0.125 * i;
+    sf::Formation formation;
+    formation.time_s = t;
+    const bool in_cells = (i / 4) % 2 == 0;
+    for (std::uint32_t id = 1; id <= 4; ++id) {
+      sf::FormationRobot robot;
+      robot.robot_id = id;
+      robot.cell = in_cells ? home : elsewhere;
+      formation.robots.push_back(robot);
+    }
+    calibration.observe(formation);
+    calibration.remember(prediction_of({robots}), t, 0.5, sf::AttackDirection::positive_x);
+  }
+  EXPECT_GT(calibration.formations_checked(), 800u);
+  sf::Prediction prediction = prediction_of({robots});
+  calibration.adjust(prediction);
+  for (const sf::RobotPrediction& robot : prediction.steps[0].robots) {
+    EXPECT_NEAR(robot.probability, 0.5, 0.05);
+  }
+  EXPECT_NEAR(prediction.steps[0].formation_probability, 0.5, 0.06);
+  EXPECT_NEAR(prediction.steps[0].confidence, prediction.steps[0].formation_probability, 1e-12);
+}
+
+TEST(OnlineCalibration, AFormationWithARobotUnseenWhenDueDecidesNothing) {
+  sf::OnlineCalibration calibration(quick);
+  const std::vector<Stated> robots{{1, home, 0.5}, {2, home, 0.5}};
+  for (int i = 0; i < 8 * 30; ++i) {
+    const double t = 0.125 * i;
+    // Robot 2 is never seen: every robot 1 is checked, no formation is.
+    calibration.observe(formation_at(t, 1, home));
+    calibration.remember(prediction_of({robots}), t, 0.5, sf::AttackDirection::positive_x);
+  }
+  EXPECT_GT(calibration.checked(), 200u);
+  EXPECT_EQ(calibration.formations_checked(), 0u);
+  sf::Prediction prediction = prediction_of({robots});
+  calibration.adjust(prediction);
+  // No formation evidence: the product of the adjusted robots'.
+  EXPECT_NEAR(prediction.steps[0].formation_probability,
+              prediction.steps[0].robots[0].probability * prediction.steps[0].robots[1].probability,
+              1e-12);
+}

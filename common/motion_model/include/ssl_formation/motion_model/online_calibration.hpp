@@ -7,10 +7,17 @@
 // probability is moved towards the hit rate lately seen for probabilities like it (per step and
 // tenth of probability), by a weight that grows with that evidence. Only what has already
 // happened is used: the correction at time t comes from predictions whose instant is before t.
+//
+// A formation's probability (that every robot is in its predicted cell) is checked the same way,
+// as a whole: the robots of one team move together (a set play, a team falling back), so the
+// product of their probabilities says far less than the formations really hit. Each step's
+// formation probability is moved towards the hit rate lately seen for formation probabilities
+// like it; before a bin has evidence, it is the product of the adjusted robots'.
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <vector>
 
@@ -73,10 +80,16 @@ class OnlineCalibration {
   // The probability a bin would move `stated` to at step `step` (0-based); `stated` itself
   // before any evidence.
   double adjusted(std::size_t step, double stated) const;
+  // The same for a formation probability stated as `stated` (the product of its robots' as
+  // stated); `fallback` before its bin has evidence.
+  double adjusted_formation(std::size_t step, double stated, double fallback) const;
+  // Formations checked so far (since the last clear).
+  std::uint64_t formations_checked() const { return formations_checked_; }
 
  private:
   struct Pending {
     double due_s = 0.0;
+    std::uint64_t formation = 0;  // the sequence number of its formation's check (FormationCheck)
     std::uint32_t robot_id = 0;
     float probability = 0.0f;  // as stated, for the bin's sum (its bin is kept exactly apart)
     std::int16_t cell_x = 0, cell_y = 0;  // grids have at most a few hundred cells
@@ -88,6 +101,15 @@ class OnlineCalibration {
     double weight = 0.0;
     double hits = 0.0;
     double stated = 0.0;
+  };
+  // One remembered formation, decided once each of its robots is: a hit if every robot was in
+  // its cell, nothing if one passed unseen (or the ends changed).
+  struct FormationCheck {
+    double due_s = 0.0;
+    double stated = 0.0;   // the product of the robots' stated probabilities
+    std::uint32_t remaining = 0;  // robots not yet checked
+    bool all_hit = true;
+    bool decidable = true;
   };
   struct Step {
     // The predictions waiting for their instant, in due order (predictions come in time order),
@@ -103,6 +125,18 @@ class OnlineCalibration {
     // stated probabilities. Worked out by observe() (every tenth of a second of the data clock),
     // so that adjust() only looks it up.
     std::array<double, bin_count> correction{};
+    // The formations remembered and not yet decided, in order; the first is number
+    // `first_formation`.
+    std::deque<FormationCheck> formations;
+    std::uint64_t first_formation = 0;
+    std::array<Bin, bin_count> formation_bins{};
+    std::array<double, bin_count> formation_correction{};
+    std::array<bool, bin_count> formation_checked{};  // whether the bin has any evidence
+    FormationCheck* formation(std::uint64_t number) {
+      return number >= first_formation && number - first_formation < formations.size()
+                 ? &formations[number - first_formation]
+                 : nullptr;
+    }
   };
   static std::size_t bin_of(double probability);
 
@@ -112,6 +146,7 @@ class OnlineCalibration {
   IntervalGate correcting_;    // when the corrections are worked out
   IntervalGate remembering_;  // when predictions are remembered
   std::uint64_t checked_ = 0;
+  std::uint64_t formations_checked_ = 0;
 };
 
 }  // namespace ssl_formation
