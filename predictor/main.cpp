@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
     sf::app::add_vision_options(general, o.network);
     sf::app::add_model_options(general, o.model);
     sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
+    sf::app::add_prior_table_option(general, o.prior_table);
     sf::app::add_daemon_options(general, o.daemon);
     if (!sf::app::parse_command_line(argc, argv, general, "ssl-predictor [options]\n       ssl-predictor --from-log FILE... [--output PATH] [options]",
                                      "Predicts the opponent's next formations from the table "

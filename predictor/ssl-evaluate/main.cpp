@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
     sf::app::add_learn_during_option(general, o.learn_during);
     sf::app::add_vision_source_option(general, o.network);
     sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
+    sf::app::add_prior_table_option(general, o.prior_table);
     po::positional_options_description positional;
     positional.add("mode", 1);
     if (!sf::app::parse_command_line(argc, argv, general,

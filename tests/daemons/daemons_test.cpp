@@ -8,6 +8,7 @@
 #include <signal.h>
 
 #include <boost/asio/io_context.hpp>
+#include <fstream>
 #include <mutex>
 #include <regex>
 #include <thread>
@@ -410,6 +411,18 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
     EXPECT_EQ(help.out.find("--recalibration-half-life arg (=60)") != std::string::npos,
               program == predictor_program)
         << program;
+    EXPECT_EQ(help.out.find("--prior-table FILE") != std::string::npos,
+              program == predictor_program)
+        << program;
+  }
+  // A prior that is not a table says so, naming the option, before anything starts.
+  std::ofstream(dir.path() / "not-a-table.bin") << "hello";
+  for (const std::string prior : {"missing.bin", "not-a-table.bin"}) {
+    const auto bad_prior = testing::run_to_end(predictor_program, {"--prior-table", prior},
+                                               dir.path(), "bad-prior", 5s);
+    EXPECT_EQ(bad_prior.exit_code, 2) << bad_prior.err;
+    EXPECT_NE(bad_prior.err.find("--prior-table: "), std::string::npos) << bad_prior.err;
+    EXPECT_NE(bad_prior.err.find(prior), std::string::npos) << bad_prior.err;
   }
 }
 

@@ -4,6 +4,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "ssl_formation/files/table_file.hpp"
+
 namespace ssl_formation::app {
 
 Grid ModelOptions::parsed_grid() const {
@@ -80,6 +82,30 @@ OpponentChoice ModelOptions::opponent_choice() const {
   choice.our_team = our_team;
   choice.opponent_team = opponent_team;
   return choice;
+}
+
+void add_prior_table_option(po::options_description& options, std::string& prior_table) {
+  options.add_options()(
+      "prior-table", po::value(&prior_table)->value_name("FILE"),
+      "the motion model's prior: a table of every team (ssl-trainer --from-log LOGS "
+      "--opponent-team all, then merge). The opponent's own rows take over from it as they fill; "
+      "an opponent without a table yet is predicted from it alone");
+}
+
+std::shared_ptr<const MotionTable> loaded_prior_table(const std::string& path, double step_s) {
+  if (path.empty()) return nullptr;
+  auto loaded = load_table(path);
+  if (!loaded) throw UsageError("--prior-table: " + loaded.error().message);
+  if (!loaded->motion) {
+    throw UsageError("--prior-table: " + path +
+                     " holds only the paper's counts: train it with --model motion");
+  }
+  if (std::abs(loaded->motion->config().step_s - step_s) > 1e-9) {
+    throw UsageError("--prior-table: " + path + " was trained with a step of " +
+                     std::to_string(loaded->motion->config().step_s) + " s, not --step's " +
+                     std::to_string(step_s) + " s");
+  }
+  return std::make_shared<const MotionTable>(std::move(*loaded->motion));
 }
 
 void add_learn_during_option(po::options_description& options, std::string& learn_during) {

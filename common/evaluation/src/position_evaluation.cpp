@@ -238,7 +238,8 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     TableMetadata own = metadata;
     own.field = method.training->sampler().field();
     pipelines.push_back(std::make_unique<PredictionPipeline>(
-        method.prediction, method.training->learner().forecaster(own),
+        method.prediction,
+        method.training->learner().forecaster(own, m == 0 ? config.prior_table : nullptr),
         [&by_method, &config, m](const PredictedFormation& p) {
           if (m == 0 && config.on_model_prediction) config.on_model_prediction(p);
           StreamPredictions& out = by_method[m];

@@ -90,7 +90,14 @@ void MotionLearner::absorb(const Learner& other) {
 }
 
 std::unique_ptr<Forecaster> MotionLearner::forecaster(const TableMetadata& metadata) const {
+  return forecaster(metadata, nullptr);
+}
+
+std::unique_ptr<Forecaster> MotionLearner::forecaster(
+    const TableMetadata& metadata, std::shared_ptr<const MotionTable> prior_table) const {
   ModelSettings settings;
+  settings.prior_table = std::move(prior_table);
+  settings.prior_field = metadata.field;
   settings.grid = table_.grid();
   settings.step_s = motion_.config().step_s;
   settings.horizons = motion_.config().horizons;
@@ -113,6 +120,14 @@ MotionForecaster::MotionForecaster(const ModelSettings& settings)
   // Allocated now rather than wherever the first sample leaves it: a daemon woken every 16 ms
   // pays for every cold page its hot path touches.
   robots_.reserve(16);
+  if (settings_.prior_table) {
+    if (std::abs(settings_.prior_table->config().step_s - settings_.step_s) > 1e-9) {
+      throw std::invalid_argument("the prior table's motion model was trained with another step");
+    }
+    prior_model_ = std::make_shared<const MotionModel>(*settings_.prior_table, settings_.grid,
+                                                       settings_.prior_field);
+    model_ = prior_model_;
+  }
 }
 
 void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
@@ -127,9 +142,10 @@ void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
       throw std::invalid_argument("the table's motion model was trained with another step");
     }
     model = std::make_shared<const MotionModel>(*table->motion, settings_.grid,
-                                                table->metadata.field);
+                                                table->metadata.field, MotionModelSettings{},
+                                                prior_model_.get());
   }
-  model_ = std::move(model);
+  model_ = model ? std::move(model) : prior_model_;
   cache_.clear();
   table_ = std::move(table);
 }

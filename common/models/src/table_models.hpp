@@ -46,6 +46,9 @@ class MotionLearner : public Learner {
   const TransitionTable* transitions() const override { return &table_; }
   const MotionTable* motion() const override { return &motion_; }
   std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const override;
+  std::unique_ptr<Forecaster> forecaster(
+      const TableMetadata& metadata,
+      std::shared_ptr<const MotionTable> prior_table) const override;
 
  private:
   TransitionTable table_;
@@ -79,7 +82,10 @@ class MotionForecaster : public Forecaster {
  private:
   ModelSettings settings_;
   std::shared_ptr<const StoredTable> table_;
-  std::shared_ptr<const MotionModel> model_;  // built from table_
+  // Every team's model (settings.prior_table), built for the first table's field; serves alone
+  // until the opponent has a table.
+  std::shared_ptr<const MotionModel> prior_model_;
+  std::shared_ptr<const MotionModel> model_;  // built from table_ (under the prior), or the prior
   MotionModel::Cache cache_;
   MotionHistory history_;
   OnlineCalibration calibration_;

@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <stdexcept>
 
 namespace ssl_formation {
 
@@ -52,6 +54,8 @@ double quantile(std::vector<double>& values, double p) {
   return values[low] + (rank - static_cast<double>(low)) * (values[high] - values[low]);
 }
 
+constexpr MotionKey empty_slot = ~MotionKey{0};  // no key has every bit set
+
 std::uint64_t next_model_id() {
   static std::atomic<std::uint64_t> last{0};
   return ++last;
@@ -60,8 +64,18 @@ std::uint64_t next_model_id() {
 }  // namespace
 
 MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
-                         MotionModelSettings settings)
+                         MotionModelSettings settings, const MotionModel* prior_model)
     : config_(table.config()), settings_(settings), id_(next_model_id()) {
+  if (prior_model) {
+    // The prior may have learned further ahead: its first horizons are the table's.
+    MotionConfig same_horizons = prior_model->config_;
+    same_horizons.horizons = config_.horizons;
+    if (!(same_horizons == config_) || prior_model->config_.horizons < config_.horizons) {
+      throw std::invalid_argument(
+          "the prior table was trained with other motion model settings (step, windows, or "
+          "fewer horizons) than the opponent's table");
+    }
+  }
   const int horizons = config_.horizons;
   horizon_.resize(static_cast<std::size_t>(horizons));
 
@@ -92,7 +106,10 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     const double prior_rms = settings_.prior_error_mm + settings_.prior_error_mm_per_s * horizon_s;
     Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0, {}};
     prior.coefficients[0] = horizon.damping;
-    horizon.root = shrink(root, prior);
+    // Under a prior table (every team's), the opponent's rows are held towards what every team
+    // does rather than towards damped constant velocity.
+    horizon.root = shrink(root, prior_model ? prior_model->horizon_[static_cast<std::size_t>(h)].root
+                                            : prior);
     // HALT and timeouts: "no robot is allowed to move", after "a grace period of 2 seconds for
     // the robots to brake" (SSL rules, Referee Commands: Halt). So a robot keeps its place but
     // for what braking hard from its velocity takes, and the spread is the vision's noise.
@@ -110,7 +127,12 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
         const MotionKeyParts parts = decode_motion_key(key);
         if (static_cast<int>(parts.level) != level) continue;
         const Horizon& horizon = horizon_[static_cast<std::size_t>(parts.horizon_index)];
-        const Estimate& parent = parts.level == MotionLevel::all
+        // The prior table's estimate of the same row, where it has one: its rows give way to
+        // the opponent's own as they fill (each weighs `shrinkage` instances).
+        const std::optional<Estimate> generic =
+            prior_model ? prior_model->estimate(key) : std::nullopt;
+        const Estimate& parent = generic ? *generic
+                                 : parts.level == MotionLevel::all
                                      ? horizon.prior_of(parts.context)
                                      : estimates.at(coarser_motion_key(key));
         estimates[key] = shrink(row, parent);
@@ -118,8 +140,40 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     };
     shrink_level(level == 0 ? rows : coarse);
   }
+  if (prior_model) {
+    // The rows only the prior has: a new opponent is predicted from every team's.
+    for (const Slot& slot : prior_model->index_) {
+      if (slot.key != empty_slot && !estimates.contains(slot.key)) {
+        estimates.emplace(slot.key, *prior_model->estimate(slot.key));
+      }
+    }
+  }
   index_estimates(estimates);
-  for (int h = 0; h < horizons; ++h) calibrate(table, h, grid, field);
+  for (int h = 0; h < horizons; ++h) {
+    calibrate(table, h, grid, field);
+    Horizon& horizon = horizon_[static_cast<std::size_t>(h)];
+    if (prior_model && horizon.mass_upper.empty()) {
+      // Too little held out of the opponent's own play to calibrate on: the prior's calibration.
+      const Horizon& generic = prior_model->horizon_[static_cast<std::size_t>(h)];
+      horizon.z50 = generic.z50;
+      horizon.z90 = generic.z90;
+      horizon.mass_upper = generic.mass_upper;
+      horizon.hit_rate = generic.hit_rate;
+    }
+  }
+}
+
+std::optional<MotionModel::Estimate> MotionModel::estimate(MotionKey key) const {
+  const Slot* slot = find(key);
+  if (!slot) return std::nullopt;
+  Estimate e;
+  e.mean_x = slot->mean_x;
+  e.mean_y = slot->mean_y;
+  e.mean_square = slot->mean_square;
+  for (int i = 0; i < motion_regressors; ++i) {
+    e.coefficients[static_cast<std::size_t>(i)] = slot->coefficients[static_cast<std::size_t>(i)];
+  }
+  return e;
 }
 
 MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& parent) const {
@@ -187,9 +241,6 @@ MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& 
   return e;
 }
 
-namespace {
-constexpr MotionKey empty_slot = ~MotionKey{0};  // no key has every bit set
-}  // namespace
 
 void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates) {
   std::size_t size = 16;

@@ -13,6 +13,7 @@ ModelSettings model_settings(const PredictionConfig& config) {
   settings.step_s = config.sampler.step_s;
   settings.horizons = config.horizon;
   settings.recalibration = config.recalibration;
+  settings.prior_table = config.prior_table;
   return settings;
 }
 

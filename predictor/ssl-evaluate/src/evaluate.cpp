@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <random>
 
 #include "ssl_formation/evaluation/evaluation.hpp"
@@ -260,6 +262,11 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
   const SamplerConfig base = model.sampler_config();
   GridReport report;
   report.grid = base.grid;
+  // A prior serves the sections of its own step (the chained steps, and the single horizon equal
+  // to it): a table's rows are learned for one step.
+  const std::shared_ptr<const MotionTable> prior =
+      options.prior_table.empty() ? nullptr
+                                  : app::loaded_prior_table(options.prior_table, base.step_s);
   const auto evaluate = [&](double step_s, int steps) {
     ev::PositionEvaluationConfig config;
     config.sampler = base;
@@ -270,6 +277,7 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
     config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
     config.tracked_vision = options.network.tracked();
+    if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
   for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);

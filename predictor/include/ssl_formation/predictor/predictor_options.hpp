@@ -24,6 +24,7 @@ struct PredictorOptions {
   int ttl = net::kDefaultMulticastTtl;
   int horizon = 2;
   double recalibration_half_life_s = OnlineCalibrationSettings{}.half_life_s;  // 0: off
+  std::string prior_table;  // --prior-table: every team's table; empty: none
   double reload_interval_s = 0.5;
   double status_interval_s = 5.0;
   int receive_buffer_bytes = net::kDefaultReceiveBufferBytes;

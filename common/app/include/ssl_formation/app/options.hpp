@@ -4,6 +4,7 @@
 // --opponent-attacks, --field-length, --field-width.
 
 #include <boost/program_options.hpp>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,6 +67,13 @@ void add_recalibration_option(po::options_description& options, double& half_lif
 // The settings a --recalibration-half-life asks for; none for 0. Throws UsageError for a
 // negative or non-finite one.
 std::optional<OnlineCalibrationSettings> recalibration_settings(double half_life_s);
+
+// --prior-table, for the programs that predict with the motion model (ssl-predictor,
+// ssl-evaluate): every team's table, under the opponent's own rows (MotionModel).
+void add_prior_table_option(po::options_description& options, std::string& prior_table);
+// The prior's motion rows; none for an empty path. Throws UsageError, saying why, for a file
+// that does not load, holds no motion rows, or was trained with another step than `step_s`.
+std::shared_ptr<const MotionTable> loaded_prior_table(const std::string& path, double step_s);
 
 // --learn-during, for the program that trains from the referee (ssl-trainer).
 void add_learn_during_option(po::options_description& options, std::string& learn_during);

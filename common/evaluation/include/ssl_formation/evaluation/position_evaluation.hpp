@@ -83,6 +83,9 @@ struct PositionEvaluationConfig {
   // none: the sampler's opponent, fixed, learning in every state.
   std::optional<MatchRules> rules;
   bool tracked_vision = false;  // --vision-source tracked
+  // The model's prior: every team's table (ssl-evaluate --prior-table), under the rows it
+  // learns from the training streams.
+  std::shared_ptr<const MotionTable> prior_table;
   // Sees every prediction the model makes on the test streams, as the daemon would have sent it
   // (and ssl-predictor --from-log written it): for tools and tests that want them as they are.
   std::function<void(const PredictedFormation&)> on_model_prediction;

@@ -79,6 +79,12 @@ class Learner {
 
   // A forecaster of what was learned so far; `metadata` is the table's (its field and step).
   virtual std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const = 0;
+  // The same under a prior table (every team's; ModelSettings::prior_table), for a model that
+  // has one: the motion model. The others ignore it.
+  virtual std::unique_ptr<Forecaster> forecaster(
+      const TableMetadata& metadata, std::shared_ptr<const MotionTable> /*prior_table*/) const {
+    return forecaster(metadata);
+  }
 };
 
 // What forecast() is for: a prediction that counts, or a rehearsal (the daemon runs the last one

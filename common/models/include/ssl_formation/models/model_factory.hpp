@@ -101,6 +101,11 @@ struct ModelSettings {
   double velocity_window_s = 0.1;
   // The damped baselines: how far from t + horizon a position may be to stand for it.
   double tolerance_s = 0.05;
+  // The motion model's prior: every team's table (`ssl-trainer --opponent-team all`, merged),
+  // under the opponent's own rows (MotionModel). None: damped constant velocity is the prior.
+  std::shared_ptr<const MotionTable> prior_table;
+  // The field the prior's probabilities are calibrated for until a table brings its own.
+  FieldSize prior_field{9000.0, 6000.0};
   // The motion model's table settings for these (its step and horizons from above).
   MotionConfig motion_config() const;
 };

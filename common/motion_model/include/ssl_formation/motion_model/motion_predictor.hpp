@@ -112,9 +112,14 @@ class MotionModel {
     std::vector<Resolved> estimates_;                            // slot-major, `horizons_` each
   };
 
-  // `grid` and `field` are those the cell probabilities are calibrated for.
+  // `grid` and `field` are those the cell probabilities are calibrated for. Under a
+  // `prior_model` (every team's table, MotionForecaster's --prior-table), each of the table's
+  // rows is held towards the prior's estimate of the same row, the rows the table lacks are the
+  // prior's, and a table with too little held out takes the prior's calibration: a new opponent
+  // is predicted like every team, and its own rows take over as they fill. Throws
+  // std::invalid_argument for a prior of other settings.
   MotionModel(const MotionTable& table, const Grid& grid, const FieldSize& field,
-              MotionModelSettings settings = {});
+              MotionModelSettings settings = {}, const MotionModel* prior_model = nullptr);
 
   const MotionConfig& config() const { return config_; }
   int horizons() const { return config_.horizons; }
@@ -174,6 +179,7 @@ class MotionModel {
     std::vector<double> hit_rate;
   };
   Estimate shrink(const MotionRow& row, const Estimate& parent) const;
+  std::optional<Estimate> estimate(MotionKey key) const;  // as indexed (floats), none if absent
   const Slot* find(MotionKey key) const;
   // The finest estimate with counts among the robot's keys, else the horizon's root.
   Resolved resolve(int horizon_index, const RobotKeys& keys) const;

@@ -33,6 +33,8 @@ struct PredictionConfig {
   // sampler's colour and side, fixed as if given by option.
   std::optional<OpponentChoice> opponent = std::nullopt;
   bool tracked_vision = false;  // --vision-source tracked (FrontEndConfig)
+  // The motion model's prior (ModelSettings::prior_table): --prior-table.
+  std::shared_ptr<const MotionTable> prior_table;
   static constexpr int max_horizon = 100;
 };
 

@@ -47,6 +47,8 @@ struct EvaluateOptions {
   int chain_steps = 3;
   double velocity_window_s = 0.1;
   double recalibration_half_life_s = OnlineCalibrationSettings{}.half_life_s;  // 0: off
+  // holdout: every team's table under the model's rows, for the sections of its step.
+  std::string prior_table;
   std::string output_dir;  // none: no CSV files
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
   // as-real-log: the recording, the log written and the mess (parse_real_log_mess); `seed`
