@@ -30,7 +30,11 @@ ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600
 if [ "${SSLF_SKIP_SANITIZERS:-0}" != 1 ]; then
   sanitize_dir="$build_dir-sanitize"
   echo "== Unit and daemon tests under AddressSanitizer and UndefinedBehaviorSanitizer ($sanitize_dir)"
+  # -O1 and line tables only: the sanitized build is half the suite's time, and -O1 halves it
+  # (10 instead of 20 minutes on 2 cores) while the sanitizers still see everything they check.
+  # GCC's -Wmaybe-uninitialized misfires at -O1 under the sanitizers (std::optional copies).
   cmake -S "$SSLF_ROOT" -B "$sanitize_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG -Wno-maybe-uninitialized" \
     -DSSLF_SANITIZE=ON -DSSLF_BUILD_BENCHMARKS=OFF >"$sanitize_dir.configure.log" 2>&1 ||
     { cat "$sanitize_dir.configure.log" >&2; exit 1; }
   # The reliability (load, SIGKILL timing) and browser tests are left to the Release build.

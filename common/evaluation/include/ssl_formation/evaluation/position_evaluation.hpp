@@ -85,7 +85,7 @@ struct PositionEvaluationConfig {
   bool tracked_vision = false;  // --vision-source tracked
   // The model's prior: every team's table (ssl-evaluate --prior-table), under the rows it
   // learns from the training streams.
-  std::shared_ptr<const MotionTable> prior_table;
+  std::shared_ptr<const MotionTable> prior_table = nullptr;
   // Sees every prediction the model makes on the test streams, as the daemon would have sent it
   // (and ssl-predictor --from-log written it): for tools and tests that want them as they are.
   std::function<void(const PredictedFormation&)> on_model_prediction;

@@ -103,7 +103,7 @@ struct ModelSettings {
   double tolerance_s = 0.05;
   // The motion model's prior: every team's table (`ssl-trainer --opponent-team all`, merged),
   // under the opponent's own rows (MotionModel). None: damped constant velocity is the prior.
-  std::shared_ptr<const MotionTable> prior_table;
+  std::shared_ptr<const MotionTable> prior_table = nullptr;
   // The field the prior's probabilities are calibrated for until a table brings its own.
   FieldSize prior_field{9000.0, 6000.0};
   // The motion model's table settings for these (its step and horizons from above).

@@ -34,7 +34,7 @@ struct PredictionConfig {
   std::optional<OpponentChoice> opponent = std::nullopt;
   bool tracked_vision = false;  // --vision-source tracked (FrontEndConfig)
   // The motion model's prior (ModelSettings::prior_table): --prior-table.
-  std::shared_ptr<const MotionTable> prior_table;
+  std::shared_ptr<const MotionTable> prior_table = nullptr;
   static constexpr int max_horizon = 100;
 };
 
