@@ -255,8 +255,10 @@ double time_predictions(const TransitionTable& table, const Streams& test,
   return runs ? elapsed / static_cast<double>(runs) : 0.0;
 }
 
+// `prior`: every team's table (--prior-table), loaded once for every grid.
 GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& grid,
-                            const Streams& train, const Streams& test) {
+                            const Streams& train, const Streams& test,
+                            const std::shared_ptr<const MotionTable>& prior) {
   app::ModelOptions model = options.model;
   model.grid = grid;
   const SamplerConfig base = model.sampler_config();
@@ -264,9 +266,6 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
   report.grid = base.grid;
   // A prior serves the sections of its own step (the chained steps, and the single horizon equal
   // to it): a table's rows are learned for one step.
-  const std::shared_ptr<const MotionTable> prior =
-      options.prior_table.empty() ? nullptr
-                                  : app::loaded_prior_table(options.prior_table, base.step_s);
   const auto evaluate = [&](double step_s, int steps) {
     ev::PositionEvaluationConfig config;
     config.sampler = base;
@@ -476,9 +475,11 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   CsvFile reliability(options, prefix + "reliability.csv");
   reliability << "grid,horizon_steps,horizon_s,game_state,quantity,bin,count,mean_confidence,"
                  "observed_frequency\n";
+  const std::shared_ptr<const MotionTable> prior =
+      app::loaded_prior_table(options.prior_table, options.model.step());
   std::vector<GridReport> reports;
   for (const std::string& grid : grids) {
-    reports.push_back(holdout_for_grid(options, grid, train, test));
+    reports.push_back(holdout_for_grid(options, grid, train, test, prior));
     print_holdout(reports.back(), base);
     write_holdout_csv(accuracy, calibration, reliability, reports.back());
     std::printf("\n");
