@@ -17,7 +17,8 @@
 #
 # The daemons are told only our team's name, as at a tournament: the referee gives the
 # opponent's colour and side (the teams change ends at half time, every 5 minutes) and learning
-# happens in running play only. The demo runs the motion model, the daemons' default.
+# happens in every game state, each filed under its state. The demo runs the motion model, the
+# daemons' default.
 # --simulation paper sends the paper's simulated opponent instead, jumping from formation to
 # formation every 2 s of data time (one every --period s of wall time), with the paper's model.
 # --replay LOG (an official log of a real or simulated match, e.g.
