@@ -23,6 +23,11 @@ std::uint32_t game_context_of(const MatchMoment& moment) {
   return MotionFeatures::game_context(moment.phase, moment.since_command_s);
 }
 
+// The ball's velocity as a motion history takes it: zero when no ball is seen.
+Point ball_velocity_of(const MatchMoment& moment) {
+  return moment.ball ? moment.ball_velocity : Point{};
+}
+
 }  // namespace
 
 // ---- The paper's model ----------------------------------------------------------------------
@@ -71,7 +76,7 @@ MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
 
 void MotionLearner::observe(const MatchMoment& moment) {
   // Followed in every state, so that velocities are known when learning starts again.
-  history_.add(moment.formation(), game_context_of(moment));
+  history_.add(moment.formation(), game_context_of(moment), ball_velocity_of(moment));
 }
 
 void MotionLearner::learn(const MatchMoment& moment) {
@@ -151,7 +156,7 @@ void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
 }
 
 void MotionForecaster::observe(const MatchMoment& moment) {
-  history_.add(moment.formation(), game_context_of(moment));
+  history_.add(moment.formation(), game_context_of(moment), ball_velocity_of(moment));
   if (settings_.recalibration) calibration_.observe(moment.formation());
 }
 
@@ -167,7 +172,10 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
     const bool moving = seen && seen->has_velocity;
     robots_.push_back({robot.robot_id, robot.position,
                        moving ? seen->kinematics : MotionKinematics{}, moving,
-                       moving ? seen->context : MotionFeatures::context(0, 0, game)});
+                       moving ? seen->context
+                              : MotionFeatures::context(
+                                    0, 0, game,
+                                    MotionFeatures::ball_in_flight(ball_velocity_of(moment)))});
   }
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
                   rules_of_the_game(moment));

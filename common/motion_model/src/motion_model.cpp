@@ -580,7 +580,8 @@ inline const MotionHistory::Entry* MotionHistory::nearest(const Track& track, st
   return best;
 }
 
-void MotionHistory::add(const Formation& formation, std::uint32_t game_context) {
+void MotionHistory::add(const Formation& formation, std::uint32_t game_context,
+                        Point ball_velocity) {
   const double t = formation.time_s;
   if (last_time_s_ && (t <= *last_time_s_ || t - *last_time_s_ > forget_after_gap_s ||
                        formation.opponent_attacks != attacks_)) {
@@ -694,12 +695,14 @@ void MotionHistory::add(const Formation& formation, std::uint32_t game_context) 
   // The team's mean velocity and phase go into every new entry, now that each robot has its own.
   if (with_velocity > 0) team = {team.x / with_velocity, team.y / with_velocity};
   const int team_phase = MotionFeatures::team_phase(formation.centroid, team);
+  const bool ball_in_flight = MotionFeatures::ball_in_flight(ball_velocity);
   for (const FormationRobot& robot : formation.robots) {
     if (!robot.observed) continue;
     Track& track = tracks_[robot.robot_id];
     Entry& entry = track.at(track.end - 1);
     entry.kinematics.team_velocity = team;
-    entry.context = MotionFeatures::context(entry.context, team_phase, game_context);
+    entry.context =
+        MotionFeatures::context(entry.context, team_phase, game_context, ball_in_flight);
   }
 }
 

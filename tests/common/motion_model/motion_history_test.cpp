@@ -286,3 +286,38 @@ TEST(MotionHistory, AnEntrysContextIsItsStandingTimeAndWhereItsTeamIs) {
   EXPECT_NE(history.latest(0)->context,
             sf::MotionFeatures::context(sf::MotionFeatures::standing_context(3.0), ahead_standing));
 }
+
+TEST(MotionHistory, ABallInFlightGoesIntoTheContextAndTheCoarseLevelsLeaveItOut) {
+  sf::MotionConfig config;
+  config.step_s = 0.5;
+  sf::MotionHistory history(config);
+  const auto at = [](double t) {
+    sf::Formation formation = formation_at(t, {{{-2000.0 + 400.0 * t, 0.0}, true}});
+    formation.centroid = {-2000.0 + 400.0 * t, 0.0};
+    return formation;
+  };
+  const std::uint32_t halt = sf::MotionFeatures::halt_game;
+  // A pass at 3 m/s, then the ball at rest (0.6 m/s is rolling out, not a pass).
+  for (int i = 0; i <= 25; ++i) history.add(at(i / 50.0), halt, {0.0, 3000.0});
+  const int team_phase = sf::MotionFeatures::team_phase({-1800.0, 0.0}, {400.0, 0.0});
+  const std::uint32_t flying = history.latest(0)->context;
+  EXPECT_EQ(flying, sf::MotionFeatures::context(0, team_phase, halt, true));
+  EXPECT_TRUE(sf::MotionFeatures::ball_in_flight_of(flying));
+  history.add(at(0.52), halt, {600.0, 0.0});
+  const std::uint32_t resting = history.latest(0)->context;
+  EXPECT_EQ(resting, sf::MotionFeatures::context(0, team_phase, halt, false));
+  EXPECT_EQ(sf::MotionFeatures::game_context_of(flying), halt);
+  EXPECT_EQ(sf::MotionFeatures::game_context_of(resting), halt);
+  // The robot's and the zone's rows tell the two apart; the coarse levels pool them.
+  sf::MotionKeyParts parts{0, sf::MotionLevel::robot, 0, 10, 3, flying};
+  sf::MotionKeyParts other = parts;
+  other.context = resting;
+  sf::MotionKey a = sf::encode_motion_key(parts), b = sf::encode_motion_key(other);
+  for (int level = 0; level < sf::motion_levels; ++level) {
+    const auto at_level = static_cast<sf::MotionLevel>(level);
+    EXPECT_EQ(a == b, at_level == sf::MotionLevel::velocity || at_level == sf::MotionLevel::all)
+        << level;
+    a = sf::coarser_motion_key(a);
+    b = sf::coarser_motion_key(b);
+  }
+}

@@ -121,20 +121,30 @@ TEST(MotionFeatures, TheContextTellsTheStandingTimeAndTheTeamPhaseApart) {
   EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}, still), 4);  // into the half it attacks
   EXPECT_EQ(sf::MotionFeatures::team_phase({1500.0, 0.0}, moving), 5);
   std::set<std::uint32_t> contexts;
-  for (std::uint32_t game = 0; game < sf::MotionFeatures::game_contexts; ++game) {
-    for (int phase = 0; phase < sf::MotionFeatures::team_phases; ++phase) {
-      for (std::uint32_t standing = 0; standing < sf::MotionFeatures::standing_contexts;
-           ++standing) {
-        const std::uint32_t context = sf::MotionFeatures::context(standing, phase, game);
-        contexts.insert(context);
-        EXPECT_EQ(sf::MotionFeatures::game_context_of(context), game);
+  for (const bool flying : {false, true}) {
+    for (std::uint32_t game = 0; game < sf::MotionFeatures::game_contexts; ++game) {
+      for (int phase = 0; phase < sf::MotionFeatures::team_phases; ++phase) {
+        for (std::uint32_t standing = 0; standing < sf::MotionFeatures::standing_contexts;
+             ++standing) {
+          const std::uint32_t context = sf::MotionFeatures::context(standing, phase, game, flying);
+          contexts.insert(context);
+          EXPECT_EQ(sf::MotionFeatures::game_context_of(context), game);
+          EXPECT_EQ(sf::MotionFeatures::ball_in_flight_of(context), flying);
+        }
       }
     }
   }
   EXPECT_EQ(contexts.size(), sf::MotionFeatures::context_count);
   EXPECT_EQ(*contexts.rbegin(), sf::MotionFeatures::context_count - 1);
-  // Running play keeps the contexts tables learned before the game's states came in.
+  // Running play with the ball at rest keeps the contexts of tables learned before the game's
+  // states and the ball came in.
   EXPECT_EQ(sf::MotionFeatures::context(4, 5), 29u);
+  EXPECT_EQ(sf::MotionFeatures::context(4, 5, sf::MotionFeatures::running_game, false), 29u);
+  // In flight from 1 m/s on, in any direction.
+  EXPECT_FALSE(sf::MotionFeatures::ball_in_flight({999.0, 0.0}));
+  EXPECT_TRUE(sf::MotionFeatures::ball_in_flight({0.0, -1000.0}));
+  EXPECT_TRUE(sf::MotionFeatures::ball_in_flight({-800.0, 600.0}));
+  EXPECT_FALSE(sf::MotionFeatures::ball_in_flight({}));
   EXPECT_EQ(sf::MotionFeatures::standing_context(99.0), sf::MotionFeatures::standing_contexts - 1);
 }
 

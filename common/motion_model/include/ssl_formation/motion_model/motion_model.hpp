@@ -113,15 +113,35 @@ struct MotionFeatures {
       2 + (all_game_phases.size() - 2) * since_command_buckets;
   static std::uint32_t game_context(GamePhase phase, double since_command_s);
   static GamePhase phase_of_game_context(std::uint32_t game_context);
-  // A row's context: the standing context, the team phase and the game context.
-  static constexpr std::uint32_t robot_contexts = standing_contexts * team_phases;
-  static constexpr std::uint32_t context_count = robot_contexts * game_contexts;
-  static std::uint32_t context(std::uint32_t standing_context, int team_phase,
-                               std::uint32_t game_context = running_game) {
-    return standing_context + standing_contexts * static_cast<std::uint32_t>(team_phase) +
-           robot_contexts * game_context;
+  // Whether the ball is in flight (a pass, a shot, a clearance): faster than this. The players
+  // follow a ball on its way, and stand or close in on one at rest. Of the ball inputs tried
+  // (docs/results.md: its position and velocity relative to the robot as regressors, the robot
+  // nearest the ball, the ball's third of the field, the nearest robot of the other team), this
+  // bit was the only one that helped on every tuning split; 0.5 and 2 m/s did no better.
+  static constexpr double ball_flight_speed_mm_s = 1000.0;
+  static bool ball_in_flight(Point ball_velocity_mm_s) {
+    return ball_velocity_mm_s.x * ball_velocity_mm_s.x +
+               ball_velocity_mm_s.y * ball_velocity_mm_s.y >=
+           ball_flight_speed_mm_s * ball_flight_speed_mm_s;
   }
-  static std::uint32_t game_context_of(std::uint32_t context) { return context / robot_contexts; }
+  static constexpr std::uint32_t ball_contexts = 2;
+  // A row's context: the standing context, the team phase, the game context and whether the
+  // ball is in flight, in that order of significance. The ball comes last so that the contexts
+  // of tables learned before it (the ball at rest or unseen) keep their numbers.
+  static constexpr std::uint32_t robot_contexts = standing_contexts * team_phases;
+  static constexpr std::uint32_t context_count = robot_contexts * game_contexts * ball_contexts;
+  static std::uint32_t context(std::uint32_t standing_context, int team_phase,
+                               std::uint32_t game_context = running_game,
+                               bool ball_in_flight = false) {
+    return standing_context + standing_contexts * static_cast<std::uint32_t>(team_phase) +
+           robot_contexts * (game_context + game_contexts * (ball_in_flight ? 1U : 0U));
+  }
+  static std::uint32_t game_context_of(std::uint32_t context) {
+    return context / robot_contexts % game_contexts;
+  }
+  static bool ball_in_flight_of(std::uint32_t context) {
+    return context / (robot_contexts * game_contexts) != 0;
+  }
   // Zones: where every robot's rows are pooled, 3 m across, numbered like cells. The length in
   // quarters (own half in two, the attacked half in two) and the width in a centre lane and two
   // wings, on a Division A field; beyond them, the edge zones. Set plays put each role at places
@@ -155,7 +175,8 @@ struct MotionFeatures {
 
 // The back-off levels, finest first: the robot's own row (cell, velocity class, context), every
 // robot's in the cell's zone (velocity class, context), every robot's with the velocity class in
-// the game context, every robot's in the game context. Below them, the horizon's pooled root (or
+// the game context, every robot's in the game context (the coarse levels leave the standing
+// time, the team phase and the ball out). Below them, the horizon's pooled root (or
 // for HALT the rules' prior: see MotionModel).
 enum class MotionLevel : std::uint8_t { robot = 0, zone = 1, velocity = 2, all = 3 };
 inline constexpr int motion_levels = 4;
@@ -414,8 +435,11 @@ class MotionHistory {
   // team's). Every robot's kinematics are then latest(id)->kinematics. A robot whose position
   // jumped (MotionFeatures::is_jump) starts its track again there: nothing is learned across
   // the jump and its velocity starts anew.
-  // `game_context` (MotionFeatures::game_context) goes into every new entry's context.
-  void add(const Formation& formation, std::uint32_t game_context = MotionFeatures::running_game);
+  // `game_context` (MotionFeatures::game_context) and whether the ball moving at
+  // `ball_velocity` (normalised mm/s; zero when no ball is seen) is in flight go into every new
+  // entry's context.
+  void add(const Formation& formation, std::uint32_t game_context = MotionFeatures::running_game,
+           Point ball_velocity = {});
   void clear();
 
   const Entry* latest(std::uint32_t robot_id) const;
