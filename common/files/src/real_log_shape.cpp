@@ -74,6 +74,11 @@ constexpr double pair_interval_s = 1.0 / 45.0;
 constexpr double second_half_after_s = 0.011;
 
 using Team = std::map<std::uint32_t, Point>;  // the last position seen of each robot id
+// The recording's ball as last seen (the most confident candidate of its latest packet), none
+// before the first: real logs have a ball, and the motion model reads whether it is in flight.
+struct RecordedBall {
+  std::optional<Point> position;
+};
 
 // The reshaped log's referee sends a message this often (a game controller sends about ten a
 // second), and one at each new command.
@@ -184,7 +189,8 @@ class Messer {
 
   // The packets of one pair at recording time `t` (none inside a cut), with the time every
   // packet is stamped with (stoppages and the half-time break push later times back).
-  void write_pair(double t, const Team& yellow, const Team& blue, LogWriter& out,
+  void write_pair(double t, const Team& yellow, const Team& blue, const RecordedBall& ball,
+                  LogWriter& out,
                   RealLogCounts& counts) {
     const double fraction = (t - start_s_) / length_s_;
     if (mess_.cuts) {
@@ -206,7 +212,7 @@ class Messer {
         for (int k = 0; k < pairs; ++k) {
           const double s = k * pair_interval_s;
           referee_at(t + shift_s_ + s, Referee::HALT, out, counts);
-          write_halves(t + shift_s_ + s, yellow, blue, fraction, out, counts);
+          write_halves(t + shift_s_ + s, yellow, blue, ball, fraction, out, counts);
         }
         shift_s_ += stoppages[i].length_s;
         running_command_ = Referee::FORCE_START;
@@ -227,7 +233,7 @@ class Messer {
       shift_s_ += half_time_break_s;
     }
     referee_at(t + shift_s_, running_command_, out, counts);
-    write_halves(t + shift_s_, yellow, blue, fraction, out, counts);
+    write_halves(t + shift_s_, yellow, blue, ball, fraction, out, counts);
   }
 
  private:
@@ -235,7 +241,8 @@ class Messer {
     if (referee_) referee_->at(t, command, stage_, ends_changed_, out, counts);
   }
 
-  void write_halves(double t, const Team& yellow, const Team& blue, double fraction, LogWriter& out,
+  void write_halves(double t, const Team& yellow, const Team& blue, const RecordedBall& ball,
+                    double fraction, LogWriter& out,
                     RealLogCounts& counts) {
     start_ghost_maybe();
     for (const bool left : {true, false}) {
@@ -244,6 +251,7 @@ class Messer {
       spec.t_capture = left ? t : t + second_half_after_s;
       add_team(yellow, fraction, left, spec.yellow);
       add_team(blue, fraction, left, spec.blue);
+      add_ball(ball, left, spec.balls);
       if (ghost_.packets_left > 0 && (ghost_.detection.position.x < 0.0) == left) {
         (ghost_.yellow ? spec.yellow : spec.blue).push_back(ghost_.detection);
         --ghost_.packets_left;
@@ -273,6 +281,19 @@ class Messer {
       }
       if ((p.x < 0.0) == left) detections.push_back({id, p});
     }
+  }
+
+  // The ball in the packet of its half, where the robots' positions go (mirrored, noisy).
+  void add_ball(const RecordedBall& ball, bool left, std::vector<Point>& balls) {
+    if (!ball.position) return;
+    const double mirror = mess_.change_of_ends && ends_changed_ ? -1.0 : 1.0;
+    Point p{mirror * ball.position->x, mirror * ball.position->y};
+    if (mess_.noise_mm > 0.0) {
+      std::normal_distribution<double> noise(0.0, mess_.noise_mm);
+      p.x += noise(noise_);
+      p.y += noise(noise_);
+    }
+    if ((p.x < 0.0) == left) balls.push_back(p);
   }
 
   void start_ghost_maybe() {
@@ -342,6 +363,7 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
   Messer messer(mess, first_s, std::max(counts.recording_s, 1e-9), teams);
   Team yellow;
   Team blue;
+  RecordedBall ball;
   double next_pair_s = 0.0;
   while (reader->next_vision(packet)) {
     if (!packet.has_detection()) continue;
@@ -352,11 +374,16 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
     for (const auto& robot : detection.robots_blue()) {
       blue[robot.robot_id()] = {robot.x(), robot.y()};
     }
+    const SSL_DetectionBall* seen = nullptr;
+    for (const auto& candidate : detection.balls()) {
+      if (!seen || candidate.confidence() > seen->confidence()) seen = &candidate;
+    }
+    if (seen) ball.position = Point{seen->x(), seen->y()};
     const double t = detection.t_capture();
     if (t < next_pair_s) continue;
     // A pause in the recording starts the beat again.
     next_pair_s = (t - next_pair_s > 1.0 ? t : next_pair_s) + pair_interval_s;
-    messer.write_pair(t, yellow, blue, *writer, counts);
+    messer.write_pair(t, yellow, blue, ball, *writer, counts);
   }
   if (!writer->close()) return fail(out.string() + ": " + writer->error());
   return counts;

@@ -71,6 +71,49 @@ TEST_F(RealLogShape, EveryPacketIsOneHalfOfTheFieldFromCameraZeroNinetyASecond) 
   EXPECT_EQ(ids, (std::set<std::uint32_t>{0, 1, 2, 3, 4, 5}));
 }
 
+TEST(RealLogShapeBall, TheRecordingsBallGoesInThePacketOfItsHalf) {
+  // 10 s of one robot and a ball rolling from x = -3 m to +3 m at 600 mm/s, with a second, less
+  // confident candidate far away (a reflection) that must not win.
+  st::ScratchDir dir;
+  std::vector<SSL_WrapperPacket> recording;
+  for (int f = 0; f < 600; ++f) {
+    sf::DetectionFrameSpec spec;
+    spec.frame_number = static_cast<std::uint32_t>(f);
+    spec.t_capture = 100.0 + f / 60.0;
+    spec.yellow.push_back({0, {-1000.0, 0.0}});
+    spec.balls.push_back({-3000.0 + 600.0 * f / 60.0, 500.0});
+    SSL_WrapperPacket packet = sf::make_detection_packet(spec);
+    SSL_DetectionBall& reflection = *packet.mutable_detection()->add_balls();
+    reflection.set_confidence(0.1F);
+    reflection.set_x(4000.0F);
+    reflection.set_y(-2500.0F);
+    reflection.set_pixel_x(0.0F);
+    reflection.set_pixel_y(0.0F);
+    packet.mutable_detection()->mutable_balls(0)->set_confidence(0.9F);
+    recording.push_back(packet);
+  }
+  ASSERT_EQ(st::write_vision_log(dir.path() / "clean.log", recording), "");
+  sf::RealLogMess mess;
+  mess.change_of_ends = true;  // from 5 s on, the ball mirrored too
+  ASSERT_TRUE(sf::write_as_real_log(dir.path() / "clean.log", dir.path() / "real.log", mess));
+  const auto log = sf::read_vision_log(dir.path() / "real.log");
+  ASSERT_TRUE(log.has_value());
+  int with_ball = 0;
+  for (std::size_t i = 0; i < log->packets.size(); ++i) {
+    const auto& detection = log->packets[i].detection();
+    const bool left = i % 2 == 0;
+    ASSERT_LE(detection.balls_size(), 1);
+    if (detection.balls_size() == 0) continue;
+    ++with_ball;
+    const auto& ball = detection.balls(0);
+    EXPECT_EQ(ball.x() < 0.0F, left) << i;
+    // The rolling ball (at y = 500, or -500 once the ends changed), never the reflection.
+    EXPECT_NEAR(std::abs(ball.y()), 500.0F, 1.0F) << i;
+  }
+  // One packet of each pair has it: the half it is in.
+  EXPECT_NEAR(with_ball, static_cast<int>(log->packets.size()) / 2, 2);
+}
+
 TEST_F(RealLogShape, EachPartOfTheMessIsWhereItWasAsked) {
   const std::vector<SSL_WrapperPacket> clean = reshape(sf::RealLogMess{});
   const auto yellow_ids = [](const std::vector<SSL_WrapperPacket>& packets) {
