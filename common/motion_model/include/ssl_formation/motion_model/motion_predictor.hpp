@@ -35,6 +35,9 @@ struct MotionModelSettings {
   // brake with this time constant and then stand, give or take the vision's noise.
   double halt_brake_time_constant_s = 0.15;
   double halt_error_mm = 20.0;
+  // How many held-out instances of a game phase weigh as much as keeping its rows' mean
+  // displacement whole (MotionModel's mean weights).
+  double mean_weight_shrinkage = 20.0;
 };
 
 // What the rules of the game say of where the opponent's robots can go under the referee's
@@ -172,6 +175,14 @@ class MotionModel {
     const Estimate& prior_of(std::uint32_t context) const {
       return MotionFeatures::game_context_of(context) == MotionFeatures::halt_game ? still : root;
     }
+    // Per game phase (GamePhase's order), how much of its rows' mean displacement the forecasts
+    // keep: fitted on the held-out sample (weigh_means).
+    std::array<double, all_game_phases.size()> mean_weight = filled_with_one();
+    static std::array<double, all_game_phases.size()> filled_with_one() {
+      std::array<double, all_game_phases.size()> ones{};
+      ones.fill(1.0);
+      return ones;
+    }
     double z50 = 0.0, z90 = 0.0;  // radius / sqrt(mean square)
     // Isotonic map from the Gaussian mass to the observed hit rate: block upper bounds and
     // their rates, increasing. Empty: identity.
@@ -192,6 +203,9 @@ class MotionModel {
                const FieldSize& field, AttackDirection attacks, Prediction& out, Cache* cache,
                const MotionRules& rules) const;
   void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
+  // Sets the horizon's mean weights from the table's held-out sample; false (weights left at
+  // one) when it holds too few instances.
+  bool weigh_means(const MotionTable& table, int horizon_index);
   void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
                  const FieldSize& field);
   double calibrated(int horizon_index, double mass) const;

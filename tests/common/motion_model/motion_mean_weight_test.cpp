@@ -1,0 +1,96 @@
+// The weight of each game phase's learned mean displacement (MotionModel::weigh_means): kept
+// where held-out play bears it out, dropped where it does not, hand-built.
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+
+#include "ssl_formation/match/game_phase.hpp"
+#include "ssl_formation/motion_model/motion_predictor.hpp"
+
+namespace ssl_formation {
+namespace {
+
+const Grid grid(6, 4);
+const FieldSize field{9000.0, 6000.0};
+
+MotionConfig config() {
+  MotionConfig c;
+  c.step_s = 0.5;
+  c.horizons = 1;
+  return c;
+}
+
+std::uint32_t context_of(GamePhase phase) {
+  return MotionFeatures::context(0, 0, MotionFeatures::game_context(phase, 5.0));
+}
+
+// Robot 3 standing at (1000, 500) in `phase`, found `dx` further along x half a second later.
+MotionInstance standing_robot(GamePhase phase, std::int32_t dx) {
+  MotionInstance i;
+  i.robot_id = 3;
+  i.x = 1000;
+  i.y = 500;
+  i.d_x = dx;
+  i.context = context_of(phase);
+  return i;
+}
+
+// Instances 0.1 s apart from `first_s` until `counted` went into rows and `held_out` into the
+// held-out sample: the rows learn `counted_dx`, the held-out play shows `held_out_dx`.
+void add(MotionTable& table, GamePhase phase, int counted, std::int32_t counted_dx, int held_out,
+         std::int32_t held_out_dx, double first_s) {
+  int rows = 0, held = 0;
+  for (double t = first_s; rows < counted || held < held_out; t += 0.1) {
+    const bool is_held_out = table.is_held_out(t);
+    if (is_held_out && held < held_out) {
+      table.add(0, t, standing_robot(phase, held_out_dx));
+      ++held;
+    } else if (!is_held_out && rows < counted) {
+      table.add(0, t, standing_robot(phase, counted_dx));
+      ++rows;
+    }
+  }
+}
+
+double forecast_dx(const MotionModel& model, GamePhase phase) {
+  MotionRobot robot;
+  robot.robot_id = 3;
+  robot.position = {1000.0, 500.0};
+  robot.has_velocity = true;
+  robot.context = context_of(phase);
+  return model.forecast(0, robot).position.x - robot.position.x;
+}
+
+TEST(MotionMeanWeight, APhasesMeanDisplacementCountsAsMuchAsItsHeldOutPlayBearsOut) {
+  MotionTable table(config());
+  // Running play: the rows and the held-out play agree that the robot goes 600 mm on.
+  add(table, GamePhase::running, 2000, 600, 300, 600, 0.0);
+  // The opponent's free kicks: the training's went 600 mm on, the held-out ones nowhere (where
+  // a few set plays happened to be taken, not a habit).
+  add(table, GamePhase::free_kick_opponent, 2000, 600, 300, 0, 1000.0);
+  const MotionModel model(table, grid, field);
+  EXPECT_NEAR(forecast_dx(model, GamePhase::running), 600.0, 10.0);
+  // 300 held-out instances against the weight's 20: at most a fifteenth of the mean is kept.
+  EXPECT_LT(forecast_dx(model, GamePhase::free_kick_opponent), 60.0);
+  EXPECT_GE(forecast_dx(model, GamePhase::free_kick_opponent), 0.0);
+}
+
+TEST(MotionMeanWeight, TooLittleHeldOutKeepsEveryMeanWhole) {
+  MotionTable table(config());
+  // 50 held-out instances, under the 100 the calibration needs: nothing to weigh with.
+  add(table, GamePhase::free_kick_opponent, 2000, 600, 50, 0, 0.0);
+  const MotionModel model(table, grid, field);
+  EXPECT_NEAR(forecast_dx(model, GamePhase::free_kick_opponent), 600.0, 10.0);
+}
+
+TEST(MotionMeanWeight, AHeldOutMeanHalfAsLargeKeepsAboutHalf) {
+  MotionTable table(config());
+  add(table, GamePhase::ball_placement_us, 3000, 600, 1000, 300, 0.0);
+  const MotionModel model(table, grid, field);
+  // The fit is 0.5, held towards one by 20 instances of 1,000: 0.51.
+  EXPECT_NEAR(forecast_dx(model, GamePhase::ball_placement_us), 306.0, 10.0);
+}
+
+}  // namespace
+}  // namespace ssl_formation
