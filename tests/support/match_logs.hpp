@@ -24,6 +24,7 @@ struct RefereeSpec {
   std::optional<bool> blue_on_positive_half;
   std::string source = "test-game-controller";
   Referee::Stage stage = Referee::NORMAL_FIRST_HALF;
+  std::optional<Point> designated_position;  // mm, feed coordinates (a ball placement's target)
 };
 
 // The message's bytes, as the game controller sends them.
@@ -48,6 +49,10 @@ inline std::string referee_payload(const RefereeSpec& spec, double sent_s = 0.0)
     message.set_blue_team_on_positive_half(*spec.blue_on_positive_half);
   }
   if (!spec.source.empty()) message.set_source_identifier(spec.source);
+  if (spec.designated_position) {
+    message.mutable_designated_position()->set_x(static_cast<float>(spec.designated_position->x));
+    message.mutable_designated_position()->set_y(static_cast<float>(spec.designated_position->y));
+  }
   return message.SerializeAsString();
 }
 

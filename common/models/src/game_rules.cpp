@@ -37,12 +37,13 @@ MotionRules rules_of_the_game(const MatchMoment& moment) {
       rules.keep_away_from = moment.ball;
       break;
     case GameState::ball_placement:
-      // Placement comes under STOP's limits; the placing robot carries the ball ("the
-      // non-placing team must not interfere", Ball Placement).
-      rules.max_speed_mm_s = stop_speed_limit_mm_s;
-      rules.keep_away_from = moment.ball;
-      if (moment.phase == GamePhase::ball_placement_opponent && moment.ball) {
-        rules.exempt_robot_id = nearest_robot(moment.formation(), *moment.ball);
+      // Not STOP's speed limit: "This rule does not apply to ball placement" (Fouls: Robot Stop
+      // Speed). The placing team moves freely; at our placement the opponent, the non-placing
+      // team, "ha[s] to keep at least 0.5 meters distance to the line between the ball and the
+      // placement position" (Fouls: Ball Placement Interference).
+      if (moment.phase == GamePhase::ball_placement_us && moment.ball) {
+        rules.keep_away_from = moment.ball;
+        rules.keep_away_to = moment.designated_position;
       }
       break;
     case GameState::kickoff_preparation: {

@@ -522,26 +522,44 @@ Point MotionRules::apply(std::uint32_t robot_id, Point from, double horizon_s, P
     to = {from.x + (to.x - from.x) * scale, from.y + (to.y - from.y) * scale};
   }
   if (!keep_away_from) return to;
+  // The area to keep away from: the ball's circle, or with keep_away_to the stadium about the
+  // segment from the ball to it. `nearest` is the segment's point nearest to `p`.
   const Point ball = *keep_away_from;
+  const Point end = keep_away_to.value_or(ball);
+  const auto nearest = [&](Point p) {
+    const Point along{end.x - ball.x, end.y - ball.y};
+    const double length_squared = along.x * along.x + along.y * along.y;
+    if (length_squared < 1e-9) return ball;
+    const double t = std::clamp(
+        ((p.x - ball.x) * along.x + (p.y - ball.y) * along.y) / length_squared, 0.0, 1.0);
+    return Point{ball.x + t * along.x, ball.y + t * along.y};
+  };
   const auto clear_of_ball = [&](Point p) {
-    return std::hypot(p.x - ball.x, p.y - ball.y) >= keep_away_mm * (1.0 - 1e-9);
+    const Point n = nearest(p);
+    return std::hypot(p.x - n.x, p.y - n.y) >= keep_away_mm * (1.0 - 1e-9);
   };
   if (clear_of_ball(to)) return to;
-  // Pushed out to the circle, away from the ball (or along where the robot stands from it).
-  Point away{to.x - ball.x, to.y - ball.y};
+  // Pushed out to the edge, away from the segment (or along where the robot stands from it).
+  Point centre = nearest(to);
+  Point away{to.x - centre.x, to.y - centre.y};
   double length = std::hypot(away.x, away.y);
   if (length < 1e-6) {
-    away = {from.x - ball.x, from.y - ball.y};
+    centre = nearest(from);
+    away = {from.x - centre.x, from.y - centre.y};
     length = std::hypot(away.x, away.y);
   }
   if (length < 1e-6) {
-    away = {-1.0, 0.0};  // towards its own goal
-    length = 1.0;
+    // On the segment: off it sideways, or towards its own goal for a bare ball.
+    const Point along{end.x - ball.x, end.y - ball.y};
+    const double along_length = std::hypot(along.x, along.y);
+    away = along_length > 1e-6 ? Point{-along.y, along.x} : Point{-1.0, 0.0};
+    length = along_length > 1e-6 ? along_length : 1.0;
   }
-  Point pushed{ball.x + away.x / length * keep_away_mm, ball.y + away.y / length * keep_away_mm};
+  Point pushed{centre.x + away.x / length * keep_away_mm,
+               centre.y + away.y / length * keep_away_mm};
   if (hold_in_half) pushed.x = std::min(pushed.x, 0.0);
   if (within_reach(pushed)) return pushed;
-  // Out of reach both ways: a robot clear of the ball now can stay where it is; one that is not
+  // Out of reach both ways: a robot clear of the area now can stay where it is; one that is not
   // must leave, whatever its speed.
   return clear_of_ball(from) ? from : pushed;
 }

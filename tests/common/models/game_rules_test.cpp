@@ -8,6 +8,7 @@
 
 #include "match_logs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -44,6 +45,7 @@ struct Script {
     return std::optional<Point>(Point{2000.0, 0.0});
   };
   std::function<Referee::Command(double t)> command = [](double) { return Referee::NORMAL_START; };
+  std::optional<Point> designated_position;  // sent with every message (feed coordinates)
 };
 
 FrontEndConfig front_config() {
@@ -81,6 +83,7 @@ void play(Run& run, const Script& script, double from_s, double seconds) {
       testing::RefereeSpec spec;
       spec.command = command;
       spec.command_counter = counter;
+      spec.designated_position = script.designated_position;
       front.add_referee(testing::referee_payload(spec, start_s + t), start_s + t);
     }
     DetectionFrameSpec spec;
@@ -267,6 +270,51 @@ TEST(GameRules, AStopPredictionKeepsHalfAMetreFromTheBallAndUnderOneAndAHalfMetr
   EXPECT_GT(checked, 1000);
 }
 
+// The distance from `p` to the segment from `a` to `b`.
+double distance_to_segment(Point p, Point a, Point b) {
+  const Point along{b.x - a.x, b.y - a.y};
+  const double length_squared = along.x * along.x + along.y * along.y;
+  const double t =
+      length_squared > 0.0
+          ? std::clamp(((p.x - a.x) * along.x + (p.y - a.y) * along.y) / length_squared, 0.0, 1.0)
+          : 0.0;
+  return distance(p, {a.x + t * along.x, a.y + t * along.y});
+}
+
+TEST(GameRules, AtOurBallPlacementTheOpponentIsForecastClearOfThePathAtAnySpeed) {
+  Script script;
+  script.robot = charging;  // learned as running play: 2.5 m/s, into the ball
+  Learning learning;
+  play(learning, script, 0.0, 60.0);
+  // Blue (us) places the ball from (2000, 0) to (0, 1500) from 5 s on; the path passes through
+  // where the robots charge.
+  script.command = [](double t) {
+    return t < 5.0 ? Referee::NORMAL_START : Referee::BALL_PLACEMENT_BLUE;
+  };
+  script.designated_position = Point{0.0, 1500.0};
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 12.0);
+  int checked = 0;
+  double fastest_mm_s = 0.0;
+  for (const Forecast& f : forecasting.seen) {
+    if (f.state != GameState::ball_placement) continue;
+    ASSERT_TRUE(f.ball);
+    for (std::size_t k = 0; k < f.prediction.steps.size(); ++k) {
+      for (const RobotPrediction& p : f.prediction.steps[k].robots) {
+        EXPECT_GE(distance_to_segment(p.normalised_position, *f.ball, Point{0.0, 1500.0}),
+                  500.0 - 1e-6);
+        const Point from = robot_of(f, p.robot_id).position;
+        fastest_mm_s = std::max(fastest_mm_s,
+                                distance(p.normalised_position, from) / ((k + 1) * step_s));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 1000);
+  // STOP's speed limit is not placement's: "This rule does not apply to ball placement".
+  EXPECT_GT(fastest_mm_s, 1500.0);
+}
+
 TEST(GameRules, AtTheirOpponentsKickoffTheRobotsAreForecastInTheirHalfOutsideTheCentreCircle) {
   Learning learning;
   play(learning, Script{}, 0.0, 60.0);
@@ -351,6 +399,24 @@ TEST(MotionRules, AnyForecastIsMovedTheLeastThatSatisfiesTheRules) {
       EXPECT_EQ(ruled, to);  // a forecast within the rules is left alone
     }
   }
+  // A placement path: the stadium about the segment from the ball to the target, at any speed.
+  MotionRules placement;
+  placement.keep_away_from = Point{0.0, 0.0};
+  placement.keep_away_to = Point{1500.0, 1000.0};
+  for (int i = 0; i < 10000; ++i) {
+    const Point from{coordinate(random), coordinate(random)};
+    const Point to{coordinate(random), coordinate(random)};
+    const Point ruled = placement.apply(1, from, 0.5, to);
+    EXPECT_GE(distance_to_segment(ruled, {0.0, 0.0}, {1500.0, 1000.0}), 500.0 - 1e-6);
+    if (distance_to_segment(to, {0.0, 0.0}, {1500.0, 1000.0}) >= 500.0) {
+      EXPECT_EQ(ruled, to);
+    } else {  // moved the least: onto the stadium's edge
+      EXPECT_NEAR(distance_to_segment(ruled, {0.0, 0.0}, {1500.0, 1000.0}), 500.0, 1e-6);
+    }
+  }
+  // On the path itself: off it sideways.
+  const Point off = placement.apply(1, {750.0, 500.0}, 0.5, {750.0, 500.0});
+  EXPECT_NEAR(distance_to_segment(off, {0.0, 0.0}, {1500.0, 1000.0}), 500.0, 1e-6);
   // The exempt robot (the one placing the ball) goes where the model says.
   rules.exempt_robot_id = 4;
   EXPECT_EQ(rules.apply(4, {3000.0, 0.0}, 0.5, {10.0, 0.0}), (Point{10.0, 0.0}));

@@ -44,12 +44,16 @@ struct MotionModelSettings {
 // current command, normalised (the opponent attacks +x). The forecast is moved the least
 // distance that satisfies them; MotionRules{} says nothing.
 struct MotionRules {
-  // STOP and ball placement: "all robots have to slow down to less than 1.5 m/s" (SSL rules,
-  // Referee Commands: Stop): no robot's average speed to a predicted position is above this.
+  // STOP: "all robots have to slow down to less than 1.5 m/s" (SSL rules, Referee Commands:
+  // Stop): no robot's average speed to a predicted position is above this.
   double max_speed_mm_s = std::numeric_limits<double>::infinity();
-  // STOP, ball placement, the defending team at a free kick or a kick-off: "at least 0.5 meters
-  // distance to the ball" (Stop; Direct Free Kick; Kick-Off's centre circle).
+  // STOP, the defending team at a free kick or a kick-off: "at least 0.5 meters distance to the
+  // ball" (Stop; Direct Free Kick; Kick-Off's centre circle).
   std::optional<Point> keep_away_from;
+  // With it, the whole segment from keep_away_from to here: "all robots of the non-placing team
+  // have to keep at least 0.5 meters distance to the line between the ball and the placement
+  // position" (Fouls: Ball Placement Interference).
+  std::optional<Point> keep_away_to;
   double keep_away_mm = 500.0;
   // The robot the rules leave out: the placing robot, or the kicker at the team's own kick-off.
   std::optional<std::uint32_t> exempt_robot_id;
