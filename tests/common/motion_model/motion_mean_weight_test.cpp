@@ -1,5 +1,5 @@
-// The weight of each game phase's learned mean displacement (MotionModel::weigh_means): kept
-// where held-out play bears it out, dropped where it does not, hand-built.
+// The weight of each game phase's learned mean displacement (MotionModel's mean weights): kept
+// where held-out play bears it out, dropped where it does not or never holds, hand-built.
 
 #include <gtest/gtest.h>
 
@@ -66,30 +66,42 @@ TEST(MotionMeanWeight, APhasesMeanDisplacementCountsAsMuchAsItsHeldOutPlayBearsO
   MotionTable table(config());
   // Running play: the rows and the held-out play agree that the robot goes 600 mm on.
   add(table, GamePhase::running, 2000, 600, 300, 600, 0.0);
-  // The opponent's free kicks: the training's went 600 mm on, the held-out ones nowhere (where
-  // a few set plays happened to be taken, not a habit).
-  add(table, GamePhase::free_kick_opponent, 2000, 600, 300, 0, 1000.0);
+  // STOP: the training's went 600 mm on, the held-out ones nowhere.
+  add(table, GamePhase::stop, 2000, 600, 300, 0, 1000.0);
   const MotionModel model(table, grid, field);
   EXPECT_NEAR(forecast_dx(model, GamePhase::running), 600.0, 10.0);
   // 300 held-out instances against the weight's 20: at most a fifteenth of the mean is kept.
-  EXPECT_LT(forecast_dx(model, GamePhase::free_kick_opponent), 60.0);
-  EXPECT_GE(forecast_dx(model, GamePhase::free_kick_opponent), 0.0);
+  EXPECT_LT(forecast_dx(model, GamePhase::stop), 60.0);
+  EXPECT_GE(forecast_dx(model, GamePhase::stop), 0.0);
 }
 
 TEST(MotionMeanWeight, TooLittleHeldOutKeepsEveryMeanWhole) {
   MotionTable table(config());
   // 50 held-out instances, under the 100 the calibration needs: nothing to weigh with.
-  add(table, GamePhase::free_kick_opponent, 2000, 600, 50, 0, 0.0);
+  add(table, GamePhase::kickoff_opponent, 2000, 600, 50, 0, 0.0);
   const MotionModel model(table, grid, field);
-  EXPECT_NEAR(forecast_dx(model, GamePhase::free_kick_opponent), 600.0, 10.0);
+  EXPECT_NEAR(forecast_dx(model, GamePhase::kickoff_opponent), 600.0, 10.0);
+}
+
+TEST(MotionMeanWeight, TheirFreeKicksOurPlacementsAndHaltsNeverKeepTheirMean) {
+  // Held-out play agreeing with the rows does not bring it back: it is the same restarts'.
+  for (const GamePhase phase :
+       {GamePhase::free_kick_opponent, GamePhase::ball_placement_us, GamePhase::halt}) {
+    MotionTable table(config());
+    add(table, phase, 2000, 600, 300, 600, 0.0);
+    add(table, GamePhase::free_kick_us, 2000, 600, 300, 600, 1000.0);
+    const MotionModel model(table, grid, field);
+    EXPECT_NEAR(forecast_dx(model, phase), 0.0, 1.0) << static_cast<int>(phase);
+    EXPECT_NEAR(forecast_dx(model, GamePhase::free_kick_us), 600.0, 10.0);
+  }
 }
 
 TEST(MotionMeanWeight, AHeldOutMeanHalfAsLargeKeepsAboutHalf) {
   MotionTable table(config());
-  add(table, GamePhase::ball_placement_us, 3000, 600, 1000, 300, 0.0);
+  add(table, GamePhase::ball_placement_opponent, 3000, 600, 1000, 300, 0.0);
   const MotionModel model(table, grid, field);
   // The fit is 0.5, held towards one by 20 instances of 1,000: 0.51.
-  EXPECT_NEAR(forecast_dx(model, GamePhase::ball_placement_us), 306.0, 10.0);
+  EXPECT_NEAR(forecast_dx(model, GamePhase::ball_placement_opponent), 306.0, 10.0);
 }
 
 }  // namespace

@@ -180,12 +180,16 @@ class MotionModel {
       return MotionFeatures::game_context_of(context) == MotionFeatures::halt_game ? still : root;
     }
     // Per game phase (GamePhase's order), how much of its rows' mean displacement the forecasts
-    // keep: fitted on the held-out sample (weigh_means).
-    std::array<double, all_game_phases.size()> mean_weight = filled_with_one();
-    static std::array<double, all_game_phases.size()> filled_with_one() {
-      std::array<double, all_game_phases.size()> ones{};
-      ones.fill(1.0);
-      return ones;
+    // keep: none for the phases whose mean is another match's (mean_holds), else fitted on the
+    // held-out sample (weigh_means), one before.
+    std::array<double, all_game_phases.size()> mean_weight = initial_mean_weights();
+    static bool mean_holds(GamePhase phase);
+    static std::array<double, all_game_phases.size()> initial_mean_weights() {
+      std::array<double, all_game_phases.size()> weights{};
+      for (std::size_t p = 0; p < weights.size(); ++p) {
+        weights[p] = mean_holds(all_game_phases[p]) ? 1.0 : 0.0;
+      }
+      return weights;
     }
     double z50 = 0.0, z90 = 0.0;  // radius / sqrt(mean square)
     // Isotonic map from the Gaussian mass to the observed hit rate: block upper bounds and
