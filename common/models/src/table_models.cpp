@@ -181,9 +181,10 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
                   rules_of_the_game(moment));
   if (!settings_.recalibration) return;
   if (use == ForecastUse::predict) {
-    calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks);
+    calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks,
+                          moment.phase);
   }
-  calibration_.adjust(out);
+  calibration_.adjust(out, moment.phase);
 }
 
 void MotionForecaster::forget_match() {

@@ -14,6 +14,8 @@ constexpr std::size_t first_ring_size = 256;
 // How often the corrections adjust() adds are worked out again, in seconds of the data clock: a
 // division per bin, where the evidence behind them changes by a thousandth in this time.
 constexpr double correction_refresh_s = 0.1;
+// The radii are scaled by at most 20 either way.
+const double max_log_radius_scale = std::log(20.0);
 }  // namespace
 
 void OnlineCalibration::Step::push(const Pending& pending) {
@@ -34,8 +36,9 @@ void OnlineCalibration::Step::push(const Pending& pending) {
 bool OnlineCalibrationSettings::valid() const {
   const auto finite = [](double value) { return std::isfinite(value); };
   return finite(half_life_s) && finite(prior_weight) && finite(tolerance_s) &&
-         finite(remember_interval_s) && half_life_s > 0.0 && prior_weight >= 0.0 &&
-         tolerance_s >= 0.0 && remember_interval_s >= 0.0;
+         finite(remember_interval_s) && finite(radius_rate) && half_life_s > 0.0 &&
+         prior_weight >= 0.0 && tolerance_s >= 0.0 && remember_interval_s >= 0.0 &&
+         radius_rate >= 0.0;
 }
 
 OnlineCalibration::OnlineCalibration(OnlineCalibrationSettings settings) : settings_(settings) {}
@@ -106,6 +109,21 @@ void OnlineCalibration::observe(const Formation& formation) {
       const FormationRobot* robot =
           walk < robots.size() && robots[walk].robot_id == p.robot_id ? &robots[walk] : nullptr;
       if (robot && robot->observed) {
+        if (p.radius90 > 0.0f) {
+          // A step towards the scales at which the share outside is a half and a tenth.
+          const double off = std::hypot(robot->position.x - p.x, robot->position.y - p.y);
+          const double rate = settings_.radius_rate;
+          double& log50 = step.log_scale50[p.phase];
+          double& log90 = step.log_scale90[p.phase];
+          // Within a factor of max_radius_scale either way: robots standing still in front of
+          // a noiseless camera would shrink them without end.
+          log50 = std::clamp(
+              log50 + rate * ((off > p.radius50 * std::exp(log50) ? 1.0 : 0.0) - 0.5),
+              -max_log_radius_scale, max_log_radius_scale);
+          log90 = std::clamp(
+              log90 + rate * ((off > p.radius90 * std::exp(log90) ? 1.0 : 0.0) - 0.1) * 5.0,
+              -max_log_radius_scale, max_log_radius_scale);
+        }
         Bin& bin = step.bins[p.bin];
         const bool hit = robot->cell.x == p.cell_x && robot->cell.y == p.cell_y;
         bin.weight += 1.0;
@@ -143,6 +161,10 @@ void OnlineCalibration::observe(const Formation& formation) {
   }
   if (!correcting_.pass(t, correction_refresh_s)) return;
   for (Step& step : steps_) {
+    for (std::size_t g = 0; g < radius_groups; ++g) {
+      step.scale50[g] = std::exp(step.log_scale50[g]);
+      step.scale90[g] = std::exp(step.log_scale90[g]);
+    }
     for (std::size_t b = 0; b < step.bins.size(); ++b) {
       const Bin& bin = step.bins[b];
       step.correction[b] =
@@ -163,7 +185,7 @@ void OnlineCalibration::observe(const Formation& formation) {
 }
 
 void OnlineCalibration::remember(const Prediction& prediction, double time_s, double step_s,
-                                 AttackDirection attacks) {
+                                 AttackDirection attacks, GamePhase phase) {
   if (!remembering_.pass(time_s, settings_.remember_interval_s)) return;
   if (steps_.size() < prediction.steps.size()) steps_.resize(prediction.steps.size());
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
@@ -181,7 +203,11 @@ void OnlineCalibration::remember(const Prediction& prediction, double time_s, do
       step.push({due_s, number, robot.robot_id, static_cast<float>(robot.probability),
                  static_cast<std::int16_t>(robot.position.x),
                  static_cast<std::int16_t>(robot.position.y),
-                 static_cast<std::uint8_t>(bin_of(robot.probability)), attacks});
+                 static_cast<std::uint8_t>(bin_of(robot.probability)), attacks,
+                 static_cast<std::uint8_t>(phase),
+                 static_cast<float>(robot.normalised_position.x),
+                 static_cast<float>(robot.normalised_position.y),
+                 static_cast<float>(robot.radius50_mm), static_cast<float>(robot.radius90_mm)});
     }
     step.formations.push_back(check);
     if (step.formations.size() > max_pending_per_step) {  // as the robots' ring: the oldest goes
@@ -206,17 +232,29 @@ double OnlineCalibration::adjusted_formation(std::size_t step, double stated,
   return std::clamp(stated + steps_[step].formation_correction[bin], 0.0, 1.0);
 }
 
-void OnlineCalibration::adjust(Prediction& prediction) const {
+double OnlineCalibration::radius50_scale(std::size_t step, GamePhase phase) const {
+  return step < steps_.size() ? steps_[step].scale50[static_cast<std::size_t>(phase)] : 1.0;
+}
+
+double OnlineCalibration::radius90_scale(std::size_t step, GamePhase phase) const {
+  return step < steps_.size() ? steps_[step].scale90[static_cast<std::size_t>(phase)] : 1.0;
+}
+
+void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase) const {
   if (checked_ == 0) return;
   double confidence = 1.0;
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
     PredictedStep& step = prediction.steps[s];
     double stated = 1.0;
     double robots = 1.0;
+    // Steps beyond those checked yet keep their radii.
+    const double scale50 = radius50_scale(s, phase), scale90 = radius90_scale(s, phase);
     for (RobotPrediction& robot : step.robots) {
       stated *= robot.probability;
       robot.probability = adjusted(s, robot.probability);
       robots *= robot.probability;
+      robot.radius50_mm *= scale50;
+      robot.radius90_mm *= scale90;
     }
     const double formation = adjusted_formation(s, stated, robots);
     step.formation_probability = formation;

@@ -1,5 +1,6 @@
-// The weight of each game phase's learned mean displacement (MotionModel's mean weights): kept
-// where held-out play bears it out, dropped where it does not or never holds, hand-built.
+// What each game phase keeps of the table's fit, hand-built: the weight of its rows' mean
+// displacement (kept where held-out play bears it out, dropped where it does not or never
+// holds), and its own radii where its held-out play strays further than the others'.
 
 #include <gtest/gtest.h>
 
@@ -102,6 +103,46 @@ TEST(MotionMeanWeight, AHeldOutMeanHalfAsLargeKeepsAboutHalf) {
   const MotionModel model(table, grid, field);
   // The fit is 0.5, held towards one by 20 instances of 1,000: 0.51.
   EXPECT_NEAR(forecast_dx(model, GamePhase::ball_placement_opponent), 306.0, 10.0);
+}
+
+// `count` instances of robot 3 standing in `phase` that moved +-`spread_mm` along x, in turn,
+// into rows (held_out false) or into the held-out sample (true), from `first_s` on.
+void add_spread(MotionTable& table, GamePhase phase, int count, std::int32_t spread_mm,
+                bool held_out, double first_s) {
+  int added = 0;
+  for (double t = first_s; added < count; t += 0.1) {
+    if (table.is_held_out(t) != held_out) continue;
+    table.add(0, t, standing_robot(phase, added % 2 == 0 ? spread_mm : -spread_mm));
+    ++added;
+  }
+}
+
+double radius90(const MotionModel& model, GamePhase phase) {
+  MotionRobot robot;
+  robot.robot_id = 3;
+  robot.position = {1000.0, 500.0};
+  robot.has_velocity = true;
+  robot.context = context_of(phase);
+  return model.forecast(0, robot).radius90_mm;
+}
+
+TEST(MotionPhaseRadii, APhaseWhoseHeldOutPlayStraysFurtherGetsWiderRadiiNeverNarrower) {
+  MotionTable table(config());
+  // Every phase's rows learned robots 100 mm either way.
+  for (const GamePhase phase :
+       {GamePhase::running, GamePhase::kickoff_opponent, GamePhase::stop}) {
+    add_spread(table, phase, 2000, 100, false, 0.0);
+  }
+  // Held out: running play as learned, the kick-offs 400 mm either way, STOP 10 mm.
+  add_spread(table, GamePhase::running, 1000, 100, true, 0.0);
+  add_spread(table, GamePhase::kickoff_opponent, 60, 400, true, 5000.0);
+  add_spread(table, GamePhase::stop, 60, 10, true, 6000.0);
+  const MotionModel model(table, grid, field);
+  EXPECT_NEAR(radius90(model, GamePhase::running), 100.0, 5.0);
+  EXPECT_NEAR(radius90(model, GamePhase::kickoff_opponent), 400.0, 20.0);
+  // Held out of the same match, a phase's play looks tamer than the next match's: its radii
+  // are never narrower than the horizon's.
+  EXPECT_NEAR(radius90(model, GamePhase::stop), 100.0, 5.0);
 }
 
 }  // namespace

@@ -285,3 +285,66 @@ TEST(OnlineCalibration, AFormationWithARobotUnseenWhenDueDecidesNothing) {
               prediction.steps[0].robots[0].probability * prediction.steps[0].robots[1].probability,
               1e-12);
 }
+
+namespace {
+
+// Robot 1 predicted at (0, 0) with radii 100 mm (50%) and 300 mm (90%) in `phase`, eight times a
+// second for `seconds` from `from_s`, and found one step (0.5 s) later `off_mm` away along x
+// (each instance's own distance from `offs`, in turn).
+void play_radii(sf::OnlineCalibration& calibration, double from_s, double seconds,
+                sf::GamePhase phase, const std::vector<double>& offs) {
+  for (int i = 0; i < static_cast<int>(seconds * 8.0); ++i) {
+    const double t = from_s + 0.125 * i;
+    sf::Formation formation = formation_at(t, 1, home);
+    // The robot found where the prediction made 0.5 s (4 frames) ago sent it, plus its offset.
+    formation.robots[0].position = {offs[static_cast<std::size_t>(i) % offs.size()], 0.0};
+    calibration.observe(formation);
+    sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
+    prediction.steps[0].robots[0].radius50_mm = 100.0;
+    prediction.steps[0].robots[0].radius90_mm = 300.0;
+    calibration.remember(prediction, t, 0.5, sf::AttackDirection::positive_x, phase);
+  }
+}
+
+// The share of `offs` within `radius`.
+double within(const std::vector<double>& offs, double radius) {
+  double inside = 0.0;
+  for (const double off : offs) inside += off <= radius ? 1.0 : 0.0;
+  return inside / static_cast<double>(offs.size());
+}
+
+}  // namespace
+
+TEST(OnlineCalibration, EachPhasesRadiiComeToHoldTheRobotHalfAndNineTenthsOfTheTime) {
+  sf::OnlineCalibration calibration(quick);
+  // At the opponent's kick-offs the robots land from 0 to 1 m away (the table's radii are far too
+  // small); in HALT within 40 mm (far too large).
+  std::vector<double> kickoff, halt;
+  for (int k = 0; k < 20; ++k) {
+    kickoff.push_back(50.0 * k + 25.0);
+    halt.push_back(2.0 * k + 1.0);
+  }
+  // 12,000 checks of each: what a team of 11 remembered 10 times a second gives in two minutes.
+  play_radii(calibration, 100.0, 1500.0, sf::GamePhase::kickoff_opponent, kickoff);
+  play_radii(calibration, 1600.0, 1500.0, sf::GamePhase::halt, halt);
+  sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
+  sf::RobotPrediction& robot = prediction.steps[0].robots[0];
+  robot.radius50_mm = 100.0;
+  robot.radius90_mm = 300.0;
+  sf::Prediction at_kickoff = prediction;
+  calibration.adjust(at_kickoff, sf::GamePhase::kickoff_opponent);
+  EXPECT_NEAR(within(kickoff, at_kickoff.steps[0].robots[0].radius50_mm), 0.5, 0.1);
+  EXPECT_NEAR(within(kickoff, at_kickoff.steps[0].robots[0].radius90_mm), 0.9, 0.1);
+  sf::Prediction in_halt = prediction;
+  calibration.adjust(in_halt, sf::GamePhase::halt);
+  EXPECT_NEAR(within(halt, in_halt.steps[0].robots[0].radius50_mm), 0.5, 0.1);
+  EXPECT_NEAR(within(halt, in_halt.steps[0].robots[0].radius90_mm), 0.9, 0.1);
+  EXPECT_LT(in_halt.steps[0].robots[0].radius90_mm, 50.0);
+  // A phase that saw nothing keeps the table's radii.
+  sf::Prediction running = prediction;
+  calibration.adjust(running, sf::GamePhase::running);
+  EXPECT_DOUBLE_EQ(running.steps[0].robots[0].radius50_mm, 100.0);
+  EXPECT_DOUBLE_EQ(running.steps[0].robots[0].radius90_mm, 300.0);
+  // So does a step never checked.
+  EXPECT_EQ(calibration.radius90_scale(3, sf::GamePhase::halt), 1.0);
+}

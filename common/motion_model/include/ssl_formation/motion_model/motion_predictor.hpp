@@ -31,6 +31,9 @@ struct MotionModelSettings {
   double prior_error_mm_per_s = 450.0;
   // Fewer held-out instances than this: Gaussian radii and uncalibrated probabilities.
   std::size_t min_calibration_instances = 100;
+  // A game phase with at least this many held-out instances has radii of its own: at a
+  // kick-off the robots run where the rows of their state learned little.
+  std::size_t min_phase_calibration_instances = 50;
   // The rules' prior in HALT and timeouts (rows of those states shrink towards it): robots
   // brake with this time constant and then stand, give or take the vision's noise.
   double halt_brake_time_constant_s = 0.15;
@@ -191,7 +194,9 @@ class MotionModel {
       }
       return weights;
     }
-    double z50 = 0.0, z90 = 0.0;  // radius / sqrt(mean square)
+    // Radius / sqrt(mean square), per game phase (GamePhase's order): the horizon's, or wider
+    // for a phase whose held-out play strayed further (calibrate).
+    std::array<double, all_game_phases.size()> z50{}, z90{};
     // Isotonic map from the Gaussian mass to the observed hit rate: block upper bounds and
     // their rates, increasing. Empty: identity.
     std::vector<double> mass_upper;
