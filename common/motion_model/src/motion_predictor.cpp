@@ -56,6 +56,15 @@ double quantile(std::vector<double>& values, double p) {
 
 constexpr MotionKey empty_slot = ~MotionKey{0};  // no key has every bit set
 
+// The robot as a held-out instance saw it when the forecast was due.
+MotionRobot robot_at(const MotionInstance& i) {
+  return {i.robot_id,
+          {static_cast<double>(i.x), static_cast<double>(i.y)},
+          i.kinematics(),
+          true,
+          i.context};
+}
+
 std::uint64_t next_model_id() {
   static std::atomic<std::uint64_t> last{0};
   return ++last;
@@ -430,11 +439,7 @@ bool MotionModel::weigh_means(const MotionTable& table, int horizon_index) {
   std::array<Sums, all_game_phases.size()> sums{};
   for (const HeldOutInstance& held_out : sample) {
     const MotionInstance& i = held_out.instance;
-    const MotionRobot robot{i.robot_id,
-                            {static_cast<double>(i.x), static_cast<double>(i.y)},
-                            i.kinematics(),
-                            true,
-                            i.context};
+    const MotionRobot robot = robot_at(i);
     const Resolved e = resolve(horizon_index, motion_keys(robot));
     const MotionForecast f = forecast(horizon_index, robot, e);
     const Point residual{robot.position.x + i.d_x - (f.position.x - e.mean_x),
@@ -466,11 +471,7 @@ void MotionModel::calibrate(const MotionTable& table, int horizon_index, const G
   masses.reserve(sample.size());
   for (const HeldOutInstance& held_out : sample) {
     const MotionInstance& i = held_out.instance;
-    const MotionRobot robot{i.robot_id,
-                            {static_cast<double>(i.x), static_cast<double>(i.y)},
-                            i.kinematics(),
-                            true,
-                            i.context};
+    const MotionRobot robot = robot_at(i);
     const MotionForecast f = forecast(horizon_index, robot);
     const Point truth{robot.position.x + i.d_x, robot.position.y + i.d_y};
     z.push_back(std::hypot(truth.x - f.position.x, truth.y - f.position.y) /

@@ -54,13 +54,18 @@ void add(MotionTable& table, GamePhase phase, int counted, std::int32_t counted_
   }
 }
 
-double forecast_dx(const MotionModel& model, GamePhase phase) {
+// Robot 3 forecast standing at (1000, 500) in `phase`.
+MotionForecast forecast_standing(const MotionModel& model, GamePhase phase) {
   MotionRobot robot;
   robot.robot_id = 3;
   robot.position = {1000.0, 500.0};
   robot.has_velocity = true;
   robot.context = context_of(phase);
-  return model.forecast(0, robot).position.x - robot.position.x;
+  return model.forecast(0, robot);
+}
+
+double forecast_dx(const MotionModel& model, GamePhase phase) {
+  return forecast_standing(model, phase).position.x - 1000.0;
 }
 
 TEST(MotionMeanWeight, APhasesMeanDisplacementCountsAsMuchAsItsHeldOutPlayBearsOut) {
@@ -118,12 +123,7 @@ void add_spread(MotionTable& table, GamePhase phase, int count, std::int32_t spr
 }
 
 double radius90(const MotionModel& model, GamePhase phase) {
-  MotionRobot robot;
-  robot.robot_id = 3;
-  robot.position = {1000.0, 500.0};
-  robot.has_velocity = true;
-  robot.context = context_of(phase);
-  return model.forecast(0, robot).radius90_mm;
+  return forecast_standing(model, phase).radius90_mm;
 }
 
 TEST(MotionPhaseRadii, APhaseWhoseHeldOutPlayStraysFurtherGetsWiderRadiiNeverNarrower) {
