@@ -317,8 +317,8 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   const std::uint32_t game = MotionFeatures::game_context_of(decode_motion_key(keys[0]).context);
   const bool halted = game == MotionFeatures::halt_game;
   // (0 in HALT: the same drift after every halt.)
-  const double mean_weight = horizon.mean_weight[static_cast<std::size_t>(
-      MotionFeatures::phase_of_game_context(game))];
+  const auto phase = static_cast<std::size_t>(MotionFeatures::phase_of_game_context(game));
+  const double mean_weight = horizon.mean_weight[phase];
   for (std::size_t level = halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
        level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {
@@ -328,13 +328,15 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
       e.mean_y = mean_weight * found->mean_y;
       e.mean_square = found->mean_square;
       for (int i = 0; i < motion_regressors; ++i) e.coefficients[i] = found->coefficients[i];
+      e.z50 = horizon.z50[phase];
+      e.z90 = horizon.z90[phase];
       e.level = static_cast<MotionLevel>(level);
       return e;
     }
   }
   const Estimate& prior = horizon.prior_of(decode_motion_key(keys[0]).context);
   return Resolved{mean_weight * prior.mean_x, mean_weight * prior.mean_y, prior.mean_square,
-                  prior.coefficients, MotionLevel::all};
+                  prior.coefficients, horizon.z50[phase], horizon.z90[phase], MotionLevel::all};
 }
 
 void MotionModel::Cache::clear() {
@@ -382,10 +384,8 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
   }
   f.mean_square_mm2 = e.mean_square;
   const double rms = std::sqrt(f.mean_square_mm2);
-  const auto phase = static_cast<std::size_t>(
-      MotionFeatures::phase_of_game_context(MotionFeatures::game_context_of(robot.context)));
-  f.radius50_mm = horizon.z50[phase] * rms;
-  f.radius90_mm = horizon.z90[phase] * rms;
+  f.radius50_mm = e.z50 * rms;
+  f.radius90_mm = e.z90 * rms;
   return f;
 }
 

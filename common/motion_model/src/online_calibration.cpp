@@ -113,16 +113,18 @@ void OnlineCalibration::observe(const Formation& formation) {
           // A step towards the scales at which the share outside is a half and a tenth.
           const double off = std::hypot(robot->position.x - p.x, robot->position.y - p.y);
           const double rate = settings_.radius_rate;
-          double& log50 = step.log_scale50[p.phase];
-          double& log90 = step.log_scale90[p.phase];
+          // Judged by the radii adjust() states now (the scales as last worked out, a tenth of
+          // a second ago at most: an exp per check was a tenth of a frame's prediction time).
+          const bool outside50 = off > p.radius50 * step.scale50[p.phase];
+          const bool outside90 = off > p.radius90 * step.scale90[p.phase];
           // Within a factor of max_radius_scale either way: robots standing still in front of
           // a noiseless camera would shrink them without end.
-          log50 = std::clamp(
-              log50 + rate * ((off > p.radius50 * std::exp(log50) ? 1.0 : 0.0) - 0.5),
-              -max_log_radius_scale, max_log_radius_scale);
-          log90 = std::clamp(
-              log90 + rate * ((off > p.radius90 * std::exp(log90) ? 1.0 : 0.0) - 0.1) * 5.0,
-              -max_log_radius_scale, max_log_radius_scale);
+          double& log50 = step.log_scale50[p.phase];
+          double& log90 = step.log_scale90[p.phase];
+          log50 = std::clamp(log50 + rate * ((outside50 ? 1.0 : 0.0) - 0.5),
+                             -max_log_radius_scale, max_log_radius_scale);
+          log90 = std::clamp(log90 + rate * ((outside90 ? 1.0 : 0.0) - 0.1) * 5.0,
+                             -max_log_radius_scale, max_log_radius_scale);
         }
         Bin& bin = step.bins[p.bin];
         const bool hit = robot->cell.x == p.cell_x && robot->cell.y == p.cell_y;

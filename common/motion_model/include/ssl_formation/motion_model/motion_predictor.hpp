@@ -92,13 +92,16 @@ struct MotionForecast {
 };
 
 class MotionModel {
-  // One robot's estimate at one horizon, found by its keys (72 bytes with five regressors: not
+  // One robot's estimate at one horizon, found by its keys (88 bytes with five regressors: not
   // aligned to a line, so a robot's horizons lie back to back). No initialisers: predict() keeps
   // a scratch array of them per robot.
   struct Resolved {
     double mean_x, mean_y;  // residual against damped constant velocity, mm
     double mean_square;
     std::array<double, motion_regressors> coefficients;
+    // The radii over sqrt(mean square) of the robot's game phase (Horizon::z50, z90), found
+    // with the rest rather than at every frame.
+    double z50, z90;
     MotionLevel level;
   };
 
