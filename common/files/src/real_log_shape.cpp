@@ -76,9 +76,7 @@ constexpr double second_half_after_s = 0.011;
 using Team = std::map<std::uint32_t, Point>;  // the last position seen of each robot id
 // The recording's ball as last seen (the most confident candidate of its latest packet), none
 // before the first: real logs have a ball, and the motion model reads whether it is in flight.
-struct RecordedBall {
-  std::optional<Point> position;
-};
+using RecordedBall = std::optional<Point>;
 
 // The reshaped log's referee sends a message this often (a game controller sends about ten a
 // second), and one at each new command.
@@ -190,8 +188,7 @@ class Messer {
   // The packets of one pair at recording time `t` (none inside a cut), with the time every
   // packet is stamped with (stoppages and the half-time break push later times back).
   void write_pair(double t, const Team& yellow, const Team& blue, const RecordedBall& ball,
-                  LogWriter& out,
-                  RealLogCounts& counts) {
+                  LogWriter& out, RealLogCounts& counts) {
     const double fraction = (t - start_s_) / length_s_;
     if (mess_.cuts) {
       for (const Stretch& cut : cuts) {
@@ -242,8 +239,7 @@ class Messer {
   }
 
   void write_halves(double t, const Team& yellow, const Team& blue, const RecordedBall& ball,
-                    double fraction, LogWriter& out,
-                    RealLogCounts& counts) {
+                    double fraction, LogWriter& out, RealLogCounts& counts) {
     start_ghost_maybe();
     for (const bool left : {true, false}) {
       DetectionFrameSpec spec;
@@ -285,9 +281,9 @@ class Messer {
 
   // The ball in the packet of its half, where the robots' positions go (mirrored, noisy).
   void add_ball(const RecordedBall& ball, bool left, std::vector<Point>& balls) {
-    if (!ball.position) return;
+    if (!ball) return;
     const double mirror = mess_.change_of_ends && ends_changed_ ? -1.0 : 1.0;
-    Point p{mirror * ball.position->x, mirror * ball.position->y};
+    Point p{mirror * ball->x, mirror * ball->y};
     if (mess_.noise_mm > 0.0) {
       std::normal_distribution<double> noise(0.0, mess_.noise_mm);
       p.x += noise(noise_);
@@ -378,7 +374,7 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
     for (const auto& candidate : detection.balls()) {
       if (!seen || candidate.confidence() > seen->confidence()) seen = &candidate;
     }
-    if (seen) ball.position = Point{seen->x(), seen->y()};
+    if (seen) ball = Point{seen->x(), seen->y()};
     const double t = detection.t_capture();
     if (t < next_pair_s) continue;
     // A pause in the recording starts the beat again.

@@ -163,7 +163,8 @@ void MotionForecaster::observe(const MatchMoment& moment) {
 void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out,
                                 ForecastUse use) {
   robots_.clear();
-  const std::uint32_t game = game_context_of(moment);
+  const std::uint32_t unmoving_context = MotionFeatures::context(
+      0, 0, game_context_of(moment), MotionFeatures::ball_in_flight(ball_velocity_of(moment)));
   for (const FormationRobot& robot : moment.formation().robots) {
     const MotionHistory::Entry* seen = history_.latest(robot.robot_id);
     // The history has just taken this formation: `seen` is the robot's latest observation,
@@ -172,10 +173,7 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
     const bool moving = seen && seen->has_velocity;
     robots_.push_back({robot.robot_id, robot.position,
                        moving ? seen->kinematics : MotionKinematics{}, moving,
-                       moving ? seen->context
-                              : MotionFeatures::context(
-                                    0, 0, game,
-                                    MotionFeatures::ball_in_flight(ball_velocity_of(moment)))});
+                       moving ? seen->context : unmoving_context});
   }
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
                   rules_of_the_game(moment));

@@ -316,9 +316,8 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   // error at 1-2 s; pooled by velocity they follow the braking and little else.
   const std::uint32_t game = MotionFeatures::game_context_of(decode_motion_key(keys[0]).context);
   const bool halted = game == MotionFeatures::halt_game;
-  // (0 in HALT: the same drift after every halt.)
   const auto phase = static_cast<std::size_t>(MotionFeatures::phase_of_game_context(game));
-  const double mean_weight = horizon.mean_weight[phase];
+  const double mean_weight = horizon.mean_weight[phase];  // 0 in HALT: the same drift each time
   for (std::size_t level = halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
        level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {
@@ -426,9 +425,8 @@ bool MotionModel::weigh_means(const MotionTable& table, int horizon_index) {
   // others it is where the few restarts of the training happened to be taken (the opponent's
   // free kicks of a simulated match, on the tuning seeds: 157.9 mm at 1 s with the mean whole,
   // 146.4 weighed, 144.3 without it). Per game phase, the weight that fits the held-out sample
-  // best, by least squares:
-  // the truth minus the forecast without the mean, regressed on the mean, within [0, 1] and
-  // held towards one by `mean_weight_shrinkage` instances.
+  // best, by least squares: the truth minus the forecast without the mean, regressed on the
+  // mean, within [0, 1] and held towards one by `mean_weight_shrinkage` instances.
   const std::vector<HeldOutInstance> sample = table.calibration(horizon_index);
   if (sample.size() < settings_.min_calibration_instances) return false;
   Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
@@ -444,8 +442,7 @@ bool MotionModel::weigh_means(const MotionTable& table, int horizon_index) {
     const MotionForecast f = forecast(horizon_index, robot, e);
     const Point residual{robot.position.x + i.d_x - (f.position.x - e.mean_x),
                          robot.position.y + i.d_y - (f.position.y - e.mean_y)};
-    Sums& phase = sums[static_cast<std::size_t>(
-        MotionFeatures::phase_of_game_context(MotionFeatures::game_context_of(i.context)))];
+    Sums& phase = sums[static_cast<std::size_t>(MotionFeatures::phase_of_context(i.context))];
     phase.residual_dot_mean += residual.x * e.mean_x + residual.y * e.mean_y;
     phase.mean_dot_mean += e.mean_x * e.mean_x + e.mean_y * e.mean_y;
     phase.n += 1.0;
@@ -476,9 +473,8 @@ void MotionModel::calibrate(const MotionTable& table, int horizon_index, const G
     const Point truth{robot.position.x + i.d_x, robot.position.y + i.d_y};
     z.push_back(std::hypot(truth.x - f.position.x, truth.y - f.position.y) /
                 std::sqrt(std::max(f.mean_square_mm2, 1.0)));
-    phase_z[static_cast<std::size_t>(MotionFeatures::phase_of_game_context(
-                MotionFeatures::game_context_of(i.context)))]
-        .push_back(z.back());
+    phase_z[static_cast<std::size_t>(MotionFeatures::phase_of_context(i.context))].push_back(
+        z.back());
     const Cell predicted = grid.cell_of(f.position, field);
     masses.emplace_back(gaussian_cell_mass(f, grid, field, predicted),
                         grid.cell_of(truth, field) == predicted);

@@ -139,6 +139,10 @@ struct MotionFeatures {
   static std::uint32_t game_context_of(std::uint32_t context) {
     return context / robot_contexts % game_contexts;
   }
+  // The game phase a row's context files the robot under.
+  static GamePhase phase_of_context(std::uint32_t context) {
+    return phase_of_game_context(game_context_of(context));
+  }
   static bool ball_in_flight_of(std::uint32_t context) {
     return context / (robot_contexts * game_contexts) != 0;
   }

@@ -219,8 +219,8 @@ class MotionModel {
                const FieldSize& field, AttackDirection attacks, Prediction& out, Cache* cache,
                const MotionRules& rules) const;
   void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
-  // Sets the horizon's mean weights from the table's held-out sample; false (weights left at
-  // one) when it holds too few instances.
+  // Sets the horizon's mean weights from the table's held-out sample; false (weights left as
+  // they were) when it holds too few instances.
   bool weigh_means(const MotionTable& table, int horizon_index);
   void calibrate(const MotionTable& table, int horizon_index, const Grid& grid,
                  const FieldSize& field);
