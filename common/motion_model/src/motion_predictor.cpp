@@ -65,6 +65,17 @@ MotionRobot robot_at(const MotionInstance& i) {
           i.context};
 }
 
+// The first standing context whose robots have all stood at least `window_s`; one past the last
+// if none has.
+std::uint32_t standing_context_after(double window_s) {
+  std::uint32_t context = 2;  // standing_context: 1 is "not yet standing_limits_s[0]"
+  for (const double limit : MotionFeatures::standing_limits_s) {
+    if (limit >= window_s) return context;
+    ++context;
+  }
+  return MotionFeatures::standing_contexts;
+}
+
 std::uint64_t next_model_id() {
   static std::atomic<std::uint64_t> last{0};
   return ++last;
@@ -87,6 +98,8 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
   }
   const int horizons = config_.horizons;
   horizon_.resize(static_cast<std::size_t>(horizons));
+  settled_context_ = standing_context_after(config_.settle_window_s);
+  long_settled_context_ = standing_context_after(config_.long_settle_window_s);
 
   // The coarser levels are sums of the finest rows.
   std::vector<MotionRow> roots(static_cast<std::size_t>(horizons));
@@ -330,12 +343,27 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
       e.z50 = horizon.z50[phase];
       e.z90 = horizon.z90[phase];
       e.level = static_cast<MotionLevel>(level);
+      e.place_regressor =
+          halted ? place_regressor(decode_motion_key(keys[0]).context) : std::int8_t{-1};
       return e;
     }
   }
   const Estimate& prior = horizon.prior_of(decode_motion_key(keys[0]).context);
-  return Resolved{mean_weight * prior.mean_x, mean_weight * prior.mean_y, prior.mean_square,
-                  prior.coefficients, horizon.z50[phase], horizon.z90[phase], MotionLevel::all};
+  return Resolved{mean_weight * prior.mean_x,
+                  mean_weight * prior.mean_y,
+                  prior.mean_square,
+                  prior.coefficients,
+                  horizon.z50[phase],
+                  horizon.z90[phase],
+                  MotionLevel::all,
+                  halted ? place_regressor(decode_motion_key(keys[0]).context) : std::int8_t{-1}};
+}
+
+std::int8_t MotionModel::place_regressor(std::uint32_t context) const {
+  const std::uint32_t standing = context % MotionFeatures::standing_contexts;
+  if (standing >= long_settled_context_) return 3;  // to_settled_mean
+  if (standing >= settled_context_) return 2;       // to_recent_mean
+  return -1;
 }
 
 void MotionModel::Cache::clear() {
@@ -376,9 +404,30 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
   f.position = {robot.position.x + e.mean_x, robot.position.y + e.mean_y};
   if (robot.has_velocity) {
     const MotionRegressors x = motion_regressors_of(robot.kinematics, horizon_s);
-    for (int i = 0; i < motion_regressors; ++i) {
-      f.position.x += e.coefficients[i] * x[i].x;
-      f.position.y += e.coefficients[i] * x[i].y;
+    // In HALT no robot may move once it has braked (SSL rules, Referee Commands: Halt). A robot
+    // that has stood a whole settle window, its sightings within the vision's noise of their
+    // mean, is at that mean: nearer its place than the last sighting (on the simulated match
+    // with 3 mm of noise, HALT at 0.2 s was 8.1 mm off with the rows' fit, against 5.8 for
+    // "every robot stays", and 5.0 so). The rows cannot learn it: their coefficients are held
+    // towards the parent's by instances of a 500 mm regressor, and a standing robot's are a few
+    // millimetres. One creeping on (slower than the standing speed, its mean further behind) is
+    // left to the rows; what a halt's end brings is nobody's to foresee.
+    if (e.place_regressor >= 0) {
+      const Point to_place = x[static_cast<std::size_t>(e.place_regressor)];
+      const double noise = settings_.halt_error_mm;
+      if (to_place.x * to_place.x + to_place.y * to_place.y <= noise * noise) {
+        f.position = {robot.position.x + to_place.x, robot.position.y + to_place.y};
+      } else {
+        for (int i = 0; i < motion_regressors; ++i) {
+          f.position.x += e.coefficients[i] * x[i].x;
+          f.position.y += e.coefficients[i] * x[i].y;
+        }
+      }
+    } else {
+      for (int i = 0; i < motion_regressors; ++i) {
+        f.position.x += e.coefficients[i] * x[i].x;
+        f.position.y += e.coefficients[i] * x[i].y;
+      }
     }
   }
   f.mean_square_mm2 = e.mean_square;

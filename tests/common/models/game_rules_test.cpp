@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -199,6 +200,61 @@ TEST(GameRules, AYoungTablePredictsStandingRobotsInHalt) {
   }
   EXPECT_GT(running, 100);
   EXPECT_GT(halted, 100);
+}
+
+// The vision's noise, up to 6 mm each way: a fixed draw per robot and frame.
+Point vision_noise(int id, double t) {
+  std::uint32_t h = static_cast<std::uint32_t>(std::lround(t * 60.0)) * 2654435761u;
+  h ^= static_cast<std::uint32_t>(id + 1) * 40503u;
+  h ^= h >> 15;
+  h *= 2246822519u;
+  h ^= h >> 13;
+  const auto unit = [](std::uint32_t bits) { return (bits & 0xffffu) / 65535.0 * 2.0 - 1.0; };
+  return {6.0 * unit(h), 6.0 * unit(h >> 16)};
+}
+
+TEST(GameRules, InHaltARobotThatHasStoodIsForecastWhereItStandsNotWhereItWasLastSeen) {
+  Learning learning;
+  play(learning, Script{}, 0.0, 60.0);
+
+  // At the HALT every robot stops dead where it was, and the vision sees it there give or take
+  // its noise.
+  Script script;
+  script.command = [](double t) { return t < 10.0 ? Referee::NORMAL_START : Referee::HALT; };
+  script.robot = [](int id, double t) {
+    if (t < 10.0) return circling(id, t);
+    const Point spot = circling(id, 10.0);
+    const Point noise = vision_noise(id, t);
+    return Point{spot.x + noise.x, spot.y + noise.y};
+  };
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 14.0);
+
+  // After a settle window of standing (half a second, once the tracker calls it standing), the
+  // forecast at every step is the mean of its sightings: nearer its spot than the last sighting,
+  // which "every robot stays" would forecast.
+  std::vector<double> forecast_off(steps, 0.0);
+  double sighting_off = 0.0;
+  int seen = 0;
+  for (const Forecast& f : forecasting.seen) {
+    if (f.state != GameState::halt || f.time_s - start_s < 11.5) continue;
+    for (const FormationRobot& robot : f.robots) {
+      const Point spot = circling(static_cast<int>(robot.robot_id), 10.0);
+      sighting_off += distance(robot.position, spot);
+      for (std::size_t k = 0; k < f.prediction.steps.size(); ++k) {
+        for (const RobotPrediction& p : f.prediction.steps[k].robots) {
+          if (p.robot_id == robot.robot_id) forecast_off[k] += distance(p.normalised_position, spot);
+        }
+      }
+      ++seen;
+    }
+  }
+  ASSERT_GT(seen, 500);
+  sighting_off /= seen;
+  EXPECT_GT(sighting_off, 3.0);  // the noise is there to average
+  for (int k = 0; k < steps; ++k) {
+    EXPECT_LT(forecast_off[static_cast<std::size_t>(k)] / seen, 0.4 * sighting_off) << "step " << k + 1;
+  }
 }
 
 TEST(GameRules, TheHaltRowsOfATeamThatKeepsMovingTakeOverFromThePrior) {

@@ -35,7 +35,8 @@ struct MotionModelSettings {
   // kick-off the robots run where the rows of their state learned little.
   std::size_t min_phase_calibration_instances = 50;
   // The rules' prior in HALT and timeouts (rows of those states shrink towards it): robots
-  // brake with this time constant and then stand, give or take the vision's noise.
+  // brake with this time constant and then stand, give or take the vision's noise. A robot whose
+  // mean sighting is within that noise stands (MotionModel forecasts it there).
   double halt_brake_time_constant_s = 0.15;
   double halt_error_mm = 20.0;
   // How many held-out instances of a game phase weigh as much as keeping its rows' mean
@@ -103,6 +104,9 @@ class MotionModel {
     // with the rest rather than at every frame.
     double z50, z90;
     MotionLevel level;
+    // In HALT, the regressor that leads to a standing robot's place (place_regressor), -1
+    // elsewhere: forecast() puts the robot there if it is within the vision's noise.
+    std::int8_t place_regressor;
   };
 
  public:
@@ -210,6 +214,10 @@ class MotionModel {
   const Slot* find(MotionKey key) const;
   // The finest estimate with counts among the robot's keys, else the horizon's root.
   Resolved resolve(int horizon_index, const RobotKeys& keys) const;
+  // In HALT, the regressor (motion_regressors_of) from a robot of `context` to its place: towards
+  // its mean position over the settle window (2) or the long one (3), the longest it has stood
+  // through; -1 if it has not stood a settle window.
+  std::int8_t place_regressor(std::uint32_t context) const;
   // The robot's estimates for the first `horizons` learned horizons, through `cache` if there
   // is one (else in `scratch`).
   const Resolved* resolve_all(const MotionRobot& robot, std::size_t horizons, Cache* cache,
@@ -234,6 +242,10 @@ class MotionModel {
   std::vector<Slot, ProbedAllocator<Slot>> index_;
   std::size_t index_mask_ = 0;
   std::uint64_t id_;  // unique per model built: what a Cache's entries are checked against
+  // The standing contexts (MotionFeatures::standing_context) from which a robot has stood the
+  // whole settle window, and the whole long one.
+  std::uint32_t settled_context_ = MotionFeatures::standing_contexts;
+  std::uint32_t long_settled_context_ = MotionFeatures::standing_contexts;
 };
 
 }  // namespace ssl_formation
