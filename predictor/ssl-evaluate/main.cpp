@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
     const std::string mess_help = "as-real-log: none, all, or a comma-separated list of " +
                                   std::string(sf::real_log_mess_names) +
                                   ", written without spaces as in ghosts,cuts (ends: a change of "
-                                  "ends at half time; noise: 3 mm)";
+                                  "ends at half time; noise: 0.3 mm, the real logs', or noise=MM)";
     po::options_description general("Options");
     general.add_options()("mode", po::value(&o.mode)->required(),
                           "paper, holdout, grid-sweep or as-real-log")(

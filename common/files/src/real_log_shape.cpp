@@ -6,6 +6,7 @@
 #include <optional>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -24,7 +25,7 @@ std::optional<RealLogMess> parse_real_log_mess(std::string_view text) {
   if (text == "none") return mess;
   if (text == "all") {
     mess.ghosts = mess.substitutions = mess.stoppages = mess.cuts = mess.change_of_ends = true;
-    mess.noise_mm = 3.0;
+    mess.noise_mm = RealLogMess::real_noise_mm;
     return mess;
   }
   std::istringstream parts{std::string(text)};
@@ -43,7 +44,19 @@ std::optional<RealLogMess> parse_real_log_mess(std::string_view text) {
     } else if (part == "ends") {
       mess.change_of_ends = true;
     } else if (part == "noise") {
-      mess.noise_mm = 3.0;
+      mess.noise_mm = RealLogMess::real_noise_mm;
+    } else if (part.rfind("noise=", 0) == 0) {
+      // Another level of noise, in mm: to see what a noisier vision than the logs' does.
+      const std::string value = part.substr(6);
+      std::size_t used = 0;
+      double mm = -1.0;
+      try {
+        mm = std::stod(value, &used);
+      } catch (const std::exception&) {
+        return std::nullopt;
+      }
+      if (used != value.size() || !std::isfinite(mm) || mm < 0.0 || mm > 1000.0) return std::nullopt;
+      mess.noise_mm = mm;
     } else {
       return std::nullopt;
     }

@@ -528,7 +528,9 @@ int run_as_real_log(const EvaluateOptions& options) {
   std::optional<RealLogMess> mess = parse_real_log_mess(options.mess);
   if (!mess) {
     throw app::UsageError("--mess must be none, all or a comma-separated list of " +
-                          std::string(real_log_mess_names) + ", not '" + options.mess + "'");
+                          std::string(real_log_mess_names) +
+                          " (noise=MM for another noise, 0 to 1000 mm), not '" + options.mess +
+                          "'");
   }
   mess->seed = options.seed;
   const Result<RealLogCounts> counts =

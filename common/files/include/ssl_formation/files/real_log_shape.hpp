@@ -34,8 +34,14 @@ struct RealLogMess {
   bool cuts = false;
   // From half of the recording on, every position mirrored: the teams changed ends.
   bool change_of_ends = false;
-  // Gaussian noise on every reported position (SSL-Vision's is a few millimetres), mm.
+  // Gaussian noise on every reported position (each axis' standard deviation), mm.
   double noise_mm = 0.0;
+  // The noise of the real logs: in their halts a robot's 1 s displacement has a median of 0 mm
+  // and a 90th percentile of 1 mm (DESIGN.md section 7). The displacement between two sightings
+  // with noise s per axis has its 90th percentile at 3.03 s and its median at 1.67 s: s = 0.3 mm
+  // gives 0.9 and 0.5 mm. (3 mm, a guess before those figures, made halts ten times as restless
+  // as the logs' and every velocity noisier than a real tracker's.)
+  static constexpr double real_noise_mm = 0.3;
   std::uint64_t seed = 11;
   friend bool operator==(const RealLogMess&, const RealLogMess&) = default;
 };
@@ -43,8 +49,9 @@ struct RealLogMess {
 // Every part of the mess by name, for messages: what parse_real_log_mess takes in a list.
 inline constexpr std::string_view real_log_mess_names =
     "ghosts, substitutions, stoppages, cuts, ends, noise";
-// "none", "all" (every part; noise 3 mm) or a comma-separated list (no spaces) of
-// real_log_mess_names; nothing for anything else.
+// "none", "all" (every part; noise RealLogMess::real_noise_mm) or a comma-separated list (no
+// spaces) of real_log_mess_names, where noise=MM sets another noise (0 to 1000 mm); nothing for
+// anything else.
 std::optional<RealLogMess> parse_real_log_mess(std::string_view text);
 
 struct RealLogCounts {
