@@ -14,8 +14,8 @@ constexpr std::size_t first_ring_size = 256;
 // How often the corrections adjust() adds are worked out again, in seconds of the data clock: a
 // division per bin, where the evidence behind them changes by a thousandth in this time.
 constexpr double correction_refresh_s = 0.1;
-// The radii are scaled by at most 20 either way.
-const double max_log_radius_scale = std::log(20.0);
+// When a check's weight in the radii's histograms passes this, every histogram is scaled back.
+constexpr double max_boost = 1e30;
 }  // namespace
 
 void OnlineCalibration::Step::push(const Pending& pending) {
@@ -36,16 +36,41 @@ void OnlineCalibration::Step::push(const Pending& pending) {
 bool OnlineCalibrationSettings::valid() const {
   const auto finite = [](double value) { return std::isfinite(value); };
   return finite(half_life_s) && finite(prior_weight) && finite(tolerance_s) &&
-         finite(remember_interval_s) && finite(radius_rate) && half_life_s > 0.0 &&
+         finite(remember_interval_s) && finite(radius_half_count) && half_life_s > 0.0 &&
          prior_weight >= 0.0 && tolerance_s >= 0.0 && remember_interval_s >= 0.0 &&
-         radius_rate >= 0.0;
+         radius_half_count >= 1.0;
 }
 
-OnlineCalibration::OnlineCalibration(OnlineCalibrationSettings settings) : settings_(settings) {}
+OnlineCalibration::OnlineCalibration(OnlineCalibrationSettings settings)
+    : settings_(settings), radius_growth_(std::exp2(1.0 / settings.radius_half_count)) {}
 
 std::size_t OnlineCalibration::bin_of(double probability) {
   const double scaled = std::clamp(probability, 0.0, 1.0) * bin_count;
   return std::min(static_cast<std::size_t>(scaled), static_cast<std::size_t>(bin_count - 1));
+}
+
+std::size_t OnlineCalibration::radius_bin_of(double off_mm, double radius_mm) {
+  if (!(off_mm > 0.0)) return 0;  // spot on (or a radius to shrink without end)
+  const double log_off = std::log(off_mm / radius_mm);
+  const double at = (log_off + max_log_radius_scale) / radius_bin_width;
+  if (!(at > 0.0)) return 0;
+  return std::min(static_cast<std::size_t>(at), radius_bins - 1);
+}
+
+double OnlineCalibration::log_quantile(const std::array<float, radius_bins>& bins, double weight,
+                                       double q) {
+  // The bin where the cumulative weight passes q, and linearly within it.
+  const double target = q * weight;
+  double below = 0.0;
+  for (std::size_t b = 0; b < radius_bins; ++b) {
+    const double in = bins[b];
+    if (below + in >= target && in > 0.0) {
+      const double within = (target - below) / in;
+      return -max_log_radius_scale + (static_cast<double>(b) + within) * radius_bin_width;
+    }
+    below += in;
+  }
+  return max_log_radius_scale;
 }
 
 void OnlineCalibration::clear() {
@@ -110,21 +135,21 @@ void OnlineCalibration::observe(const Formation& formation) {
           walk < robots.size() && robots[walk].robot_id == p.robot_id ? &robots[walk] : nullptr;
       if (robot && robot->observed) {
         if (p.radius90 > 0.0f) {
-          // A step towards the scales at which the share outside is a half and a tenth.
+          // How far off, as a multiple of each stated radius, into the phase's histograms.
           const double off = std::hypot(robot->position.x - p.x, robot->position.y - p.y);
-          const double rate = settings_.radius_rate;
-          // Judged by the radii adjust() states now (the scales as last worked out, a tenth of
-          // a second ago at most: an exp per check was a tenth of a frame's prediction time).
-          const bool outside50 = off > p.radius50 * step.scale50[p.phase];
-          const bool outside90 = off > p.radius90 * step.scale90[p.phase];
-          // Within a factor of max_radius_scale either way: robots standing still in front of
-          // a noiseless camera would shrink them without end.
-          double& log50 = step.log_scale50[p.phase];
-          double& log90 = step.log_scale90[p.phase];
-          log50 = std::clamp(log50 + rate * ((outside50 ? 1.0 : 0.0) - 0.5),
-                             -max_log_radius_scale, max_log_radius_scale);
-          log90 = std::clamp(log90 + rate * ((outside90 ? 1.0 : 0.0) - 0.1) * 5.0,
-                             -max_log_radius_scale, max_log_radius_scale);
+          RadiusEvidence& evidence = step.radii[p.phase];
+          evidence.off50[radius_bin_of(off, p.radius50)] += static_cast<float>(evidence.boost);
+          evidence.off90[radius_bin_of(off, p.radius90)] += static_cast<float>(evidence.boost);
+          evidence.weight += evidence.boost;
+          evidence.boost *= radius_growth_;
+          if (evidence.boost > max_boost) {
+            // Back to the scale of one check: the same evidence, in smaller numbers.
+            const double back = 1.0 / evidence.boost;
+            for (float& w : evidence.off50) w = static_cast<float>(w * back);
+            for (float& w : evidence.off90) w = static_cast<float>(w * back);
+            evidence.weight *= back;
+            evidence.boost = 1.0;
+          }
         }
         Bin& bin = step.bins[p.bin];
         const bool hit = robot->cell.x == p.cell_x && robot->cell.y == p.cell_y;
@@ -164,8 +189,13 @@ void OnlineCalibration::observe(const Formation& formation) {
   if (!correcting_.pass(t, correction_refresh_s)) return;
   for (Step& step : steps_) {
     for (std::size_t g = 0; g < radius_groups; ++g) {
-      step.scale50[g] = std::exp(step.log_scale50[g]);
-      step.scale90[g] = std::exp(step.log_scale90[g]);
+      const RadiusEvidence& evidence = step.radii[g];
+      if (evidence.weight <= 0.0) continue;
+      // The quantiles of the evidence, held towards the stated radii (scale 1) by the prior.
+      const double weight = evidence.weight / evidence.boost;
+      const double trust = weight / (weight + settings_.prior_weight);
+      step.scale50[g] = std::exp(trust * log_quantile(evidence.off50, evidence.weight, 0.5));
+      step.scale90[g] = std::exp(trust * log_quantile(evidence.off90, evidence.weight, 0.9));
     }
     for (std::size_t b = 0; b < step.bins.size(); ++b) {
       const Bin& bin = step.bins[b];
