@@ -139,10 +139,16 @@ class OnlineCalibration {
     std::array<float, radius_bins> off50{}, off90{};
     double weight = 0.0;  // in boosted units
     double boost = 1.0;
+    // The bins with any weight lie within [first, last]; fresh: checked since the scales were
+    // last worked out.
+    std::size_t first = radius_bins - 1, last = 0;
+    bool fresh = false;
   };
   static std::size_t radius_bin_of(double off_mm, double radius_mm);
-  // The q-quantile of a histogram of `weight` (boosted), on the log scale.
-  static double log_quantile(const std::array<float, radius_bins>& bins, double weight, double q);
+  // The q-quantile of a histogram of `weight` (boosted) whose bins outside [first, last] are
+  // empty, on the log scale.
+  static double log_quantile(const std::array<float, radius_bins>& bins, double weight, double q,
+                             std::size_t first, std::size_t last);
   // Faded sums over the checked predictions of one bin.
   struct Bin {
     double weight = 0.0;
