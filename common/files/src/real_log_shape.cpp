@@ -365,6 +365,7 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
     return fail(recording.string() + ": no vision detection to reshape");
   }
   counts.recording_s = last_s - first_s;
+  counts.sides_given = teams.blue_on_positive_half.has_value();
   auto reader = LogReader::open(recording);
   if (!reader) return fail(reader.error().message);
   auto writer = LogWriter::create(out);

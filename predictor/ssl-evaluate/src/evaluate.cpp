@@ -545,6 +545,13 @@ int run_as_real_log(const EvaluateOptions& options) {
       options.write_log.c_str(), static_cast<unsigned long long>(counts->packets_read),
       counts->recording_s, static_cast<unsigned long long>(counts->packets_written),
       options.mess.c_str(), static_cast<unsigned long long>(counts->ghost_detections));
+  if (counts->referee_messages > 0 && !counts->sides_given) {
+    std::printf(
+        "its referee does not say which half each team defends (the recording's did not): "
+        "evaluate it with --opponent-attacks auto (else the opponent is taken to attack +x "
+        "throughout%s)\n",
+        mess->change_of_ends ? ", which is wrong after the change of ends" : "");
+  }
   return 0;
 }
 

@@ -295,6 +295,9 @@ TEST_F(RealLogShape, StoppagesComeWithTheRefereesHaltAndRunningPlayElsewhere) {
   const ReadBack log = read_back(out_);
   ASSERT_GT(log.packets.size(), 10000U);
   EXPECT_EQ(counts->referee_messages, log.referee.size());
+  // The recording has no referee: nothing says which half a team defends, and the count says so.
+  EXPECT_FALSE(counts->sides_given);
+  for (const auto& [message, at_s] : log.referee) EXPECT_FALSE(message.has_blue_team_on_positive_half());
 
   // About ten messages a second, over the whole log, each whole; the counter counts commands.
   const double log_s = log.packets.back().receive_s - log.packets.front().receive_s;
@@ -413,7 +416,9 @@ TEST(RealLogShapeReferee, TheRecordingsTeamsAndSidesAreKeptAndTurnAtTheChangeOfE
   mess.stoppages = true;
   mess.change_of_ends = true;
   const auto out = dir.path() / "real.log.gz";
-  ASSERT_TRUE(sf::write_as_real_log(recording, out, mess).has_value());
+  const auto counts = sf::write_as_real_log(recording, out, mess);
+  ASSERT_TRUE(counts.has_value());
+  EXPECT_TRUE(counts->sides_given);
   const ReadBack log = read_back(out);
   ASSERT_FALSE(log.referee.empty());
   std::vector<Referee::Stage> stages;

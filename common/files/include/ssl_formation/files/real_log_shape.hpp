@@ -59,6 +59,9 @@ struct RealLogCounts {
   std::uint64_t packets_written = 0;  // half-field packets written
   std::uint64_t ghost_detections = 0;
   std::uint64_t referee_messages = 0;  // written (with stoppages)
+  // Whether they say which half blue defends: only if the recording's referee did. Without it
+  // nothing in the log tells the side after a change of ends but where the goalkeepers stand.
+  bool sides_given = false;
   double recording_s = 0.0;  // the recording's first to last capture time
 };
 
