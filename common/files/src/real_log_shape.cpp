@@ -272,9 +272,21 @@ class Messer {
     }
   }
 
+  // A recorded position as the messed-up vision reports it: mirrored after the change of ends,
+  // with the noise.
+  Point as_seen(Point recorded) {
+    const double mirror = mess_.change_of_ends && ends_changed_ ? -1.0 : 1.0;
+    Point p{mirror * recorded.x, mirror * recorded.y};
+    if (mess_.noise_mm > 0.0) {
+      std::normal_distribution<double> noise(0.0, mess_.noise_mm);
+      p.x += noise(noise_);
+      p.y += noise(noise_);
+    }
+    return p;
+  }
+
   void add_team(const Team& team, double fraction, bool left,
                 std::vector<RobotDetection>& detections) {
-    const double mirror = mess_.change_of_ends && ends_changed_ ? -1.0 : 1.0;
     for (const auto& [recorded_id, recorded] : team) {
       std::uint32_t id = recorded_id;
       if (mess_.substitutions) {
@@ -282,12 +294,7 @@ class Messer {
           if (fraction >= s.from && id == s.leaves) id = s.comes;
         }
       }
-      Point p{mirror * recorded.x, mirror * recorded.y};
-      if (mess_.noise_mm > 0.0) {
-        std::normal_distribution<double> noise(0.0, mess_.noise_mm);
-        p.x += noise(noise_);
-        p.y += noise(noise_);
-      }
+      const Point p = as_seen(recorded);
       if ((p.x < 0.0) == left) detections.push_back({id, p});
     }
   }
@@ -295,13 +302,7 @@ class Messer {
   // The ball in the packet of its half, where the robots' positions go (mirrored, noisy).
   void add_ball(const RecordedBall& ball, bool left, std::vector<Point>& balls) {
     if (!ball) return;
-    const double mirror = mess_.change_of_ends && ends_changed_ ? -1.0 : 1.0;
-    Point p{mirror * ball->x, mirror * ball->y};
-    if (mess_.noise_mm > 0.0) {
-      std::normal_distribution<double> noise(0.0, mess_.noise_mm);
-      p.x += noise(noise_);
-      p.y += noise(noise_);
-    }
+    const Point p = as_seen(*ball);
     if ((p.x < 0.0) == left) balls.push_back(p);
   }
 

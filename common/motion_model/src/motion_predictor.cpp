@@ -327,10 +327,12 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   // that (where it went when play resumed) is that match's, not the team's. On the simulated
   // match of `ssl-evaluate holdout` the robot and zone rows of HALT were 2-3 times persistence's
   // error at 1-2 s; pooled by velocity they follow the braking and little else.
-  const std::uint32_t game = MotionFeatures::game_context_of(decode_motion_key(keys[0]).context);
+  const std::uint32_t context = decode_motion_key(keys[0]).context;
+  const std::uint32_t game = MotionFeatures::game_context_of(context);
   const bool halted = game == MotionFeatures::halt_game;
   const auto phase = static_cast<std::size_t>(MotionFeatures::phase_of_game_context(game));
   const double mean_weight = horizon.mean_weight[phase];  // 0 in HALT: the same drift each time
+  const std::int8_t place = halted ? place_regressor(context) : std::int8_t{-1};
   for (std::size_t level = halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
        level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {
@@ -343,12 +345,11 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
       e.z50 = horizon.z50[phase];
       e.z90 = horizon.z90[phase];
       e.level = static_cast<MotionLevel>(level);
-      e.place_regressor =
-          halted ? place_regressor(decode_motion_key(keys[0]).context) : std::int8_t{-1};
+      e.place_regressor = place;
       return e;
     }
   }
-  const Estimate& prior = horizon.prior_of(decode_motion_key(keys[0]).context);
+  const Estimate& prior = horizon.prior_of(context);
   return Resolved{mean_weight * prior.mean_x,
                   mean_weight * prior.mean_y,
                   prior.mean_square,
@@ -356,7 +357,7 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
                   horizon.z50[phase],
                   horizon.z90[phase],
                   MotionLevel::all,
-                  halted ? place_regressor(decode_motion_key(keys[0]).context) : std::int8_t{-1}};
+                  place};
 }
 
 std::int8_t MotionModel::place_regressor(std::uint32_t context) const {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hand_built_motion.hpp"
+
 #include <cstdint>
 
 #include "ssl_formation/match/game_phase.hpp"
@@ -12,15 +14,9 @@
 namespace ssl_formation {
 namespace {
 
-const Grid grid(6, 4);
-const FieldSize field{9000.0, 6000.0};
-
-MotionConfig config() {
-  MotionConfig c;
-  c.step_s = 0.5;
-  c.horizons = 1;
-  return c;
-}
+const Grid& grid = testing::hand_built_grid;
+const FieldSize& field = testing::hand_built_field;
+MotionConfig config() { return testing::hand_built_config(); }
 
 std::uint32_t context_of(GamePhase phase) {
   return MotionFeatures::context(0, 0, MotionFeatures::game_context(phase, 5.0));

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hand_built_motion.hpp"
+
 #include "scratch_dir.hpp"
 
 #include <cmath>
@@ -14,15 +16,9 @@
 namespace ssl_formation {
 namespace {
 
-const Grid grid(6, 4);
-const FieldSize field{9000.0, 6000.0};
-
-MotionConfig config() {
-  MotionConfig c;
-  c.step_s = 0.5;
-  c.horizons = 1;
-  return c;
-}
+const Grid& grid = testing::hand_built_grid;
+const FieldSize& field = testing::hand_built_field;
+MotionConfig config() { return testing::hand_built_config(); }
 
 // Robot 3 at (0, 0) moving at 1 m/s along x, in running play, moved by (dx, 0) half a second
 // later.

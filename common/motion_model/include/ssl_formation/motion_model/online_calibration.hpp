@@ -21,10 +21,10 @@
 // stated radius, to its step's and phase's histogram, faded by checks of that phase rather than
 // by time (a team's kick-offs are minutes apart, and what the last showed holds for the next);
 // a radius is scaled by the median (50%) or the 90th percentile (90%) of those multiples, held
-// towards 1 by the same prior weight as the probabilities. A running quantile that moved the scale a small step per check
-// was tried first: in the long halts of a real log, where the robots stand within a millimetre
-// and the table's radii are tens of millimetres, it was still moving after the halt's end (the
-// 50% radius held 96% of the robots).
+// towards 1 by the same prior weight as the probabilities. A running quantile that moved the
+// scale a small step per check was tried first: in the long halts of a real log, where the
+// robots stand within a millimetre and the table's radii are tens of millimetres, it was still
+// moving after the halt's end (the 50% radius held 96% of the robots).
 
 #include <array>
 #include <cstddef>
