@@ -13,6 +13,38 @@ constexpr std::uint64_t motion_row_size = 8 + 8 * MotionRow::size;
 constexpr std::uint64_t held_out_size = 8 + 4 + 4 * motion_instance_values.size() + 4;
 constexpr std::uint64_t motion_horizons_offset = 8;                    // in the configuration
 constexpr std::uint64_t motion_rows_offset = motion_config_size + 16;  // the row count
+// offset_ms, since_command_ms, stage, seen, then x and y per robot slot
+constexpr std::uint64_t set_play_snapshot_size = 4 * 4 + 8 * SetPlaySnapshot::robot_slots;
+
+void write_set_plays(FileWriter& writer, const SetPlayMemory& memory) {
+  writer.write_u32(static_cast<std::uint32_t>(memory.episodes().size()));
+  for (const SetPlayEpisode& episode : memory.episodes()) {
+    writer.write_u32(static_cast<std::uint32_t>(episode.snapshots.size()));
+    for (const SetPlaySnapshot& s : episode.snapshots) {
+      writer.write_u32(static_cast<std::uint32_t>(s.offset_ms));
+      writer.write_u32(static_cast<std::uint32_t>(s.since_command_ms));
+      writer.write_u32(static_cast<std::uint32_t>(s.stage));
+      writer.write_u32(s.seen);
+      for (const auto& p : s.position) {
+        writer.write_u32(static_cast<std::uint32_t>(p[0]));
+        writer.write_u32(static_cast<std::uint32_t>(p[1]));
+      }
+    }
+  }
+}
+
+SetPlaySnapshot decode_set_play_snapshot(const std::uint8_t* in) {
+  SetPlaySnapshot s;
+  s.offset_ms = static_cast<std::int32_t>(get_u32(&in[0]));
+  s.since_command_ms = static_cast<std::int32_t>(get_u32(&in[4]));
+  s.stage = static_cast<SetPlayStage>(get_u32(&in[8]));
+  s.seen = get_u32(&in[12]);
+  for (std::size_t i = 0; i < s.position.size(); ++i) {
+    s.position[i][0] = static_cast<std::int32_t>(get_u32(&in[16 + 8 * i]));
+    s.position[i][1] = static_cast<std::int32_t>(get_u32(&in[20 + 8 * i]));
+  }
+  return s;
+}
 
 void write_motion_config(FileWriter& writer, const MotionConfig& config) {
   writer.write_f64(config.step_s);
@@ -135,9 +167,11 @@ void write_motion_section(FileWriter& writer, const MotionTable& motion, const M
     writer.write_u32(static_cast<std::uint32_t>(sample.size()));
     for (const HeldOutInstance& held : sample) write_held_out(writer, held);
   }
+  if (!motion.set_plays().empty()) write_set_plays(writer, motion.set_plays());
 }
 
-MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit) {
+MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit,
+                           bool with_set_plays) {
   MotionExtent extent;
   std::array<std::uint8_t, motion_fixed_size> fixed{};
   {
@@ -173,12 +207,36 @@ MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit) {
     if (count > (limit - pos) / held_out_size) return past(count * held_out_size);
     pos += count * held_out_size;
   }
+  if (with_set_plays) {
+    const auto read_count = [&](std::uint32_t& count) {
+      std::uint8_t bytes[4];
+      ChunkReader reader(fd, pos, pos + 4);
+      extent.read_error = reader.read(bytes, 4);
+      count = get_u32(bytes);
+      pos += 4;
+      return extent.read_error == 0;
+    };
+    if (limit - pos < 4) return past(4);
+    std::uint32_t episodes = 0;
+    if (!read_count(episodes)) return extent;
+    // More than a memory keeps: the sizes cannot be followed; the content check says why.
+    if (episodes > SetPlayMemory::max_episodes) return extent;
+    for (std::uint32_t e = 0; e < episodes; ++e) {
+      if (limit - pos < 4) return past(4);
+      std::uint32_t count = 0;
+      if (!read_count(count)) return extent;
+      if (count > (limit - pos) / set_play_snapshot_size) {
+        return past(count * set_play_snapshot_size);
+      }
+      pos += count * set_play_snapshot_size;
+    }
+  }
   extent.end = pos;
   extent.known = true;
   return extent;
 }
 
-ReadProblem read_motion_section(ChunkReader& reader, double header_step_s,
+ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, bool with_set_plays,
                                 std::optional<MotionTable>& out) {
   std::array<std::uint8_t, motion_fixed_size> fixed{};
   if (const int error = reader.read(fixed.data(), fixed.size()); error != 0) {
@@ -265,6 +323,40 @@ ReadProblem read_motion_section(ChunkReader& reader, double header_step_s,
             0};
   }
   table.restore_held_out_seen(seen);
+  if (with_set_plays) {
+    std::uint32_t episodes = 0;
+    if (const int error = reader.read_u32(episodes); error != 0) return {std::nullopt, error};
+    if (episodes > SetPlayMemory::max_episodes) {
+      return {std::to_string(episodes) + " kick-offs, more than a memory keeps (" +
+                  std::to_string(SetPlayMemory::max_episodes) + ")",
+              0};
+    }
+    std::array<std::uint8_t, set_play_snapshot_size> bytes{};
+    std::optional<SetPlayEpisode> previous;
+    for (std::uint32_t e = 0; e < episodes; ++e) {
+      const std::string where = "kick-off " + std::to_string(e);
+      std::uint32_t count = 0;
+      if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+      if (count > SetPlayMemory::max_snapshots_per_episode) {
+        return {where + ": " + std::to_string(count) + " snapshots, more than an episode keeps", 0};
+      }
+      SetPlayEpisode episode;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        if (const int error = reader.read(bytes.data(), bytes.size()); error != 0) {
+          return {std::nullopt, error};
+        }
+        episode.snapshots.push_back(decode_set_play_snapshot(bytes.data()));
+      }
+      if (!SetPlayMemory::valid_episode(episode)) return {where + ": invalid snapshots", 0};
+      if (previous && episode < *previous) return {where + ": kick-offs out of order", 0};
+      previous = episode;
+      const std::size_t kept = table.set_plays().episodes().size();
+      table.set_plays().add(std::move(episode));
+      if (table.set_plays().episodes().size() != kept + 1) {
+        return {where + ": no snapshot before the kick-off was over", 0};
+      }
+    }
+  }
   out.emplace(std::move(table));
   return {};
 }

@@ -28,7 +28,8 @@ using MotionRows = std::vector<std::pair<MotionKey, MotionRow>>;
 // The rows of `motion` in file order, or why it cannot go into a file whose header's step is
 // `step_s` (every check load_table makes, so that save_table never writes a file it rejects).
 Result<MotionRows> motion_rows_to_save(const MotionTable& motion, double step_s);
-// Writes the motion section of `motion`, whose rows motion_rows_to_save gave.
+// Writes the motion section of `motion`, whose rows motion_rows_to_save gave, with its
+// kick-offs' memory if it holds any (then the file is version 4).
 void write_motion_section(FileWriter& writer, const MotionTable& motion, const MotionRows& rows);
 
 // Where the motion section that starts at `begin` ends, from its sizes, or why that is unknown.
@@ -42,11 +43,12 @@ struct MotionExtent {
 // Reads the section's sizes from `fd`, never past `limit` (where the file checksum starts).
 // The sizes have no checksum of their own: table_file.hpp says how a file that ends inside them
 // is told from a corrupt one.
-MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit);
+// With `with_set_plays` (format version 4) the section ends with the kick-offs' memory.
+MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit, bool with_set_plays);
 
 // Reads the motion section into `out`, checking every field; `header_step_s` is the step the
 // file's header states.
-ReadProblem read_motion_section(ChunkReader& reader, double header_step_s,
+ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, bool with_set_plays,
                                 std::optional<MotionTable>& out);
 
 }  // namespace ssl_formation::detail

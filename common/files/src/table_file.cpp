@@ -96,12 +96,14 @@ Result<std::uint32_t, TableLoadError> check_magic_and_version(
                             "misread; train it again from its logs (version " +
                             std::to_string(table_file_motion_version) + ")");
   }
-  if (version != table_file_version && version != table_file_motion_version) {
+  if (version != table_file_version && version != table_file_motion_version &&
+      version != table_file_set_play_version) {
     return load_failure(TableFileError::wrong_version, path,
                         "format version " + std::to_string(version) +
                             ", but this program reads version " +
-                            std::to_string(table_file_version) + " or " +
-                            std::to_string(table_file_motion_version));
+                            std::to_string(table_file_version) + ", " +
+                            std::to_string(table_file_motion_version) + " or " +
+                            std::to_string(table_file_set_play_version));
   }
   return version;
 }
@@ -111,7 +113,8 @@ Result<std::uint32_t, TableLoadError> check_magic_and_version(
 Result<std::uint64_t, TableLoadError> expected_file_size(const std::filesystem::path& path, int fd,
                                                          const TableHeader& header,
                                                          std::uint64_t file_size) {
-  const bool has_motion = header.version == table_file_motion_version;
+  const bool has_motion = header.version == table_file_motion_version ||
+                          header.version == table_file_set_play_version;
   const std::uint64_t counts_end = header_size + counts_size(header);
   const std::uint64_t least = counts_end + (has_motion ? motion_fixed_size : 0) + checksum_size;
   if (file_size < least) {
@@ -122,7 +125,8 @@ Result<std::uint64_t, TableLoadError> expected_file_size(const std::filesystem::
   if (!has_motion) return least;
 
   // The motion section's sizes are not covered by the header checksum: see table_file.hpp.
-  const MotionExtent extent = motion_extent(fd, counts_end, file_size - checksum_size);
+  const MotionExtent extent = motion_extent(fd, counts_end, file_size - checksum_size,
+                                            header.version == table_file_set_play_version);
   if (extent.read_error != 0) return read_failure(path, extent.read_error);
   if (extent.past_end) {
     // A file whose checksum matches is whole: its sizes themselves are wrong.
@@ -247,9 +251,10 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                         "corrupt: the counts sum to " + std::to_string(sum) +
                             " transitions, the header says " + std::to_string(header.transitions));
   }
-  if (header.version == table_file_motion_version) {
+  if (header.version != table_file_version) {
     if (const ReadProblem problem =
-            read_motion_section(reader, header.metadata.step_s, stored.motion);
+            read_motion_section(reader, header.metadata.step_s,
+                                header.version == table_file_set_play_version, stored.motion);
         problem.failed()) {
       return content_failure(path, problem);
     }
@@ -277,7 +282,10 @@ Result<TableSaved> save_any_table(const std::filesystem::path& path, const Trans
   }
 
   const TableHeader header =
-      header_for(table, metadata, motion ? table_file_motion_version : table_file_version);
+      header_for(table, metadata,
+                 !motion                           ? table_file_version
+                 : motion->set_plays().empty() ? table_file_motion_version
+                                                   : table_file_set_play_version);
   const auto write_content = [&](FileWriter& writer) -> std::optional<std::string> {
     const auto header_bytes = encode_header(header);
     writer.write(header_bytes.data(), header_bytes.size());

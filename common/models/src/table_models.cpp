@@ -72,6 +72,7 @@ MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
     : table_(std::move(table)),
       motion_(std::move(motion)),
       history_(motion_.config()),
+      set_plays_(motion_.config().horizons * motion_.config().step_s),
       recalibration_(recalibration) {}
 
 void MotionLearner::observe(const MatchMoment& moment) {
@@ -82,6 +83,14 @@ void MotionLearner::observe(const MatchMoment& moment) {
 void MotionLearner::learn(const MatchMoment& moment) {
   for (const Transition& t : moment.sample.transitions) table_.add(t.from, t.to);
   learn_motion(motion_, history_, moment.formation(), moment.learn_from_s);
+  set_plays_.record(moment.formation().time_s, moment.phase,
+                    moment.game_state == GameState::kickoff_preparation, moment.since_command_s,
+                    moment.formation(), motion_.set_plays());
+}
+
+void MotionLearner::forget_match() {
+  history_.clear();
+  set_plays_.finish(motion_.set_plays());
 }
 
 void MotionLearner::absorb(const Learner& other) {
@@ -175,8 +184,19 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
                        moving ? seen->kinematics : MotionKinematics{}, moving,
                        moving ? seen->context : unmoving_context});
   }
+  // At a kick-off of the opponent's, what its earlier kick-offs say (set_play_memory.hpp).
+  const SetPlayAdvice* advice = nullptr;
+  if (moment.phase == GamePhase::kickoff_opponent && table_ && table_->motion &&
+      !table_->motion->set_plays().empty()) {
+    table_->motion->set_plays().recall(
+        moment.formation(),
+        moment.game_state == GameState::kickoff_preparation ? SetPlayStage::preparation
+                                                            : SetPlayStage::taken,
+        moment.since_command_s, settings_.step_s, steps, set_play_advice_);
+    advice = &set_play_advice_;
+  }
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
-                  rules_of_the_game(moment));
+                  rules_of_the_game(moment), advice);
   if (!settings_.recalibration) return;
   if (use == ForecastUse::predict) {
     calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks,

@@ -38,7 +38,7 @@ class MotionLearner : public Learner {
                 std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{});
   void observe(const MatchMoment& moment) override;
   void learn(const MatchMoment& moment) override;
-  void forget_match() override { history_.clear(); }
+  void forget_match() override;
   void absorb(const Learner& other) override;
   std::uint64_t progress() const override {
     return table_.transitions() + motion_.instances() + motion_.held_out();
@@ -54,6 +54,7 @@ class MotionLearner : public Learner {
   TransitionTable table_;
   MotionTable motion_;
   MotionHistory history_;
+  SetPlayRecorder set_plays_;
   std::optional<OnlineCalibrationSettings> recalibration_;
 };
 
@@ -90,6 +91,7 @@ class MotionForecaster : public Forecaster {
   MotionHistory history_;
   OnlineCalibration calibration_;
   std::vector<MotionRobot> robots_;  // reused from sample to sample
+  SetPlayAdvice set_play_advice_;    // reused from kick-off to kick-off
 };
 
 }  // namespace ssl_formation::models

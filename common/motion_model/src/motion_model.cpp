@@ -471,10 +471,11 @@ void MotionTable::merge(const MotionTable& other) {
     }
   }
   held_out_seen_ = seen;
+  set_plays_.merge(other.set_plays_);
 }
 
 std::size_t MotionTable::memory_bytes() const {
-  std::size_t bytes = rows_.memory_bytes();
+  std::size_t bytes = rows_.memory_bytes() + set_plays_.memory_bytes();
   for (const HeldOutSample& sample : held_out_) {
     bytes += sample.candidates.capacity() * sizeof(HeldOutInstance);
   }
@@ -505,7 +506,8 @@ std::vector<HeldOutInstance> MotionTable::calibration(int horizon_index) const {
 
 bool operator==(const MotionTable& a, const MotionTable& b) {
   if (!(a.config_ == b.config_) || a.instances_ != b.instances_ ||
-      a.held_out_seen_ != b.held_out_seen_ || a.rows_ != b.rows_) {
+      a.held_out_seen_ != b.held_out_seen_ || a.rows_ != b.rows_ ||
+      a.set_plays_ != b.set_plays_) {
     return false;
   }
   for (int h = 0; h < a.config_.horizons; ++h) {

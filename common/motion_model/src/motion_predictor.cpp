@@ -638,19 +638,22 @@ Point MotionRules::apply(std::uint32_t robot_id, Point from, double horizon_s, P
 void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
                           const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
                           Prediction& out, const MotionRules& rules) const {
-  predict(robots, horizon, codec, field, attacks, out, nullptr, rules);
+  predict(robots, horizon, codec, field, attacks, out, nullptr, rules, nullptr);
 }
 
 void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
                           const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
-                          Prediction& out, Cache& cache, const MotionRules& rules) const {
-  predict(robots, horizon, codec, field, attacks, out, &cache, rules);
+                          Prediction& out, Cache& cache, const MotionRules& rules,
+                          const SetPlayAdvice* advice) const {
+  predict(robots, horizon, codec, field, attacks, out, &cache, rules, advice);
 }
 
 void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
                           const StateCodec& codec, const FieldSize& field, AttackDirection attacks,
-                          Prediction& out, Cache* cache, const MotionRules& rules) const {
+                          Prediction& out, Cache* cache, const MotionRules& rules,
+                          const SetPlayAdvice* advice) const {
   const bool ruled = rules.any();
+  const bool advised = advice && advice->any && advice->robots.size() == robots.size();
   const Grid& grid = codec.grid();
   const auto steps = static_cast<std::size_t>(horizon);
   out.steps.resize(steps);
@@ -682,6 +685,13 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
         const double rms =
             std::sqrt(last.mean_square_mm2) * 2.0 - std::sqrt(before_last.mean_square_mm2);
         f.mean_square_mm2 = rms * rms;
+      }
+      if (advised && k <= static_cast<int>(SetPlayAdvice::Robot{}.weight.size())) {
+        const SetPlayAdvice::Robot& recalled = advice->robots[r];
+        const auto step = static_cast<std::size_t>(k - 1);
+        const double w = recalled.weight[step];
+        f.position = {f.position.x + w * (recalled.position[step].x - f.position.x),
+                      f.position.y + w * (recalled.position[step].y - f.position.y)};
       }
       if (ruled) {
         f.position = rules.apply(robot.robot_id, robot.position, k * config_.step_s, f.position);

@@ -327,6 +327,66 @@ TEST_F(MotionTableFile, TruncatedMotionSectionIsTruncated) {
   EXPECT_NE(message_of(result).find("at least"), std::string::npos) << message_of(result);
 }
 
+// A kick-off made up directly: robot 2 runs along y after NORMAL_START, the others stand.
+SetPlayEpisode made_up_kickoff(std::int32_t shift_mm) {
+  SetPlayEpisode episode;
+  for (int i = 0; i < 40; ++i) {
+    SetPlaySnapshot s;
+    s.offset_ms = 100 * i;
+    s.stage = i < 10 ? SetPlayStage::preparation : i < 30 ? SetPlayStage::taken : SetPlayStage::over;
+    s.since_command_ms = i < 10 ? 100 * i : 100 * (i - 10);
+    for (std::uint32_t id = 0; id < 6; ++id) {
+      s.seen |= 1U << id;
+      s.position[id] = {-600 * static_cast<std::int32_t>(id) + shift_mm, id == 2 ? 50 * i : -300};
+    }
+    episode.snapshots.push_back(s);
+  }
+  return episode;
+}
+
+TEST_F(MotionTableFile, KickOffsMakeVersionFourAndRoundTripExactly) {
+  Saved saved = save_trained();
+  MotionTable motion = *saved.stored.motion;
+  motion.set_plays().add(made_up_kickoff(0));
+  motion.set_plays().add(made_up_kickoff(-70));
+  ASSERT_EQ(motion.set_plays().episodes().size(), 2u);
+  const fs::path path = dir_ / "kickoffs.bin";
+  ASSERT_TRUE(save_table(path, saved.stored.table, saved.stored.metadata, motion));
+  const Bytes bytes = read_bytes(path);
+  EXPECT_EQ(get_u32(bytes, version_offset), table_file_set_play_version);
+  // The version-3 file's bytes, then the kick-offs: 4 + 2 x (4 + 40 x 144) bytes.
+  EXPECT_EQ(bytes.size(), saved.bytes.size() + 4 + 2 * (4 + 40 * 144));
+  const LoadResult loaded = load_table(path);
+  ASSERT_TRUE(loaded) << message_of(loaded);
+  ASSERT_TRUE(loaded->motion.has_value());
+  EXPECT_TRUE(*loaded->motion == motion);
+  EXPECT_EQ(loaded->motion->set_plays(), motion.set_plays());
+  const fs::path again = dir_ / "again.bin";
+  ASSERT_TRUE(save_table(again, *loaded));
+  EXPECT_EQ(read_bytes(again), bytes);
+
+  // Cut anywhere in the kick-offs: truncated; a byte flipped there: corrupt.
+  for (std::size_t n = saved.bytes.size() - 8; n < bytes.size(); n += 97) {
+    const LoadResult cut = load_bytes(Bytes(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n)));
+    ASSERT_EQ(kind_of(cut), TableFileError::truncated) << n << ": " << message_of(cut);
+  }
+  for (std::size_t at = saved.bytes.size() - 4; at < bytes.size() - 4; at += 131) {
+    Bytes flipped = bytes;
+    flipped[at] ^= 0x10;
+    const LoadResult result = load_bytes(flipped);
+    ASSERT_FALSE(result) << at;
+    EXPECT_NE(kind_of(result), TableFileError::wrong_version) << at;
+  }
+  // Resealed content that breaks the rules: snapshots out of order.
+  Bytes unordered = bytes;
+  const std::size_t first_snapshot = saved.bytes.size() - 4 + 4 + 4;
+  put_u32(unordered, first_snapshot + 144, 5000);  // the second snapshot's offset_ms
+  reseal(unordered);
+  const LoadResult result = load_bytes(unordered);
+  EXPECT_EQ(kind_of(result), TableFileError::corrupt) << message_of(result);
+  EXPECT_NE(message_of(result).find("kick-off 0"), std::string::npos) << message_of(result);
+}
+
 TEST_F(MotionTableFile, FlippedByteInTheMotionSectionIsDetected) {
   const Saved saved = save_trained();
   const std::size_t m = saved.motion_begin;
@@ -376,10 +436,10 @@ TEST_F(MotionTableFile, TrailingBytesAreCorrupt) {
 TEST_F(MotionTableFile, WrongVersionWithAMotionSection) {
   Saved saved = save_trained();
   Bytes bytes = saved.bytes;
-  put_u32(bytes, version_offset, 4);
+  put_u32(bytes, version_offset, 5);
   const LoadResult result = load_bytes(bytes);
   EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 4"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 5"), std::string::npos) << message_of(result);
 }
 
 // Version 2 had version 3's layout, but its rows were keyed by the earlier features: read as

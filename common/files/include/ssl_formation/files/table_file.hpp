@@ -7,7 +7,8 @@
 // Two format versions are read. Version 1 holds the paper's counts only; a table without a
 // motion table is still saved as version 1, byte for byte as before motion tables existed.
 // Version 3 is version 1 with 3 in its version field and the motion section between the counts
-// and the file checksum. Version 2 had the same layout, but its motion rows are keyed by the
+// and the file checksum; version 4 is version 3 with the opponent's kick-offs at the end of the
+// motion section. Version 2 had the same layout, but its motion rows are keyed by the
 // features before the zones and the team's phase (a context of the standing time alone): read
 // as version 3 they would mean something else, so a version-2 file is refused and must be
 // trained again (table_file_retired_motion_version).
@@ -16,7 +17,8 @@
 //
 //   offset size  field
 //        0    8  magic "SSLFTABL"
-//        8    4  u32 format version: 1 (table_file_version) or 3 (table_file_motion_version)
+//        8    4  u32 format version: 1 (table_file_version), 3 (table_file_motion_version) or
+//                4 (table_file_set_play_version)
 //       12    4  u32 grid length L (cells along x)
 //       16    4  u32 grid width W (cells along y)
 //       20    4  u32 encoding: 0 dense, 1 sparse
@@ -51,6 +53,12 @@
 //                    then content): u64 hash, u32 robot_id, the 14 i32 of
 //                    motion_instance_values (x, y, d_x, d_y, v_x, v_y, a_x, a_y, g_x, g_y,
 //                    s_x, s_y, t_x, t_y), u32 context                          (72 bytes)
+//                  version 4 only: u32 kick-off count (<= SetPlayMemory::max_episodes), then
+//                    the kick-offs in SetPlayMemory's order, each u32 snapshot count (1 to
+//                    max_snapshots_per_episode), then the snapshots, each i32 offset_ms (0 for
+//                    the first, then increasing), i32 since_command_ms (>= 0), u32 stage
+//                    (SetPlayStage), u32 robots seen (a bit per id 0-15), then 16 x (i32 x,
+//                    i32 y) normalised mm                                      (144 bytes)
 //      end-4   4  u32 CRC-32 of every byte before it (the file checksum)
 //
 // The header has its own checksum so that the size fields can be trusted before the file
@@ -79,6 +87,9 @@ namespace ssl_formation {
 inline constexpr std::uint32_t table_file_version = 1;
 // The version of a file with a motion table.
 inline constexpr std::uint32_t table_file_motion_version = 3;
+// The version of a file whose motion table remembers the opponent's kick-offs (SetPlayMemory);
+// a motion table that remembers none is still saved as version 3, byte for byte as before.
+inline constexpr std::uint32_t table_file_set_play_version = 4;
 // The version of motion tables keyed by the earlier features, refused with a reason.
 inline constexpr std::uint32_t table_file_retired_motion_version = 2;
 

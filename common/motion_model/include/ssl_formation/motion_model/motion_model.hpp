@@ -33,6 +33,7 @@
 #include "ssl_formation/base/interval_gate.hpp"
 #include "ssl_formation/base/probed_memory.hpp"
 #include "ssl_formation/match/game_phase.hpp"
+#include "ssl_formation/motion_model/set_play_memory.hpp"
 #include "ssl_formation/vision/robot_tracker.hpp"
 
 namespace ssl_formation {
@@ -396,6 +397,9 @@ class MotionTable {
   // The held-out sample of one horizon, in increasing hash order.
   std::vector<HeldOutInstance> calibration(int horizon_index) const;
   const MotionRowMap& row_map() const { return rows_; }
+  // The opponent's kick-offs (set_play_memory.hpp): merged and saved with the rows.
+  const SetPlayMemory& set_plays() const { return set_plays_; }
+  SetPlayMemory& set_plays() { return set_plays_; }
 
   bool is_held_out(double time_s) const;
   friend bool operator==(const MotionTable& a, const MotionTable& b);
@@ -416,6 +420,7 @@ class MotionTable {
     std::optional<HeldOutInstance> bar;  // set by the first cut
   };
   std::vector<HeldOutSample> held_out_;
+  SetPlayMemory set_plays_;
   std::uint64_t instances_ = 0;
   std::uint64_t held_out_seen_ = 0;
 };

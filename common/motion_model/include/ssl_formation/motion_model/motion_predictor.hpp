@@ -161,10 +161,12 @@ class MotionModel {
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out,
                const MotionRules& rules = {}) const;
-  // The same, looking the robots' estimates up through `cache` (see Cache).
+  // The same, looking the robots' estimates up through `cache` (see Cache). With `advice`
+  // (SetPlayMemory::recall for the same robots), each forecast is moved towards where the
+  // opponent's earlier kick-offs put the robot, by the advice's weight, before the rules.
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out, Cache& cache,
-               const MotionRules& rules = {}) const;
+               const MotionRules& rules = {}, const SetPlayAdvice* advice = nullptr) const;
 
  private:
   // A slot is the key and the estimate rounded to floats, padded to a cache line so that a
@@ -225,7 +227,7 @@ class MotionModel {
   MotionForecast forecast(int horizon_index, const MotionRobot& robot, const Resolved& e) const;
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out, Cache* cache,
-               const MotionRules& rules) const;
+               const MotionRules& rules, const SetPlayAdvice* advice) const;
   void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
   // Sets the horizon's mean weights from the table's held-out sample; false (weights left as
   // they were) when it holds too few instances.
