@@ -198,11 +198,12 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
                   rules_of_the_game(moment), advice);
   if (!settings_.recalibration) return;
+  const bool preparing = moment.game_state == GameState::kickoff_preparation;
   if (use == ForecastUse::predict) {
     calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks,
-                          moment.phase);
+                          moment.phase, preparing);
   }
-  calibration_.adjust(out, moment.phase);
+  calibration_.adjust(out, moment.phase, preparing);
 }
 
 void MotionForecaster::forget_match() {

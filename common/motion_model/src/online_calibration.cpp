@@ -153,7 +153,7 @@ void OnlineCalibration::observe(const Formation& formation) {
         if (p.radius90 > 0.0f) {
           // How far off, as a multiple of each stated radius, into the phase's histograms.
           const double off = std::hypot(robot->position.x - p.x, robot->position.y - p.y);
-          RadiusEvidence& evidence = step.radii[p.phase];
+          RadiusEvidence& evidence = step.radii[p.group];
           const std::size_t bin50 = radius_bin_of(off, p.radius50);
           const std::size_t bin90 = radius_bin_of(off, p.radius90);
           evidence.off50[bin50] += static_cast<float>(evidence.boost);
@@ -241,7 +241,8 @@ void OnlineCalibration::observe(const Formation& formation) {
 }
 
 void OnlineCalibration::remember(const Prediction& prediction, double time_s, double step_s,
-                                 AttackDirection attacks, GamePhase phase) {
+                                 AttackDirection attacks, GamePhase phase, bool preparing) {
+  const auto group = static_cast<std::uint8_t>(radius_group(phase, preparing));
   if (!remembering_.pass(time_s, settings_.remember_interval_s)) return;
   if (steps_.size() < prediction.steps.size()) steps_.resize(prediction.steps.size());
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
@@ -260,7 +261,7 @@ void OnlineCalibration::remember(const Prediction& prediction, double time_s, do
                  static_cast<std::int16_t>(robot.position.x),
                  static_cast<std::int16_t>(robot.position.y),
                  static_cast<std::uint8_t>(bin_of(robot.probability)), attacks,
-                 static_cast<std::uint8_t>(phase),
+                 group,
                  static_cast<float>(robot.normalised_position.x),
                  static_cast<float>(robot.normalised_position.y),
                  static_cast<float>(robot.radius50_mm), static_cast<float>(robot.radius90_mm)});
@@ -288,15 +289,20 @@ double OnlineCalibration::adjusted_formation(std::size_t step, double stated,
   return std::clamp(stated + steps_[step].formation_correction[bin], 0.0, 1.0);
 }
 
-double OnlineCalibration::radius50_scale(std::size_t step, GamePhase phase) const {
-  return step < steps_.size() ? steps_[step].scale50[static_cast<std::size_t>(phase)] : 1.0;
+std::size_t OnlineCalibration::radius_group(GamePhase phase, bool preparing) {
+  if (preparing && phase == GamePhase::kickoff_opponent) return all_game_phases.size();
+  return static_cast<std::size_t>(phase);
 }
 
-double OnlineCalibration::radius90_scale(std::size_t step, GamePhase phase) const {
-  return step < steps_.size() ? steps_[step].scale90[static_cast<std::size_t>(phase)] : 1.0;
+double OnlineCalibration::radius50_scale(std::size_t step, GamePhase phase, bool preparing) const {
+  return step < steps_.size() ? steps_[step].scale50[radius_group(phase, preparing)] : 1.0;
 }
 
-void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase) const {
+double OnlineCalibration::radius90_scale(std::size_t step, GamePhase phase, bool preparing) const {
+  return step < steps_.size() ? steps_[step].scale90[radius_group(phase, preparing)] : 1.0;
+}
+
+void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase, bool preparing) const {
   if (checked_ == 0) return;
   double confidence = 1.0;
   for (std::size_t s = 0; s < prediction.steps.size(); ++s) {
@@ -304,7 +310,8 @@ void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase) const {
     double stated = 1.0;
     double robots = 1.0;
     // Steps beyond those checked yet keep their radii.
-    const double scale50 = radius50_scale(s, phase), scale90 = radius90_scale(s, phase);
+    const double scale50 = radius50_scale(s, phase, preparing),
+                 scale90 = radius90_scale(s, phase, preparing);
     for (RobotPrediction& robot : step.robots) {
       stated *= robot.probability;
       robot.probability = adjusted(s, robot.probability);

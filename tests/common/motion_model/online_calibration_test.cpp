@@ -292,7 +292,7 @@ namespace {
 // second for `seconds` from `from_s`, and found one step (0.5 s) later `off_mm` away along x
 // (each instance's own distance from `offs`, in turn).
 void play_radii(sf::OnlineCalibration& calibration, double from_s, double seconds,
-                sf::GamePhase phase, const std::vector<double>& offs) {
+                sf::GamePhase phase, const std::vector<double>& offs, bool preparing = false) {
   for (int i = 0; i < static_cast<int>(seconds * 8.0); ++i) {
     const double t = from_s + 0.125 * i;
     sf::Formation formation = formation_at(t, 1, home);
@@ -302,7 +302,7 @@ void play_radii(sf::OnlineCalibration& calibration, double from_s, double second
     sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
     prediction.steps[0].robots[0].radius50_mm = 100.0;
     prediction.steps[0].robots[0].radius90_mm = 300.0;
-    calibration.remember(prediction, t, 0.5, sf::AttackDirection::positive_x, phase);
+    calibration.remember(prediction, t, 0.5, sf::AttackDirection::positive_x, phase, preparing);
   }
 }
 
@@ -370,4 +370,29 @@ TEST(OnlineCalibration, RobotsStandingWithinAMillimetreInALongHaltGetRadiiOfAMil
   EXPECT_LT(robot.radius90_mm, 5.0);
   EXPECT_GT(robot.radius90_mm, robot.radius50_mm);
   EXPECT_GE(within(standing, robot.radius90_mm), 0.85);
+}
+
+TEST(OnlineCalibration, TheOpponentsKickOffPreparationDoesNotNarrowTheRadiiAfterTheKick) {
+  // Its robots walking to their places, remembered from earlier kick-offs, land within 20 mm;
+  // after the kick they run the routine and land up to 1 m away.
+  sf::OnlineCalibration calibration(quick);
+  std::vector<double> walking, running;
+  for (int k = 0; k < 20; ++k) {
+    walking.push_back(1.0 * k + 0.5);
+    running.push_back(50.0 * k + 25.0);
+  }
+  play_radii(calibration, 100.0, 60.0, sf::GamePhase::kickoff_opponent, running);
+  play_radii(calibration, 200.0, 60.0, sf::GamePhase::kickoff_opponent, walking, true);
+  sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
+  prediction.steps[0].robots[0].radius50_mm = 100.0;
+  prediction.steps[0].robots[0].radius90_mm = 300.0;
+  sf::Prediction taken = prediction, prepared = prediction;
+  calibration.adjust(taken, sf::GamePhase::kickoff_opponent);
+  calibration.adjust(prepared, sf::GamePhase::kickoff_opponent, true);
+  EXPECT_NEAR(within(running, taken.steps[0].robots[0].radius90_mm), 0.9, 0.1);
+  EXPECT_NEAR(within(walking, prepared.steps[0].robots[0].radius90_mm), 0.9, 0.1);
+  EXPECT_LT(prepared.steps[0].robots[0].radius90_mm, 40.0);
+  // Our own kick-off's preparation is one with the rest of our kick-off.
+  EXPECT_EQ(calibration.radius90_scale(0, sf::GamePhase::kickoff_us, true),
+            calibration.radius90_scale(0, sf::GamePhase::kickoff_us));
 }
