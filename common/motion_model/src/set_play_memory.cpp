@@ -16,14 +16,38 @@ std::int32_t whole_ms(double seconds) {
 
 }  // namespace
 
+std::uint32_t SetPlayMemory::index_key(SetPlayStage stage, std::int32_t since_command_ms) {
+  constexpr std::int32_t most_ms = (1 << 24) - 1;  // four and a half hours
+  return static_cast<std::uint32_t>(stage) << 24 |
+         static_cast<std::uint32_t>(std::clamp(since_command_ms, 0, most_ms));
+}
+
 void SetPlayMemory::add(SetPlayEpisode episode) {
   const bool before_over = std::any_of(
       episode.snapshots.begin(), episode.snapshots.end(),
       [](const SetPlaySnapshot& s) { return s.stage != SetPlayStage::over; });
   if (!before_over || !valid_episode(episode)) return;
-  episodes_.insert(std::upper_bound(episodes_.begin(), episodes_.end(), episode),
-                   std::move(episode));
-  if (episodes_.size() > max_episodes) episodes_.pop_back();
+  const auto at = std::upper_bound(episodes_.begin(), episodes_.end(), episode);
+  const auto position = static_cast<std::uint16_t>(at - episodes_.begin());
+  // The episodes after it move up one; its snapshots join the index in order.
+  for (IndexEntry& entry : index_) {
+    if (entry.episode >= position) ++entry.episode;
+  }
+  const auto old_end = static_cast<std::ptrdiff_t>(index_.size());
+  for (std::size_t i = 0; i < episode.snapshots.size(); ++i) {
+    const SetPlaySnapshot& s = episode.snapshots[i];
+    if (s.stage == SetPlayStage::over) continue;
+    index_.push_back({index_key(s.stage, s.since_command_ms), position,
+                      static_cast<std::uint16_t>(i)});
+  }
+  std::sort(index_.begin() + old_end, index_.end());
+  std::inplace_merge(index_.begin(), index_.begin() + old_end, index_.end());
+  episodes_.insert(at, std::move(episode));
+  if (episodes_.size() > max_episodes) {
+    const auto last = static_cast<std::uint16_t>(episodes_.size() - 1);
+    std::erase_if(index_, [last](const IndexEntry& entry) { return entry.episode == last; });
+    episodes_.pop_back();
+  }
 }
 
 void SetPlayMemory::merge(const SetPlayMemory& other) {
@@ -37,7 +61,8 @@ std::size_t SetPlayMemory::snapshots() const {
 }
 
 std::size_t SetPlayMemory::memory_bytes() const {
-  std::size_t bytes = episodes_.capacity() * sizeof(SetPlayEpisode);
+  std::size_t bytes = episodes_.capacity() * sizeof(SetPlayEpisode) +
+                      index_.capacity() * sizeof(IndexEntry);
   for (const SetPlayEpisode& episode : episodes_) {
     bytes += episode.snapshots.capacity() * sizeof(SetPlaySnapshot);
   }
@@ -81,24 +106,28 @@ void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
     std::size_t index;
   };
   std::vector<Candidate> candidates;
-  const auto since_ms = static_cast<double>(whole_ms(since_command_s));
-  const double tolerance_ms = since_tolerance_s * 1000.0;
-  for (const SetPlayEpisode& episode : episodes_) {
-    for (std::size_t i = 0; i < episode.snapshots.size(); ++i) {
-      const SetPlaySnapshot& s = episode.snapshots[i];
-      if (s.stage != stage || std::abs(s.since_command_ms - since_ms) > tolerance_ms) continue;
-      const std::uint32_t both = s.seen & seen;
-      int n = 0;
-      double sum = 0.0;
-      for (std::uint32_t id = 0; id < SetPlaySnapshot::robot_slots; ++id) {
-        if ((both >> id & 1U) == 0) continue;
-        const Point then = s.at(id);
-        sum += (now[id].x - then.x) * (now[id].x - then.x) + (now[id].y - then.y) * (now[id].y - then.y);
-        ++n;
-      }
-      if (n == 0 || n < robots_now - 2) continue;
-      candidates.push_back({sum / n, &episode, i});
+  const std::int32_t since_ms = whole_ms(since_command_s);
+  const auto tolerance_ms = static_cast<std::int32_t>(std::lround(since_tolerance_s * 1000.0));
+  const auto first = std::lower_bound(
+      index_.begin(), index_.end(),
+      IndexEntry{index_key(stage, since_ms - tolerance_ms), 0, 0});
+  const auto last = std::upper_bound(
+      index_.begin(), index_.end(),
+      IndexEntry{index_key(stage, since_ms + tolerance_ms), 0xffff, 0xffff});
+  for (auto entry = first; entry < last; ++entry) {
+    const SetPlayEpisode& episode = episodes_[entry->episode];
+    const SetPlaySnapshot& s = episode.snapshots[entry->snapshot];
+    const std::uint32_t both = s.seen & seen;
+    int n = 0;
+    double sum = 0.0;
+    for (std::uint32_t id = 0; id < SetPlaySnapshot::robot_slots; ++id) {
+      if ((both >> id & 1U) == 0) continue;
+      const Point then = s.at(id);
+      sum += (now[id].x - then.x) * (now[id].x - then.x) + (now[id].y - then.y) * (now[id].y - then.y);
+      ++n;
     }
+    if (n == 0 || n < robots_now - 2) continue;
+    candidates.push_back({sum / n, &episode, entry->snapshot});
   }
   if (candidates.empty()) return;
   // Each robot's own ranking adds its own distance; the nearest few teams are enough to rank.

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -134,6 +135,37 @@ TEST(SetPlayMemory, MergingInEitherOrderEqualsRecordingBothStreams) {
   EXPECT_EQ(a, b);
   EXPECT_EQ(a, three_kickoffs());
   EXPECT_NE(first, a);
+  // And they recall the same: the index follows the episodes whatever the order they came in.
+  const Formation now = kickoff_formation(1002.4, 2.0, 30.0, 1000.0);
+  SetPlayAdvice from_a, from_b, from_all;
+  a.recall(now, SetPlayStage::taken, 0.4, 0.5, 3, from_a);
+  b.recall(now, SetPlayStage::taken, 0.4, 0.5, 3, from_b);
+  three_kickoffs().recall(now, SetPlayStage::taken, 0.4, 0.5, 3, from_all);
+  ASSERT_TRUE(from_all.any);
+  for (std::size_t r = 0; r < now.robots.size(); ++r) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(from_a.robots[r].position[k], from_all.robots[r].position[k]) << r << " " << k;
+      EXPECT_EQ(from_b.robots[r].position[k], from_all.robots[r].position[k]) << r << " " << k;
+      EXPECT_EQ(from_b.robots[r].weight[k], from_all.robots[r].weight[k]) << r << " " << k;
+    }
+  }
+}
+
+TEST(SetPlayMemory, AFullMemoryDropsTheLastInItsOrderAndRecallsOnlyWhatItKeeps) {
+  SetPlayMemory memory;
+  SetPlayRecorder recorder(1.0);
+  for (std::size_t k = 0; k < SetPlayMemory::max_episodes + 3; ++k) {
+    record_kickoff(recorder, memory, 100.0 + 20.0 * static_cast<double>(k),
+                   static_cast<double>(k % 7) * 10.0 - 30.0);
+  }
+  recorder.finish(memory);
+  EXPECT_EQ(memory.episodes().size(), SetPlayMemory::max_episodes);
+  EXPECT_TRUE(std::is_sorted(memory.episodes().begin(), memory.episodes().end()));
+  const Formation now = kickoff_formation(5002.2, 2.0, 0.0, 5000.0);
+  SetPlayAdvice advice;
+  memory.recall(now, SetPlayStage::taken, 0.2, 0.5, 2, advice);
+  ASSERT_TRUE(advice.any);
+  EXPECT_NEAR(advice.robots[runner].position[0].y, 700.0, 30.0);
 }
 
 TEST(SetPlayMemory, RunningPlayAloneRecordsNothing) {
