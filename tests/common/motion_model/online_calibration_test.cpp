@@ -306,6 +306,13 @@ void play_radii(sf::OnlineCalibration& calibration, double from_s, double second
   }
 }
 
+// 20 distances, `first_mm` then every `step_mm`: how far off a phase's robots land.
+std::vector<double> evenly_spread(double first_mm, double step_mm) {
+  std::vector<double> offs;
+  for (int k = 0; k < 20; ++k) offs.push_back(first_mm + step_mm * k);
+  return offs;
+}
+
 // The share of `offs` within `radius`.
 double within(const std::vector<double>& offs, double radius) {
   double inside = 0.0;
@@ -319,11 +326,7 @@ TEST(OnlineCalibration, EachPhasesRadiiComeToHoldTheRobotHalfAndNineTenthsOfTheT
   sf::OnlineCalibration calibration(quick);
   // At the opponent's kick-offs the robots land from 0 to 1 m away (the table's radii are far too
   // small); in HALT within 40 mm (far too large).
-  std::vector<double> kickoff, halt;
-  for (int k = 0; k < 20; ++k) {
-    kickoff.push_back(50.0 * k + 25.0);
-    halt.push_back(2.0 * k + 1.0);
-  }
+  const std::vector<double> kickoff = evenly_spread(25.0, 50.0), halt = evenly_spread(1.0, 2.0);
   // 12,000 checks of each: what a team of 11 remembered 10 times a second gives in two minutes.
   // The kick-offs' evidence is 25 minutes old when it is used: it fades with checks of its own
   // phase, not with time (kick-offs are minutes apart).
@@ -356,8 +359,7 @@ TEST(OnlineCalibration, RobotsStandingWithinAMillimetreInALongHaltGetRadiiOfAMil
   // where the table states radii of 100 and 300 mm. A running quantile that moved the radius a
   // small step per check was still far too wide at the end of such a halt.
   sf::OnlineCalibration calibration(quick);
-  std::vector<double> standing;
-  for (int k = 0; k < 20; ++k) standing.push_back(0.05 * k + 0.025);  // 0.025 to 0.975 mm
+  const std::vector<double> standing = evenly_spread(0.025, 0.05);  // 0.025 to 0.975 mm
   play_radii(calibration, 100.0, 25.0, sf::GamePhase::halt, standing);  // 200 checks
   sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
   sf::RobotPrediction& robot = prediction.steps[0].robots[0];
@@ -376,11 +378,7 @@ TEST(OnlineCalibration, TheOpponentsKickOffPreparationDoesNotNarrowTheRadiiAfter
   // Its robots walking to their places, remembered from earlier kick-offs, land within 20 mm;
   // after the kick they run the routine and land up to 1 m away.
   sf::OnlineCalibration calibration(quick);
-  std::vector<double> walking, running;
-  for (int k = 0; k < 20; ++k) {
-    walking.push_back(1.0 * k + 0.5);
-    running.push_back(50.0 * k + 25.0);
-  }
+  const std::vector<double> walking = evenly_spread(0.5, 1.0), running = evenly_spread(25.0, 50.0);
   play_radii(calibration, 100.0, 60.0, sf::GamePhase::kickoff_opponent, running);
   play_radii(calibration, 200.0, 60.0, sf::GamePhase::kickoff_opponent, walking, true);
   sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
