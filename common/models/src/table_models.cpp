@@ -184,21 +184,21 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
                        moving ? seen->kinematics : MotionKinematics{}, moving,
                        moving ? seen->context : unmoving_context});
   }
+  // A kick-off being prepared: its robots walk to their places (SetPlayMemory's stage, and a
+  // radius group of the recalibration's).
+  const bool preparing = moment.game_state == GameState::kickoff_preparation;
   // At a kick-off of the opponent's, what its earlier kick-offs say (set_play_memory.hpp).
   const SetPlayAdvice* advice = nullptr;
   if (moment.phase == GamePhase::kickoff_opponent && table_ && table_->motion &&
       !table_->motion->set_plays().empty()) {
     table_->motion->set_plays().recall(
-        moment.formation(),
-        moment.game_state == GameState::kickoff_preparation ? SetPlayStage::preparation
-                                                            : SetPlayStage::taken,
+        moment.formation(), preparing ? SetPlayStage::preparation : SetPlayStage::taken,
         moment.since_command_s, settings_.step_s, steps, set_play_advice_);
     advice = &set_play_advice_;
   }
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
                   rules_of_the_game(moment), advice);
   if (!settings_.recalibration) return;
-  const bool preparing = moment.game_state == GameState::kickoff_preparation;
   if (use == ForecastUse::predict) {
     calibration_.remember(out, moment.formation().time_s, settings_.step_s, moment.attacks,
                           moment.phase, preparing);

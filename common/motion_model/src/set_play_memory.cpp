@@ -10,6 +10,10 @@ namespace ssl_formation {
 
 namespace {
 
+double squared_distance(Point a, Point b) {
+  return (a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y);
+}
+
 std::int32_t whole_ms(double seconds) {
   return static_cast<std::int32_t>(std::lround(std::clamp(seconds, 0.0, 2.0e6) * 1000.0));
 }
@@ -122,8 +126,7 @@ void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
     double sum = 0.0;
     for (std::uint32_t id = 0; id < SetPlaySnapshot::robot_slots; ++id) {
       if ((both >> id & 1U) == 0) continue;
-      const Point then = s.at(id);
-      sum += (now[id].x - then.x) * (now[id].x - then.x) + (now[id].y - then.y) * (now[id].y - then.y);
+      sum += squared_distance(now[id], s.at(id));
       ++n;
     }
     if (n == 0 || n < robots_now - 2) continue;
@@ -145,10 +148,7 @@ void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
     for (const Candidate& c : candidates) {
       const SetPlaySnapshot& s = c.episode->snapshots[c.index];
       if (!s.has(id)) continue;
-      const Point then = s.at(id);
-      const double own = (now[id].x - then.x) * (now[id].x - then.x) +
-                         (now[id].y - then.y) * (now[id].y - then.y);
-      ranked.emplace_back(c.team_mm2 + own_weight * own, &c);
+      ranked.emplace_back(c.team_mm2 + own_weight * squared_distance(now[id], s.at(id)), &c);
     }
     std::sort(ranked.begin(), ranked.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
