@@ -352,6 +352,15 @@ void MotionRow::add(const MotionRow& o) {
   for (std::size_t i = 0; i < size; ++i) sums[i] += o.sums[i];
 }
 
+MotionRow MotionRow::without_regressor(int i) const {
+  MotionRow out = *this;
+  out.sums[static_cast<std::size_t>(3 + 2 * i)] = 0;
+  out.sums[static_cast<std::size_t>(3 + 2 * i + 1)] = 0;
+  out.sums[static_cast<std::size_t>(4 + 2 * r + i)] = 0;
+  for (int j = 0; j < r; ++j) out.sums[static_cast<std::size_t>(4 + 3 * r + pair_index(i, j))] = 0;
+  return out;
+}
+
 MotionTable::MotionTable(MotionConfig config) : config_(config) {
   if (!config_.valid()) throw std::invalid_argument("invalid motion model configuration");
   held_out_.resize(static_cast<std::size_t>(config_.horizons));

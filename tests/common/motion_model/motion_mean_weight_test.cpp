@@ -1,11 +1,13 @@
 // What each game phase keeps of the table's fit, hand-built: the weight of its rows' mean
 // displacement (kept where held-out play bears it out, dropped where it does not or never
-// holds), and its own radii where its held-out play strays further than the others'.
+// holds), the team's velocity as a regressor (not at the restarts taken where the ball went
+// out), and its own radii where its held-out play strays further than the others'.
 
 #include <gtest/gtest.h>
 
 #include "hand_built_motion.hpp"
 
+#include <array>
 #include <cstdint>
 
 #include "ssl_formation/match/game_phase.hpp"
@@ -104,6 +106,49 @@ TEST(MotionMeanWeight, AHeldOutMeanHalfAsLargeKeepsAboutHalf) {
   const MotionModel model(table, grid, field);
   // The fit is 0.5, held towards one by 20 instances of 1,000: 0.51.
   EXPECT_NEAR(forecast_dx(model, GamePhase::ball_placement_opponent), 306.0, 10.0);
+}
+
+// Robot 3 in `phase` forecast 0.5 s on, standing while its team moves at `team_velocity_x`.
+double forecast_dx_with_team(const MotionModel& model, GamePhase phase, double team_velocity_x) {
+  MotionRobot robot;
+  robot.robot_id = 3;
+  robot.position = {1000.0, 500.0};
+  robot.has_velocity = true;
+  robot.kinematics.team_velocity = {team_velocity_x, 0.0};
+  robot.context = context_of(phase);
+  return model.forecast(0, robot).position.x - 1000.0;
+}
+
+TEST(MotionTeamVelocity, TheRestartsTakenWhereTheBallWentOutLeaveTheTeamsVelocityOut) {
+  // In every phase the robot went 400 mm on whenever its team moved at 1 m/s and stayed when
+  // it stood: the team's velocity explains the whole displacement.
+  const std::array<GamePhase, 5> phases{GamePhase::running, GamePhase::stop,
+                                        GamePhase::free_kick_opponent, GamePhase::free_kick_us,
+                                        GamePhase::ball_placement_us};
+  MotionTable table(config());
+  double t = 0.0;
+  for (const GamePhase phase : phases) {
+    for (int i = 0; i < 2000; ++i, t += 0.1) {
+      MotionInstance instance = standing_robot(phase, i % 2 == 0 ? 400 : 0);
+      instance.t_x = i % 2 == 0 ? 1000 : 0;
+      table.add(0, t, instance);
+    }
+  }
+  const MotionModel model(table, grid, field);
+  // Where it holds, the team setting off says the robot follows.
+  for (const GamePhase phase : {GamePhase::running, GamePhase::stop}) {
+    EXPECT_GT(forecast_dx_with_team(model, phase, 1000.0) - forecast_dx_with_team(model, phase, 0.0),
+              300.0)
+        << to_string(phase);
+  }
+  // At the free kicks and our placements each robot makes for its own place about the ball:
+  // the forecast is the same whatever the team does.
+  for (const GamePhase phase : {GamePhase::free_kick_opponent, GamePhase::free_kick_us,
+                                GamePhase::ball_placement_us}) {
+    EXPECT_NEAR(forecast_dx_with_team(model, phase, 1000.0),
+                forecast_dx_with_team(model, phase, 0.0), 0.5)
+        << to_string(phase);
+  }
 }
 
 // `count` instances of robot 3 standing in `phase` that moved +-`spread_mm` along x, in turn,

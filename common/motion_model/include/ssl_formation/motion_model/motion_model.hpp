@@ -233,6 +233,7 @@ struct MotionKinematics {
 //   t  the team's mean velocity times the horizon (a team moves from one set-play position to
 //      the next together: when the others set off, a robot still standing is about to).
 inline constexpr int motion_regressors = 5;
+inline constexpr int team_velocity_regressor = 4;  // t
 using MotionRegressors = std::array<Point, motion_regressors>;
 MotionRegressors motion_regressors_of(const MotionKinematics& kinematics, double horizon_s);
 
@@ -255,6 +256,9 @@ struct MotionRow {
   void add(const std::array<std::int64_t, 2>& d,
            const std::array<std::array<std::int64_t, 2>, r>& x);
   void add(const MotionRow& other);
+  // The same sums with regressor `i` taken as zero in every instance: a fit of them leaves it
+  // out.
+  MotionRow without_regressor(int i) const;
   friend bool operator==(const MotionRow&, const MotionRow&) = default;
 
  private:

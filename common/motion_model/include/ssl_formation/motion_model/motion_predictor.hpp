@@ -212,6 +212,9 @@ class MotionModel {
     std::vector<double> hit_rate;
   };
   Estimate shrink(const MotionRow& row, const Estimate& parent) const;
+  // Whether the rows of a game phase fit the team's mean velocity (regressor t); the others'
+  // are fitted without it, and held towards a parent without it.
+  static bool team_velocity_holds(GamePhase phase);
   std::optional<Estimate> estimate(MotionKey key) const;  // as indexed (floats), none if absent
   const Slot* find(MotionKey key) const;
   // The finest estimate with counts among the robot's keys, else the horizon's root.
