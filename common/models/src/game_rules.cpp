@@ -1,5 +1,7 @@
 #include "ssl_formation/models/game_rules.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -73,6 +75,71 @@ MotionRules rules_of_the_game(const MatchMoment& moment) {
       break;  // HALT and timeouts are the model's prior (MotionModelSettings); play runs free
   }
   return rules;
+}
+
+void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, Point spot,
+                           double step_s, int steps, SetPlayAdvice& advice) {
+  using Path = BallPlacementPath;
+  advice.robots.assign(robots.size(), SetPlayAdvice::Robot{});
+  advice.any = false;
+  if (robots.empty()) return;
+  std::size_t placer = 0;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t r = 0; r < robots.size(); ++r) {
+    const double d = std::hypot(robots[r].position.x - ball.x, robots[r].position.y - ball.y);
+    if (d < nearest) {
+      nearest = d;
+      placer = r;
+    }
+  }
+  const MotionRobot& robot = robots[placer];
+  // The way it takes: on to where it has the ball behind the spot, or first to the ball's far
+  // side from the spot.
+  const double to_spot = std::hypot(spot.x - ball.x, spot.y - ball.y);
+  const Point along = to_spot > 1.0 ? Point{(spot.x - ball.x) / to_spot, (spot.y - ball.y) / to_spot}
+                                    : Point{1.0, 0.0};
+  std::array<Point, 3> path{robot.position, {}, {}};
+  std::size_t corners = 2;
+  if (nearest < Path::carrying_mm) {
+    path[1] = {spot.x + robot.position.x - ball.x, spot.y + robot.position.y - ball.y};
+  } else {
+    path[1] = {ball.x - along.x * Path::behind_ball_mm, ball.y - along.y * Path::behind_ball_mm};
+    path[2] = {spot.x - along.x * Path::behind_ball_mm, spot.y - along.y * Path::behind_ball_mm};
+    corners = 3;
+  }
+  // Its speed along the way: what it already has towards the first corner, then speeding up.
+  const double first_leg = std::hypot(path[1].x - path[0].x, path[1].y - path[0].y);
+  double speed = 0.0;
+  if (robot.has_velocity && first_leg > 1.0) {
+    const Point v = robot.kinematics.velocity;
+    speed = std::clamp(
+        (v.x * (path[1].x - path[0].x) + v.y * (path[1].y - path[0].y)) / first_leg, 0.0,
+        Path::speed_mm_s);
+  }
+  const double speeding_up_s = (Path::speed_mm_s - speed) / Path::acceleration_mm_s2;
+  SetPlayAdvice::Robot& out = advice.robots[placer];
+  const int advised = std::min(steps, static_cast<int>(out.weight.size()));
+  for (int k = 0; k < advised; ++k) {
+    const double h = (k + 1) * step_s;
+    const double t = std::min(h, speeding_up_s);
+    double travelled =
+        speed * t + 0.5 * Path::acceleration_mm_s2 * t * t + Path::speed_mm_s * (h - t);
+    Point at = path[corners - 1];
+    for (std::size_t i = 0; i + 1 < corners; ++i) {
+      const double leg = std::hypot(path[i + 1].x - path[i].x, path[i + 1].y - path[i].y);
+      if (travelled <= leg) {
+        const double f = leg > 0.0 ? travelled / leg : 0.0;
+        at = {path[i].x + (path[i + 1].x - path[i].x) * f,
+              path[i].y + (path[i + 1].y - path[i].y) * f};
+        break;
+      }
+      travelled -= leg;
+    }
+    out.position[static_cast<std::size_t>(k)] = at;
+    out.weight[static_cast<std::size_t>(k)] =
+        Path::weight * std::min(1.0, h / Path::full_weight_s);
+  }
+  advice.any = advised > 0;
 }
 
 }  // namespace ssl_formation::models

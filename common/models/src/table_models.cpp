@@ -195,6 +195,11 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
         moment.formation(), preparing ? SetPlayStage::preparation : SetPlayStage::taken,
         moment.since_command_s, settings_.step_s, steps, set_play_advice_);
     advice = &set_play_advice_;
+  } else if (moment.phase == GamePhase::ball_placement_opponent && moment.ball &&
+             moment.designated_position) {
+    advise_ball_placement(robots_, *moment.ball, *moment.designated_position, settings_.step_s,
+                          steps, set_play_advice_);
+    advice = &set_play_advice_;
   }
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
                   rules_of_the_game(moment), advice);

@@ -91,7 +91,7 @@ class MotionForecaster : public Forecaster {
   MotionHistory history_;
   OnlineCalibration calibration_;
   std::vector<MotionRobot> robots_;  // reused from sample to sample
-  SetPlayAdvice set_play_advice_;    // reused from kick-off to kick-off
+  SetPlayAdvice set_play_advice_;    // reused from set play to set play
 };
 
 }  // namespace ssl_formation::models

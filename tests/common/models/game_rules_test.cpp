@@ -9,6 +9,7 @@
 #include "match_logs.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -369,6 +370,85 @@ TEST(GameRules, AtOurBallPlacementTheOpponentIsForecastClearOfThePathAtAnySpeed)
   EXPECT_GT(checked, 1000);
   // STOP's speed limit is not placement's: "This rule does not apply to ball placement".
   EXPECT_GT(fastest_mm_s, 1500.0);
+}
+
+// Every robot standing where it circled from.
+Point standing(int id, double) { return circling(id, 0.0); }
+
+TEST(GameRules, AtTheirBallPlacementTheRobotNearestTheBallIsForecastOnItsWayToTheSpot) {
+  Script script;
+  script.robot = standing;  // learned as running play: nobody moves
+  Learning learning;
+  play(learning, script, 0.0, 60.0);
+  // Yellow (the opponent) places the ball from (2000, 0) to (-1000, -2000) from 5 s on; robot 4
+  // stands nearest the ball, about a metre from it.
+  script.command = [](double t) {
+    return t < 5.0 ? Referee::NORMAL_START : Referee::BALL_PLACEMENT_YELLOW;
+  };
+  script.designated_position = Point{-1000.0, -2000.0};
+  Forecasting forecasting(*learning.learner);
+  play(forecasting, script, 0.0, 10.0);
+  int checked = 0;
+  for (const Forecast& f : forecasting.seen) {
+    if (f.state != GameState::ball_placement) continue;
+    ASSERT_TRUE(f.ball);
+    const std::vector<RobotPrediction>& last = f.prediction.steps.back().robots;
+    for (const RobotPrediction& p : last) {
+      const Point from = robot_of(f, p.robot_id).position;
+      if (p.robot_id == 4) {
+        // 1.5 s on, the path has it round the ball's far side from the spot, at (2091, 61), and
+        // 591 mm on towards the spot, at (1600, -267): 950 mm from where it stands. The forecast
+        // moves 0.4 of the way there.
+        EXPECT_NEAR(distance(p.normalised_position, from), 380.0, 20.0);
+        EXPECT_LT(distance(p.normalised_position, *f.ball), distance(from, *f.ball));
+      } else {
+        EXPECT_LT(distance(p.normalised_position, from), 50.0) << p.robot_id;
+      }
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 200);
+}
+
+TEST(BallPlacementPath, TheNearestRobotDrivesBehindTheBallThenCarriesItToTheSpot) {
+  std::vector<MotionRobot> robots(3);
+  robots[0].robot_id = 0;
+  robots[0].position = {-3000.0, 0.0};
+  robots[1].robot_id = 2;
+  robots[1].position = {0.0, 0.0};  // 1 m from the ball, standing
+  robots[2].robot_id = 4;
+  robots[2].position = {500.0, 2000.0};
+  SetPlayAdvice advice;
+  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 3, advice);
+  ASSERT_TRUE(advice.any);
+  ASSERT_EQ(advice.robots.size(), 3u);
+  // From standing, 2 m/s^2 up to 1.5 m/s (0.75 s): 250 mm in 0.5 s, 937.5 in 1 s, 1687.5 in
+  // 1.5 s, along (0, 0) to (890, 0), behind the ball, then on to (2890, 0).
+  const std::array<double, 3> along{250.0, 937.5, 1687.5};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_NEAR(advice.robots[1].position[k].x, along[k], 1e-6) << k;
+    EXPECT_NEAR(advice.robots[1].position[k].y, 0.0, 1e-6) << k;
+    EXPECT_DOUBLE_EQ(advice.robots[1].weight[k], models::BallPlacementPath::weight);
+    EXPECT_EQ(advice.robots[0].weight[k], 0.0);
+    EXPECT_EQ(advice.robots[2].weight[k], 0.0);
+  }
+  // A tenth of a second ahead the path counts a fifth as much as from half a second on.
+  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.1, 1, advice);
+  EXPECT_DOUBLE_EQ(advice.robots[1].weight[0], models::BallPlacementPath::weight / 5.0);
+}
+
+TEST(BallPlacementPath, ARobotWithTheBallCarriesItOnAndStopsBehindTheSpot) {
+  std::vector<MotionRobot> robots(1);
+  robots[0].robot_id = 1;
+  robots[0].position = {890.0, 0.0};  // behind the ball at (1000, 0), already at 1.5 m/s
+  robots[0].has_velocity = true;
+  robots[0].kinematics.velocity = {1500.0, 0.0};
+  SetPlayAdvice advice;
+  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 1.0, 2, advice);
+  EXPECT_NEAR(advice.robots[0].position[0].x, 2390.0, 1e-6);
+  // 2 m of the way in 1.33 s; there it stays, the ball on the spot at its feet.
+  EXPECT_NEAR(advice.robots[0].position[1].x, 2890.0, 1e-6);
+  EXPECT_NEAR(advice.robots[0].position[1].y, 0.0, 1e-6);
 }
 
 TEST(GameRules, AtTheirOpponentsKickoffTheRobotsAreForecastInTheirHalfOutsideTheCentreCircle) {
