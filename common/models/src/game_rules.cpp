@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <vector>
 
 namespace ssl_formation::models {
 
@@ -12,18 +14,27 @@ namespace {
 constexpr double stop_speed_limit_mm_s = 1500.0;
 constexpr double ball_distance_mm = 500.0;
 
-// The predicted team's robot nearest to `point`: the one placing the ball, or its kicker.
-std::optional<std::uint32_t> nearest_robot(const Formation& formation, Point point) {
-  std::optional<std::uint32_t> nearest;
+// The index of the robot (FormationRobot, MotionRobot: anything with a position) nearest to
+// `point`, the first on a tie; none for no robots.
+template <typename Robot>
+std::optional<std::size_t> nearest_index(const std::vector<Robot>& robots, Point point) {
+  std::optional<std::size_t> nearest;
   double best = std::numeric_limits<double>::infinity();
-  for (const FormationRobot& robot : formation.robots) {
-    const double d = std::hypot(robot.position.x - point.x, robot.position.y - point.y);
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const double d = std::hypot(robots[i].position.x - point.x, robots[i].position.y - point.y);
     if (d < best) {
       best = d;
-      nearest = robot.robot_id;
+      nearest = i;
     }
   }
   return nearest;
+}
+
+// The predicted team's robot nearest to `point`: the one placing the ball, or its kicker.
+std::optional<std::uint32_t> nearest_robot(const Formation& formation, Point point) {
+  const std::optional<std::size_t> i = nearest_index(formation.robots, point);
+  if (!i) return std::nullopt;
+  return formation.robots[*i].robot_id;
 }
 
 }  // namespace
@@ -82,27 +93,25 @@ void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, P
   using Path = BallPlacementPath;
   advice.robots.assign(robots.size(), SetPlayAdvice::Robot{});
   advice.any = false;
-  if (robots.empty()) return;
-  std::size_t placer = 0;
-  double nearest = std::numeric_limits<double>::infinity();
-  for (std::size_t r = 0; r < robots.size(); ++r) {
-    const double d = std::hypot(robots[r].position.x - ball.x, robots[r].position.y - ball.y);
-    if (d < nearest) {
-      nearest = d;
-      placer = r;
-    }
-  }
+  const std::optional<std::size_t> nearest = nearest_index(robots, ball);
+  if (!nearest) return;
+  const std::size_t placer = *nearest;
   const MotionRobot& robot = robots[placer];
-  // The way it takes: on to where it has the ball behind the spot, or first to the ball's far
-  // side from the spot.
   const double to_spot = std::hypot(spot.x - ball.x, spot.y - ball.y);
-  const Point along = to_spot > 1.0 ? Point{(spot.x - ball.x) / to_spot, (spot.y - ball.y) / to_spot}
-                                    : Point{1.0, 0.0};
+  const double to_ball = std::hypot(ball.x - robot.position.x, ball.y - robot.position.y);
+  // The way it takes: on to where it has the ball behind the spot; or first to the ball's far
+  // side from the spot; or, for a ball within the tolerance of its spot already (whose far side
+  // is no side at all), straight to the ball, which it will touch into place.
   std::array<Point, 3> path{robot.position, {}, {}};
   std::size_t corners = 2;
-  if (nearest < Path::carrying_mm) {
+  if (to_ball < Path::carrying_mm) {
     path[1] = {spot.x + robot.position.x - ball.x, spot.y + robot.position.y - ball.y};
+  } else if (to_spot <= Path::placed_mm) {
+    const double short_of_ball = (to_ball - Path::behind_ball_mm) / to_ball;
+    path[1] = {robot.position.x + (ball.x - robot.position.x) * short_of_ball,
+               robot.position.y + (ball.y - robot.position.y) * short_of_ball};
   } else {
+    const Point along{(spot.x - ball.x) / to_spot, (spot.y - ball.y) / to_spot};
     path[1] = {ball.x - along.x * Path::behind_ball_mm, ball.y - along.y * Path::behind_ball_mm};
     path[2] = {spot.x - along.x * Path::behind_ball_mm, spot.y - along.y * Path::behind_ball_mm};
     corners = 3;
@@ -112,9 +121,8 @@ void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, P
   double speed = 0.0;
   if (robot.has_velocity && first_leg > 1.0) {
     const Point v = robot.kinematics.velocity;
-    speed = std::clamp(
-        (v.x * (path[1].x - path[0].x) + v.y * (path[1].y - path[0].y)) / first_leg, 0.0,
-        Path::speed_mm_s);
+    speed = std::clamp((v.x * (path[1].x - path[0].x) + v.y * (path[1].y - path[0].y)) / first_leg,
+                       0.0, Path::speed_mm_s);
   }
   const double speeding_up_s = (Path::speed_mm_s - speed) / Path::acceleration_mm_s2;
   SetPlayAdvice::Robot& out = advice.robots[placer];
@@ -136,8 +144,7 @@ void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, P
       travelled -= leg;
     }
     out.position[static_cast<std::size_t>(k)] = at;
-    out.weight[static_cast<std::size_t>(k)] =
-        Path::weight * std::min(1.0, h / Path::full_weight_s);
+    out.weight[static_cast<std::size_t>(k)] = Path::weight * std::min(1.0, h / Path::full_weight_s);
   }
   advice.any = advised > 0;
 }

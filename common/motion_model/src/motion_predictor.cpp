@@ -356,10 +356,14 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
     }
   }
   const Estimate& prior = horizon.prior_of(context);
+  std::array<double, motion_regressors> coefficients = prior.coefficients;
+  if (!team_velocity_holds(all_game_phases[phase])) {
+    coefficients[team_velocity_regressor] = 0.0;  // as the phase's own rows are fitted
+  }
   return Resolved{mean_weight * prior.mean_x,
                   mean_weight * prior.mean_y,
                   prior.mean_square,
-                  prior.coefficients,
+                  coefficients,
                   horizon.z50[phase],
                   horizon.z90[phase],
                   MotionLevel::all,
@@ -684,7 +688,9 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
   const auto resolved = static_cast<std::size_t>(std::min(horizon, learned));
   for (std::size_t r = 0; r < robots.size(); ++r) {
     const MotionRobot& robot = robots[r];
-    // The two forecasts before the current step, for extrapolating beyond the learned ones.
+    // The two forecasts before the current step, as the rows made them (before any advice and
+    // the rules, which then apply to the extrapolated steps once), for extrapolating beyond the
+    // learned ones.
     MotionForecast before_last{robot.position, 0.0, 0.0, 0.0, MotionLevel::all, true};
     MotionForecast last = before_last;
     Cell previous = grid.cell_of(robot.position, field);
@@ -706,6 +712,8 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
             std::sqrt(last.mean_square_mm2) * 2.0 - std::sqrt(before_last.mean_square_mm2);
         f.mean_square_mm2 = rms * rms;
       }
+      before_last = last;
+      last = f;
       if (advised && k <= static_cast<int>(SetPlayAdvice::Robot{}.weight.size())) {
         const SetPlayAdvice::Robot& recalled = advice->robots[r];
         const auto step = static_cast<std::size_t>(k - 1);
@@ -729,8 +737,6 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
       p.mean_square_mm2 = f.mean_square_mm2;
       p.normalised_position = f.position;
       previous = cell;
-      before_last = last;
-      last = f;
     }
   }
 

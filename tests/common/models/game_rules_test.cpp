@@ -437,6 +437,33 @@ TEST(BallPlacementPath, TheNearestRobotDrivesBehindTheBallThenCarriesItToTheSpot
   EXPECT_DOUBLE_EQ(advice.robots[1].weight[0], models::BallPlacementPath::weight / 5.0);
 }
 
+TEST(BallPlacementPath, ABallOnItsSpotIsApproachedStraightAndNoRobotsGetNoAdvice) {
+  std::vector<MotionRobot> robots(2);
+  robots[0].position = {0.0, 0.0};
+  robots[1].robot_id = 1;
+  robots[1].position = {1500.0, 0.0};
+  SetPlayAdvice advice;
+  // The ball within the 0.15 m the rules allow, on its spot: robot 1 goes straight at it (not
+  // round it) and stops 110 mm short, 390 mm on; 250 mm in the first 0.5 s from standing.
+  for (const Point spot : {Point{1000.0, 0.0}, Point{1100.0, 100.0}}) {
+    models::advise_ball_placement(robots, Point{1000.0, 0.0}, spot, 0.5, 3, advice);
+    ASSERT_TRUE(advice.any);
+    ASSERT_EQ(advice.robots.size(), 2u);
+    EXPECT_NEAR(advice.robots[1].position[0].x, 1250.0, 1e-6);
+    EXPECT_NEAR(advice.robots[1].position[2].x, 1110.0, 1e-6);
+    EXPECT_NEAR(advice.robots[1].position[2].y, 0.0, 1e-6);
+    for (const double w : advice.robots[0].weight) EXPECT_EQ(w, 0.0);
+  }
+  models::advise_ball_placement({}, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 3, advice);
+  EXPECT_FALSE(advice.any);
+  EXPECT_TRUE(advice.robots.empty());
+  // More steps than an advice holds: the first 16 are advised, for robot 1, nearest the ball.
+  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 40, advice);
+  EXPECT_TRUE(advice.any);
+  EXPECT_GT(advice.robots[1].weight.back(), 0.0);
+  EXPECT_EQ(advice.robots[0].weight.back(), 0.0);
+}
+
 TEST(BallPlacementPath, ARobotWithTheBallCarriesItOnAndStopsBehindTheSpot) {
   std::vector<MotionRobot> robots(1);
   robots[0].robot_id = 1;

@@ -137,14 +137,15 @@ TEST(MotionTeamVelocity, TheRestartsTakenWhereTheBallWentOutLeaveTheTeamsVelocit
   const MotionModel model(table, grid, field);
   // Where it holds, the team setting off says the robot follows.
   for (const GamePhase phase : {GamePhase::running, GamePhase::stop}) {
-    EXPECT_GT(forecast_dx_with_team(model, phase, 1000.0) - forecast_dx_with_team(model, phase, 0.0),
-              300.0)
+    EXPECT_GT(
+        forecast_dx_with_team(model, phase, 1000.0) - forecast_dx_with_team(model, phase, 0.0),
+        300.0)
         << to_string(phase);
   }
   // At the free kicks and our placements each robot makes for its own place about the ball:
   // the forecast is the same whatever the team does.
-  for (const GamePhase phase : {GamePhase::free_kick_opponent, GamePhase::free_kick_us,
-                                GamePhase::ball_placement_us}) {
+  for (const GamePhase phase :
+       {GamePhase::free_kick_opponent, GamePhase::free_kick_us, GamePhase::ball_placement_us}) {
     EXPECT_NEAR(forecast_dx_with_team(model, phase, 1000.0),
                 forecast_dx_with_team(model, phase, 0.0), 0.5)
         << to_string(phase);

@@ -214,6 +214,53 @@ TEST(MotionModel, AnEmptyTablePredictsDampedConstantVelocity) {
   }
 }
 
+TEST(MotionModel, BeyondTheLearnedStepsAnAdviceCountsOnceAtItsWeight) {
+  // An empty table of one learned 1 s step: 1 m/s along x, damped by k(1) then extrapolated
+  // linearly. A set play's advice puts the robot at (0, 1000) at every step, at weight 0.5.
+  const sf::MotionTable table(one_second(1));
+  const sf::MotionModelSettings settings;
+  const sf::MotionModel model(table, grid, field, settings);
+  const double tau = settings.prior_time_constant_s;
+  const double first = tau * (1.0 - std::exp(-1.0 / tau)) * 1000.0;  // k(1) x 1000 mm
+  sf::SetPlayAdvice advice;
+  advice.robots.resize(1);
+  for (std::size_t k = 0; k < 3; ++k) {
+    advice.robots[0].position[k] = {0.0, 1000.0};
+    advice.robots[0].weight[k] = 0.5;
+  }
+  advice.any = true;
+  sf::Prediction prediction;
+  sf::MotionModel::Cache cache;
+  model.predict({moving_robot(1, {0.0, 0.0}, {1000.0, 0.0})}, 3, sf::StateCodec(grid), field,
+                sf::AttackDirection::positive_x, prediction, cache, {}, &advice);
+  ASSERT_EQ(prediction.steps.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    // The rows' forecast (k + 1) x k(1) x 1000 mm along x, then half way to the advice: the
+    // advice of an earlier step does not carry into a later one.
+    const sf::Point p = prediction.steps[k].robots.at(0).normalised_position;
+    EXPECT_NEAR(p.x, 0.5 * (k + 1) * first, 1e-6) << k;
+    EXPECT_NEAR(p.y, 500.0, 1e-6) << k;
+  }
+}
+
+TEST(MotionRow, ARowWithoutARegressorIsTheRowOfItsInstancesWithThatRegressorZero) {
+  std::mt19937 random(7);
+  std::uniform_int_distribution<std::int64_t> mm(-3000, 3000);
+  for (int without = 0; without < sf::motion_regressors; ++without) {
+    sf::MotionRow all, zeroed;
+    for (int n = 0; n < 50; ++n) {
+      const std::array<std::int64_t, 2> d{mm(random), mm(random)};
+      std::array<std::array<std::int64_t, 2>, sf::motion_regressors> x{};
+      for (auto& regressor : x) regressor = {mm(random), mm(random)};
+      all.add(d, x);
+      x[static_cast<std::size_t>(without)] = {0, 0};
+      zeroed.add(d, x);
+    }
+    EXPECT_EQ(all.without_regressor(without), zeroed) << "regressor " << without;
+    EXPECT_NE(all, zeroed);
+  }
+}
+
 TEST(MotionModel, WorkedExampleOfAPositionAndItsRadii) {
   // One robot at (1000, 500) moving at 1 m/s along +x: half the time it went 400 mm in the next
   // second, half the time 600 mm. With no shrinkage the row predicts the mean, 500 mm ahead, and

@@ -31,6 +31,8 @@ struct BallPlacementPath {
   // of the table the rest.
   static constexpr double speed_mm_s = 1500.0;
   static constexpr double acceleration_mm_s2 = 2000.0;
+  // A ball this near the spot is within the rules' tolerance: the robot goes straight to it.
+  static constexpr double placed_mm = 150.0;
   // A robot this near the ball has it; the robot's centre stays this far behind the ball.
   static constexpr double carrying_mm = 300.0;
   static constexpr double behind_ball_mm = 110.0;

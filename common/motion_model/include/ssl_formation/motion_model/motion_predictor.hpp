@@ -161,9 +161,10 @@ class MotionModel {
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out,
                const MotionRules& rules = {}) const;
-  // The same, looking the robots' estimates up through `cache` (see Cache). With `advice`
-  // (SetPlayMemory::recall for the same robots), each forecast is moved towards where the
-  // opponent's earlier kick-offs put the robot, by the advice's weight, before the rules.
+  // The same, looking the robots' estimates up through `cache` (see Cache). With `advice` (for
+  // the same robots: SetPlayMemory::recall, models::advise_ball_placement), each forecast is
+  // moved towards where the set play takes the robot, by the advice's weight, before the rules.
+  // Steps beyond the table's horizons extrapolate the forecasts before advice and rules.
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out, Cache& cache,
                const MotionRules& rules = {}, const SetPlayAdvice* advice = nullptr) const;

@@ -56,8 +56,9 @@ struct SetPlayEpisode {
   bool operator==(const SetPlayEpisode&) const = default;
 };
 
-// What recall() says of each robot of a moment: per step, where the earlier kick-offs put it and
-// how much that counts against the model's forecast (0: nothing recalled).
+// Where a set play is taking each robot of a moment, per step, and how much that counts against
+// the model's forecast (0: nothing to say): recall() fills it from the earlier kick-offs,
+// models::advise_ball_placement from the path of the robot placing the ball.
 struct SetPlayAdvice {
   struct Robot {
     std::array<Point, 16> position{};
