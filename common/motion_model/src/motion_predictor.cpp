@@ -132,6 +132,8 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     // does rather than towards damped constant velocity.
     horizon.root = shrink(root, prior_model ? prior_model->horizon_[static_cast<std::size_t>(h)].root
                                             : prior);
+    horizon.root_without_team_velocity = horizon.root;
+    horizon.root_without_team_velocity.coefficients[team_velocity_regressor] = 0.0;
     // HALT and timeouts: "no robot is allowed to move", after "a grace period of 2 seconds for
     // the robots to brake" (SSL rules, Referee Commands: Halt). So a robot keeps its place but
     // for what braking hard from its velocity takes, and the spread is the vision's noise.
@@ -157,13 +159,9 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
                                  : parts.level == MotionLevel::all
                                      ? horizon.prior_of(parts.context)
                                      : estimates.at(coarser_motion_key(key));
-        if (team_velocity_holds(MotionFeatures::phase_of_context(parts.context))) {
-          estimates[key] = shrink(row, parent);
-        } else {
-          Estimate without = parent;
-          without.coefficients[team_velocity_regressor] = 0.0;
-          estimates[key] = shrink(row.without_regressor(team_velocity_regressor), without);
-        }
+        estimates[key] = team_velocity_holds(MotionFeatures::phase_of_context(parts.context))
+                             ? shrink(row, parent)
+                             : shrink(row.without_regressor(team_velocity_regressor), parent);
       }
     };
     shrink_level(level == 0 ? rows : coarse);
@@ -356,14 +354,10 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
     }
   }
   const Estimate& prior = horizon.prior_of(context);
-  std::array<double, motion_regressors> coefficients = prior.coefficients;
-  if (!team_velocity_holds(all_game_phases[phase])) {
-    coefficients[team_velocity_regressor] = 0.0;  // as the phase's own rows are fitted
-  }
   return Resolved{mean_weight * prior.mean_x,
                   mean_weight * prior.mean_y,
                   prior.mean_square,
-                  coefficients,
+                  prior.coefficients,
                   horizon.z50[phase],
                   horizon.z90[phase],
                   MotionLevel::all,

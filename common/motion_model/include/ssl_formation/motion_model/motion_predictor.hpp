@@ -188,9 +188,15 @@ class MotionModel {
     double damping = 1.0;
     Estimate root;   // every game context's rows pooled
     Estimate still;  // the rules' prior in HALT and timeouts
+    // The root without the team's velocity, for the phases whose rows leave it out
+    // (team_velocity_holds).
+    Estimate root_without_team_velocity;
     // What a row at the `all` level (or a robot with no row at all) is held towards.
     const Estimate& prior_of(std::uint32_t context) const {
-      return MotionFeatures::game_context_of(context) == MotionFeatures::halt_game ? still : root;
+      if (MotionFeatures::game_context_of(context) == MotionFeatures::halt_game) return still;
+      return team_velocity_holds(MotionFeatures::phase_of_context(context))
+                 ? root
+                 : root_without_team_velocity;
     }
     // Per game phase (GamePhase's order), how much of its rows' mean displacement the forecasts
     // keep: none for the phases whose mean is another match's (mean_holds), else fitted on the
@@ -214,7 +220,7 @@ class MotionModel {
   };
   Estimate shrink(const MotionRow& row, const Estimate& parent) const;
   // Whether the rows of a game phase fit the team's mean velocity (regressor t); the others'
-  // are fitted without it, and held towards a parent without it.
+  // are fitted without it, and so their parents, down to the root (Horizon::prior_of).
   static bool team_velocity_holds(GamePhase phase);
   std::optional<Estimate> estimate(MotionKey key) const;  // as indexed (floats), none if absent
   const Slot* find(MotionKey key) const;
