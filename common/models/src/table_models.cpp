@@ -1,5 +1,6 @@
 #include "table_models.hpp"
 
+#include "ssl_formation/models/braking_advice.hpp"
 #include "ssl_formation/models/game_rules.hpp"
 
 #include <cmath>
@@ -199,6 +200,16 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
              moment.designated_position) {
     advise_ball_placement(robots_, *moment.ball, *moment.designated_position, settings_.step_s,
                           steps, set_play_advice_);
+    advice = &set_play_advice_;
+  }
+  // While robots take their places for a restart: those braking to a stop (braking_advice.hpp).
+  if (braking_advice_holds(moment.phase)) {
+    if (!advice) {
+      set_play_advice_.robots.assign(robots_.size(), SetPlayAdvice::Robot{});
+      set_play_advice_.any = false;
+    }
+    advise_braking(robots_, prediction_history_config(settings_).velocity_window_s,
+                   settings_.step_s, steps, set_play_advice_);
     advice = &set_play_advice_;
   }
   model_->predict(robots_, steps, moment.codec, moment.field, moment.attacks, out, cache_,
