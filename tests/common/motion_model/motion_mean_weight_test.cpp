@@ -24,13 +24,17 @@ std::uint32_t context_of(GamePhase phase) {
   return MotionFeatures::context(0, 0, MotionFeatures::game_context(phase, 5.0));
 }
 
-// Robot 3 standing at (1000, 500) in `phase`, found `dx` further along x half a second later.
+// Robot 3 at (1000, 500) in `phase`, creeping across the field (150 mm/s along y, its sightings
+// over the settle window 40 mm behind), found `dx` further along x half a second later. A robot
+// that stands is forecast where it stands: a creeping one's displacement along x is the rows'.
 MotionInstance standing_robot(GamePhase phase, std::int32_t dx) {
   MotionInstance i;
   i.robot_id = 3;
   i.x = 1000;
   i.y = 500;
   i.d_x = dx;
+  i.v_y = 150;
+  i.g_y = -40;
   i.context = context_of(phase);
   return i;
 }
@@ -52,14 +56,20 @@ void add(MotionTable& table, GamePhase phase, int counted, std::int32_t counted_
   }
 }
 
-// Robot 3 forecast standing at (1000, 500) in `phase`.
-MotionForecast forecast_standing(const MotionModel& model, GamePhase phase) {
+// Robot 3 at (1000, 500) in `phase`, creeping as the instances above.
+MotionRobot creeping_robot(GamePhase phase) {
   MotionRobot robot;
   robot.robot_id = 3;
   robot.position = {1000.0, 500.0};
   robot.has_velocity = true;
+  robot.kinematics.velocity = {0.0, 150.0};
+  robot.kinematics.to_recent_mean = {0.0, -40.0};
   robot.context = context_of(phase);
-  return model.forecast(0, robot);
+  return robot;
+}
+
+MotionForecast forecast_standing(const MotionModel& model, GamePhase phase) {
+  return model.forecast(0, creeping_robot(phase));
 }
 
 double forecast_dx(const MotionModel& model, GamePhase phase) {
@@ -108,14 +118,10 @@ TEST(MotionMeanWeight, AHeldOutMeanHalfAsLargeKeepsAboutHalf) {
   EXPECT_NEAR(forecast_dx(model, GamePhase::ball_placement_opponent), 306.0, 10.0);
 }
 
-// Robot 3 in `phase` forecast 0.5 s on, standing while its team moves at `team_velocity_x`.
+// Robot 3 in `phase` forecast 0.5 s on, creeping while its team moves at `team_velocity_x`.
 double forecast_dx_with_team(const MotionModel& model, GamePhase phase, double team_velocity_x) {
-  MotionRobot robot;
-  robot.robot_id = 3;
-  robot.position = {1000.0, 500.0};
-  robot.has_velocity = true;
+  MotionRobot robot = creeping_robot(phase);
   robot.kinematics.team_velocity = {team_velocity_x, 0.0};
-  robot.context = context_of(phase);
   return model.forecast(0, robot).position.x - 1000.0;
 }
 
