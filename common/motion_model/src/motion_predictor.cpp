@@ -785,6 +785,7 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
       p.radius90_mm = f.radius90_mm;
       p.mean_square_mm2 = f.mean_square_mm2;
       p.normalised_position = f.position;
+      p.stays = f.stays;
       previous = cell;
     }
   }
@@ -799,7 +800,7 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
       centroid.x += p.normalised_position.x;
       centroid.y += p.normalised_position.y;
       mean_square += p.mean_square_mm2;
-      formation *= p.probability;
+      formation *= formation_factor(p, p.probability);
       unseen = unseen || p.unseen;
     }
     const double n = static_cast<double>(std::max<std::size_t>(step.robots.size(), 1));

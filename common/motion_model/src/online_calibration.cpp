@@ -255,7 +255,7 @@ void OnlineCalibration::remember(const Prediction& prediction, double time_s, do
         check.decidable = false;  // a formation with a robot nobody can check
         continue;
       }
-      check.stated *= robot.probability;
+      check.stated *= formation_factor(robot, robot.probability);
       ++check.remaining;
       step.push({due_s, number, robot.robot_id, static_cast<float>(robot.probability),
                  static_cast<std::int16_t>(robot.position.x),
@@ -313,9 +313,9 @@ void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase, bool pre
     const double scale50 = radius50_scale(s, phase, preparing),
                  scale90 = radius90_scale(s, phase, preparing);
     for (RobotPrediction& robot : step.robots) {
-      stated *= robot.probability;
+      stated *= formation_factor(robot, robot.probability);
       robot.probability = adjusted(s, robot.probability);
-      robots *= robot.probability;
+      robots *= formation_factor(robot, robot.probability);
       robot.radius50_mm *= scale50;
       robot.radius90_mm *= scale90;
     }

@@ -6,8 +6,12 @@
 
 #include "hand_built_motion.hpp"
 
+#include <cmath>
 #include <cstdint>
+#include <vector>
 
+#include "ssl_formation/base/prediction.hpp"
+#include "ssl_formation/base/state.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
@@ -176,6 +180,30 @@ TEST(StandingRobot, ItsCellProbabilityIsCalibratedApartFromTheMovingRobots) {
   };
   EXPECT_NEAR(stated(standing), 0.7, 0.06);
   EXPECT_NEAR(stated(moving), 0.3, 0.06);
+}
+
+TEST(StandingRobot, StayingRobotsCountHalfInTheFormationsProbability) {
+  // Robots that stay stay together (a team standing in a stoppage): each counts as the square
+  // root of its probability in the product over the team, a moving robot as its own.
+  MotionTable table(testing::hand_built_config());
+  add(table, 2000, 400, 0.0, [](int n, bool) { return standing_instance(n); });
+  add(table, 2000, 400, 5000.0,
+      [](int n, bool held_out) { return moving_instance(!held_out || n % 10 < 3); });
+  const MotionModel model(table, grid, field);
+  const std::vector<MotionRobot> robots{
+      robot_at(3, {750.0, 750.0}, {}, {}, standing_context()),
+      robot_at(5, {-2250.0, -750.0}, {2000.0, 0.0}, {-500.0, 0.0}, moving_context())};
+  Prediction prediction;
+  model.predict(robots, 1, StateCodec(grid), field, AttackDirection::positive_x, prediction);
+  const std::vector<RobotPrediction>& predicted = prediction.steps.at(0).robots;
+  ASSERT_EQ(predicted.size(), 2u);
+  EXPECT_TRUE(predicted[0].stays);
+  EXPECT_FALSE(predicted[1].stays);
+  const double staying = predicted[0].probability, moving = predicted[1].probability;
+  ASSERT_GT(staying, 0.5);
+  ASSERT_LT(staying, 0.95);
+  EXPECT_NEAR(prediction.steps[0].formation_probability, std::sqrt(staying) * moving, 1e-12);
+  EXPECT_GT(prediction.steps[0].formation_probability, staying * moving * 1.05);
 }
 
 }  // namespace
