@@ -90,6 +90,23 @@ MotionModel standing_robots_model() {
   return MotionModel(table, grid, field);
 }
 
+// Held out: the standing robot stays in its cell seven times in ten, as its rows learned; the
+// moving one lands in its forecast cell three times in ten, though its rows learned it always
+// did.
+MotionModel standing_and_moving_robots_model() {
+  MotionTable table(testing::hand_built_config());
+  add(table, 2000, 400, 0.0, [](int n, bool) { return standing_instance(n); });
+  add(table, 2000, 400, 5000.0,
+      [](int n, bool held_out) { return moving_instance(!held_out || n % 10 < 3); });
+  return MotionModel(table, grid, field);
+}
+
+MotionRobot the_standing_robot() { return robot_at(3, {750.0, 750.0}, {}, {}, standing_context()); }
+
+MotionRobot the_moving_robot() {
+  return robot_at(5, {-2250.0, -750.0}, {2000.0, 0.0}, {-500.0, 0.0}, moving_context());
+}
+
 TEST(StandingRobot, IsForecastWhereItStandsThoughItsRowsHaveSomeSetOff) {
   const MotionModel model = standing_robots_model();
   // The rows' mean: three in ten went 1.5 m on, 450 mm. A creeping robot (150 mm/s across, its
@@ -154,20 +171,11 @@ TEST(StandingRobot, OneThatHasStoodASettleWindowIsForecastAtItsMeanSighting) {
 }
 
 TEST(StandingRobot, ItsCellProbabilityIsCalibratedApartFromTheMovingRobots) {
-  // Held out: the standing robot stays in its cell seven times in ten, as its rows learned; the
-  // moving one lands in its forecast cell three times in ten, though its rows learned it always
-  // did. The moving one's Gaussian mass is the larger (its rows never strayed), its hit rate the
+  // The moving robot's Gaussian mass is the larger (its rows never strayed), its hit rate the
   // smaller: one map for both would pool them and state about one half for each.
-  MotionTable table(testing::hand_built_config());
-  add(table, 2000, 400, 0.0, [](int n, bool) { return standing_instance(n); });
-  add(table, 2000, 400, 5000.0,
-      [](int n, bool held_out) { return moving_instance(!held_out || n % 10 < 3); });
-  const MotionModel model(table, grid, field);
-
-  const MotionForecast standing = model.forecast(
-      0, robot_at(3, {750.0, 750.0}, {}, {}, standing_context()));
-  const MotionForecast moving = model.forecast(
-      0, robot_at(5, {-2250.0, -750.0}, {2000.0, 0.0}, {-500.0, 0.0}, moving_context()));
+  const MotionModel model = standing_and_moving_robots_model();
+  const MotionForecast standing = model.forecast(0, the_standing_robot());
+  const MotionForecast moving = model.forecast(0, the_moving_robot());
   ASSERT_TRUE(standing.stays);
   ASSERT_FALSE(moving.stays);
   ASSERT_EQ(grid.cell_of(moving.position, field), grid.cell_of({-1250.0, -750.0}, field));
@@ -185,14 +193,8 @@ TEST(StandingRobot, ItsCellProbabilityIsCalibratedApartFromTheMovingRobots) {
 TEST(StandingRobot, StayingRobotsCountHalfInTheFormationsProbability) {
   // Robots that stay stay together (a team standing in a stoppage): each counts as the square
   // root of its probability in the product over the team, a moving robot as its own.
-  MotionTable table(testing::hand_built_config());
-  add(table, 2000, 400, 0.0, [](int n, bool) { return standing_instance(n); });
-  add(table, 2000, 400, 5000.0,
-      [](int n, bool held_out) { return moving_instance(!held_out || n % 10 < 3); });
-  const MotionModel model(table, grid, field);
-  const std::vector<MotionRobot> robots{
-      robot_at(3, {750.0, 750.0}, {}, {}, standing_context()),
-      robot_at(5, {-2250.0, -750.0}, {2000.0, 0.0}, {-500.0, 0.0}, moving_context())};
+  const MotionModel model = standing_and_moving_robots_model();
+  const std::vector<MotionRobot> robots{the_standing_robot(), the_moving_robot()};
   Prediction prediction;
   model.predict(robots, 1, StateCodec(grid), field, AttackDirection::positive_x, prediction);
   const std::vector<RobotPrediction>& predicted = prediction.steps.at(0).robots;
