@@ -647,6 +647,7 @@ double MotionModel::calibrated(int horizon_index, double mass, bool stays) const
   // A table whose held-out sample had no robot of this kind: the other kind's map.
   return map.empty() ? horizon.cell_calibration[stays ? 0 : 1](mass) : map(mass);
 }
+
 double MotionModel::cell_probability(int horizon_index, const MotionForecast& forecast,
                                      const Grid& grid, const FieldSize& field, Cell cell) const {
   return calibrated(horizon_index, gaussian_cell_mass(forecast, grid, field, cell), forecast.stays);

@@ -4,12 +4,11 @@
 
 #include <gtest/gtest.h>
 
-#include "hand_built_motion.hpp"
-
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
+#include "hand_built_motion.hpp"
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/base/state.hpp"
 #include "ssl_formation/match/game_phase.hpp"
@@ -111,9 +110,8 @@ TEST(StandingRobot, IsForecastWhereItStandsThoughItsRowsHaveSomeSetOff) {
   const MotionModel model = standing_robots_model();
   // The rows' mean: three in ten went 1.5 m on, 450 mm. A creeping robot (150 mm/s across, its
   // sightings 40 mm behind it over the settle window) is forecast by them.
-  const MotionForecast creeping =
-      model.forecast(0, robot_at(3, {750.0, 750.0}, {0.0, 150.0}, {0.0, -40.0},
-                                 standing_context()));
+  const MotionForecast creeping = model.forecast(
+      0, robot_at(3, {750.0, 750.0}, {0.0, 150.0}, {0.0, -40.0}, standing_context()));
   EXPECT_FALSE(creeping.stays);
   EXPECT_NEAR(creeping.position.x, 750.0 + 450.0, 30.0);
   // A standing one stays: most of its like did, and the median of where they went, which the
@@ -150,20 +148,20 @@ TEST(StandingRobot, VisionNoiseShakesTheTrackedVelocityButNotTheMeanSighting) {
 TEST(StandingRobot, OneThatHasStoodASettleWindowIsForecastAtItsMeanSighting) {
   const MotionModel model = standing_robots_model();
   // Stood a second: its mean sighting over the settle window, 6 mm off its last, is its place.
-  const MotionForecast settled = model.forecast(
-      0, robot_at(3, {750.0, 750.0}, {20.0, 0.0}, {6.0, -3.0}, standing_context()));
+  const MotionForecast settled =
+      model.forecast(0, robot_at(3, {750.0, 750.0}, {20.0, 0.0}, {6.0, -3.0}, standing_context()));
   EXPECT_TRUE(settled.stays);
   EXPECT_DOUBLE_EQ(settled.position.x, 756.0);
   EXPECT_DOUBLE_EQ(settled.position.y, 747.0);
   // A mean 30 mm off is more than the vision's noise: the robot stays at its last sighting.
-  const MotionForecast drifted = model.forecast(
-      0, robot_at(3, {750.0, 750.0}, {50.0, 0.0}, {30.0, 0.0}, standing_context()));
+  const MotionForecast drifted =
+      model.forecast(0, robot_at(3, {750.0, 750.0}, {50.0, 0.0}, {30.0, 0.0}, standing_context()));
   EXPECT_TRUE(drifted.stays);
   EXPECT_DOUBLE_EQ(drifted.position.x, 750.0);
   // Just stopped (standing under half a second): no settle window yet, the last sighting.
-  const std::uint32_t just_stopped = MotionFeatures::context(
-      MotionFeatures::standing_context(0.2), 0,
-      MotionFeatures::game_context(GamePhase::running, 5.0));
+  const std::uint32_t just_stopped =
+      MotionFeatures::context(MotionFeatures::standing_context(0.2), 0,
+                              MotionFeatures::game_context(GamePhase::running, 5.0));
   const MotionForecast stopped =
       model.forecast(0, robot_at(3, {750.0, 750.0}, {20.0, 0.0}, {6.0, -3.0}, just_stopped));
   EXPECT_TRUE(stopped.stays);
@@ -179,10 +177,10 @@ TEST(StandingRobot, ItsCellProbabilityIsCalibratedApartFromTheMovingRobots) {
   ASSERT_TRUE(standing.stays);
   ASSERT_FALSE(moving.stays);
   ASSERT_EQ(grid.cell_of(moving.position, field), grid.cell_of({-1250.0, -750.0}, field));
-  EXPECT_GT(MotionModel::gaussian_cell_mass(moving, grid, field,
-                                            grid.cell_of(moving.position, field)),
-            MotionModel::gaussian_cell_mass(standing, grid, field,
-                                            grid.cell_of(standing.position, field)));
+  EXPECT_GT(
+      MotionModel::gaussian_cell_mass(moving, grid, field, grid.cell_of(moving.position, field)),
+      MotionModel::gaussian_cell_mass(standing, grid, field,
+                                      grid.cell_of(standing.position, field)));
   const auto stated = [&](const MotionForecast& f) {
     return model.cell_probability(0, f, grid, field, grid.cell_of(f.position, field));
   };
