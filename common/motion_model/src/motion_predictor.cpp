@@ -386,10 +386,14 @@ bool MotionModel::stands(const MotionRobot& robot, const Resolved& e,
   }
   // In HALT and timeouts no robot may move (SSL rules, Referee Commands: Halt): one that has
   // stood a settle window, its mean sighting within the vision's noise, stands though it creeps.
-  if (!e.halted || e.place_regressor < 0) return false;
-  const Point to_place = x[static_cast<std::size_t>(e.place_regressor)];
-  return to_place.x * to_place.x + to_place.y * to_place.y <=
-         settings_.halt_error_mm * settings_.halt_error_mm;
+  return e.halted && way_to_place(e, x);
+}
+
+const Point* MotionModel::way_to_place(const Resolved& e, const MotionRegressors& x) const {
+  if (e.place_regressor < 0) return nullptr;
+  const Point& way = x[static_cast<std::size_t>(e.place_regressor)];
+  const double noise = settings_.halt_error_mm;
+  return way.x * way.x + way.y * way.y <= noise * noise ? &way : nullptr;
 }
 
 void MotionModel::Cache::clear() {
@@ -446,11 +450,8 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
       // the last sighting, 8.5 with the rows' fit). The rows cannot learn it: their coefficients
       // are held towards the parent's by instances of a 500 mm regressor, and a standing
       // robot's are a few millimetres.
-      const Point* to_place =
-          e.place_regressor >= 0 ? &x[static_cast<std::size_t>(e.place_regressor)] : nullptr;
-      const double noise = settings_.halt_error_mm;
-      if (to_place && to_place->x * to_place->x + to_place->y * to_place->y <= noise * noise) {
-        f.position = {robot.position.x + to_place->x, robot.position.y + to_place->y};
+      if (const Point* way = way_to_place(e, x)) {
+        f.position = {robot.position.x + way->x, robot.position.y + way->y};
       }
       f.stays = true;
     } else {

@@ -254,6 +254,9 @@ class MotionModel {
   std::int8_t place_regressor(std::uint32_t context) const;
   // Whether the robot stands: forecast where it stands rather than by its rows (stay_speed_mm_s).
   bool stands(const MotionRobot& robot, const Resolved& e, const MotionRegressors& x) const;
+  // The way (one of `x`) from a robot that has stood a settle window to its mean sighting over
+  // it, if that is within the vision's noise (halt_error_mm); none otherwise.
+  const Point* way_to_place(const Resolved& e, const MotionRegressors& x) const;
   // The robot's estimates for the first `horizons` learned horizons, through `cache` if there
   // is one (else in `scratch`).
   const Resolved* resolve_all(const MotionRobot& robot, std::size_t horizons, Cache* cache,
