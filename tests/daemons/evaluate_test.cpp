@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <regex>
@@ -304,6 +305,74 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
   for (const auto& [state, n] : robots) by_state += state == "all" ? 0 : n;
   EXPECT_EQ(by_state, robots["all"]);  // every instant in exactly one state
   EXPECT_NE(run.out.find("by phase of the game"), std::string::npos) << run.out;
+}
+
+TEST(Evaluate, HoldoutWritesEveryScoredRobotAsItsTablesCountedIt) {
+  TempDir dir;
+  const std::filesystem::path samples = dir / "samples.csv";
+  const auto run =
+      evaluate(dir,
+               {"holdout", "--train-seconds", "60", "--test-seconds", "45", "--horizons", "1",
+                "--chain-steps", "1", "--write-samples", samples.string()},
+               "samples");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto lines = csv_rows(read(samples));
+  ASSERT_GT(lines.size(), 1000u);
+  const std::vector<std::string>& header = lines.front();
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  const std::size_t horizon = column("horizon_s"), state = column("game_state"),
+                    truth_x = column("truth_x_mm"), truth_y = column("truth_y_mm");
+  // Per game state at 1 s (its own section), how many robots and each method's mean error.
+  struct Sums {
+    std::uint64_t robots = 0;
+    std::map<std::string, double> error;
+  };
+  std::map<std::string, Sums> by_state;
+  const std::vector<std::string> methods{"model", "persistence", "damped-constant-acceleration"};
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string>& line = lines[i];
+    ASSERT_EQ(line.size(), header.size()) << i;
+    if (line[horizon] != "1" || line[column("horizon_steps")] != "1") continue;
+    for (const std::string& name : {std::string("all"), line[state]}) {
+      Sums& sums = by_state[name];
+      ++sums.robots;
+      for (const std::string& method : methods) {
+        sums.error[method] +=
+            std::hypot(std::stod(line[column(method + "_x_mm")]) - std::stod(line[truth_x]),
+                       std::stod(line[column(method + "_y_mm")]) - std::stod(line[truth_y]));
+      }
+    }
+  }
+  // The same robots and the same errors as the accuracy table (positions written to 0.1 mm).
+  const std::map<std::string, std::string> label{
+      {"model", "model"},
+      {"persistence", "persistence"},
+      {"damped-constant-acceleration", "damped constant acceleration"}};
+  std::size_t compared = 0;
+  for (const auto& row : csv_rows(read(dir / "samples" / "holdout-accuracy.csv"))) {
+    if (row[1] != "1" || row[2] != "1" || !by_state.contains(row[3])) continue;
+    const Sums& sums = by_state[row[3]];
+    for (const std::string& method : methods) {
+      if (row[4] != label.at(method)) continue;
+      EXPECT_EQ(std::stoull(row[11]), sums.robots) << row[3];
+      EXPECT_NEAR(std::stod(row[8]), sums.error.at(method) / static_cast<double>(sums.robots), 0.1)
+          << row[3] << ' ' << method;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 3u * 4u);  // all, running and at least two stoppages
+  EXPECT_GT(by_state["all"].robots, by_state["running"].robots);
+
+  // A file it cannot write stops it before any work, saying which.
+  const auto unwritable =
+      evaluate(dir, {"holdout", "--write-samples", (dir / "no-such-dir" / "samples.csv").string()},
+               "unwritable");
+  EXPECT_NE(unwritable.exit_code, 0);
+  EXPECT_NE(unwritable.err.find("no-such-dir"), std::string::npos) << unwritable.err;
 }
 
 TEST(Evaluate, BadModeAndOptionsExitWithTwo) {

@@ -86,6 +86,7 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
     if (!truth) continue;
     // The robots every method predicted and the truth holds.
     struct Scored {
+      const FormationRobot* now;
       const FormationRobot* actual;
       std::vector<const RobotPrediction*> guesses;
     };
@@ -93,7 +94,7 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
     for (const FormationRobot& robot : now.robots) {
       const FormationRobot* actual = truth->find(robot.robot_id);
       if (!actual) continue;
-      Scored s{actual, std::vector<const RobotPrediction*>(at.size(), nullptr)};
+      Scored s{&robot, actual, std::vector<const RobotPrediction*>(at.size(), nullptr)};
       bool everyone = true;
       for (std::size_t m = 0; m < at.size() && everyone; ++m) {
         if (h >= at[m]->steps.size()) {
@@ -106,6 +107,12 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
       if (everyone) scored.push_back(std::move(s));
     }
     if (scored.empty()) continue;
+    if (config.on_sample) {
+      for (const Scored& s : scored) {
+        config.on_sample(ScoredSample{step_s, k + 1, instant.time_s, s.now->robot_id, instant.phase,
+                                      s.now->feed_position, s.actual->feed_position, &s.guesses});
+      }
+    }
     for (const std::size_t row : rows) {
       HorizonScore& score = result.rows[row][h];
       bool every_cell_right = true;

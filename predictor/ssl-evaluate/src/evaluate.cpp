@@ -88,6 +88,55 @@ class CsvFile {
   std::ofstream out_;
 };
 
+// --write-samples: every robot as it was scored (ev::ScoredSample), a line each, for cutting the
+// tables another way (by how the robot moved, by robot, by time). Positions in the feed's
+// coordinates, mm.
+class SampleFile {
+ public:
+  explicit SampleFile(const std::string& path) : path_(path) {
+    if (path_.empty()) return;
+    out_.open(path_);
+    if (!out_) throw std::runtime_error("cannot write " + path_);
+    spdlog::info("writing every scored robot to {}", path_);
+    out_ << "grid,step_s,horizon_steps,horizon_s,time_s,robot_id,game_state,x_mm,y_mm,"
+            "truth_x_mm,truth_y_mm,model_x_mm,model_y_mm";
+    for (const ModelKind baseline : ev::PositionEvaluationConfig{}.baselines) {
+      out_ << ',' << describe(baseline).name << "_x_mm," << describe(baseline).name << "_y_mm";
+    }
+    out_ << ",model_radius50_mm,model_radius90_mm,model_stays\n";
+  }
+  bool enabled() const { return out_.is_open(); }
+  void write(const std::string& grid, const ev::ScoredSample& sample) {
+    char buffer[96];
+    const auto put = [&](int written) {
+      out_.write(buffer, std::clamp(written, 0, static_cast<int>(sizeof buffer) - 1));
+    };
+    out_ << grid;
+    put(std::snprintf(buffer, sizeof buffer, ",%g,%d,%g,%.3f,%u,", sample.step_s, sample.steps,
+                      sample.steps * sample.step_s, sample.time_s, sample.robot_id));
+    out_ << ev::state_row_name(ev::state_row_of(sample.phase));
+    put(std::snprintf(buffer, sizeof buffer, ",%.1f,%.1f,%.1f,%.1f", sample.position.x,
+                      sample.position.y, sample.truth.x, sample.truth.y));
+    for (const RobotPrediction* forecast : *sample.forecasts) {
+      put(std::snprintf(buffer, sizeof buffer, ",%.1f,%.1f", forecast->feed_position.x,
+                        forecast->feed_position.y));
+    }
+    const RobotPrediction& model = *sample.forecasts->front();
+    put(std::snprintf(buffer, sizeof buffer, ",%.1f,%.1f,%d\n", model.radius50_mm,
+                      model.radius90_mm, model.stays ? 1 : 0));
+  }
+  // Throws if anything failed to be written (a full disk).
+  void close() {
+    if (!enabled()) return;
+    out_.close();
+    if (!out_) throw std::runtime_error("cannot write " + path_);
+  }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+};
+
 }  // namespace
 
 // ---- paper
@@ -258,7 +307,7 @@ double time_predictions(const TransitionTable& table, const Streams& test,
 // `prior`: every team's table (--prior-table), loaded once for every grid.
 GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& grid,
                             const Streams& train, const Streams& test,
-                            const std::shared_ptr<const MotionTable>& prior) {
+                            const std::shared_ptr<const MotionTable>& prior, SampleFile& samples) {
   app::ModelOptions model = options.model;
   model.grid = grid;
   const SamplerConfig base = model.sampler_config();
@@ -277,6 +326,11 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
     config.tracked_vision = options.network.tracked();
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
+    if (samples.enabled()) {
+      config.on_sample = [&samples, name = base.grid.to_string()](const ev::ScoredSample& s) {
+        samples.write(name, s);
+      };
+    }
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
   for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);
@@ -464,6 +518,7 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     throw app::UsageError("--simulation must be auto, paper or match, not '" + options.simulation +
                           "'");
   }
+  SampleFile samples(options.write_samples);  // before any work: a path it cannot write stops it
   const auto [train, test] = holdout_streams(options, simulation);
   const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
   CsvFile accuracy(options, prefix + "accuracy.csv");
@@ -479,11 +534,12 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
       app::loaded_prior_table(options.prior_table, options.model.step());
   std::vector<GridReport> reports;
   for (const std::string& grid : grids) {
-    reports.push_back(holdout_for_grid(options, grid, train, test, prior));
+    reports.push_back(holdout_for_grid(options, grid, train, test, prior, samples));
     print_holdout(reports.back(), base);
     write_holdout_csv(accuracy, calibration, reliability, reports.back());
     std::printf("\n");
   }
+  samples.close();
   if (grids.size() > 1) {
     CsvFile sweep(options, "grid-sweep.csv");
     sweep << "grid,states,transitions,table_memory_bytes,prediction_us,model_cell_accuracy_h1,"

@@ -69,6 +69,21 @@ struct HorizonScore {
   RadiusCoverage radii;              // the model's 50% and 90% radii
 };
 
+// One robot scored at one horizon: where it was, where it was `steps` steps of `step_s` later, and
+// where each method had said it would be (the model first, then the baselines, as
+// PositionEvaluation::methods), in the feed's coordinates (mm). The pointed-to values live only
+// for the call that passes them.
+struct ScoredSample {
+  double step_s = 0.0;
+  int steps = 0;
+  double time_s = 0.0;  // of the instant the predictions were made at
+  std::uint32_t robot_id = 0;
+  GamePhase phase = GamePhase::running;
+  Point position;  // at time_s
+  Point truth;     // steps x step_s later
+  const std::vector<const RobotPrediction*>* forecasts = nullptr;
+};
+
 struct PositionEvaluationConfig {
   SamplerConfig sampler = sampler_config_for(default_model);  // the model's
   ModelKind model = default_model;
@@ -89,6 +104,9 @@ struct PositionEvaluationConfig {
   // Sees every prediction the model makes on the test streams, as the daemon would have sent it
   // (and ssl-predictor --from-log written it): for tools and tests that want them as they are.
   std::function<void(const PredictedFormation&)> on_model_prediction;
+  // Sees every robot as it is scored, at every horizon (ssl-evaluate --write-samples): what the
+  // tables average, one robot at a time, for whoever wants to cut them another way.
+  std::function<void(const ScoredSample&)> on_sample;
 };
 
 struct PositionEvaluation {

@@ -50,6 +50,8 @@ struct EvaluateOptions {
   // holdout: every team's table under the model's rows, for the sections of its step.
   std::string prior_table;
   std::string output_dir;  // none: no CSV files
+  // holdout, grid-sweep: every scored robot as a CSV line (ev::ScoredSample); none without it.
+  std::string write_samples;
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
   // as-real-log: the recording, the log written and the mess (parse_real_log_mess); `seed`
   // places its ghosts and draws its noise.
