@@ -7,6 +7,7 @@
 #   accuracy-vs-horizon.png  exact cell and state against horizon in seconds, same methods
 #   reliability.png          reliability diagrams of the per-robot probability and the formation
 #                            confidence
+#   reliability-by-grid.png  the same for every grid of the grid sweep, with each horizon's ECE
 #   grid-sweep.png           accuracy, table memory and prediction time per grid
 #
 #   scripts/plot-eval.sh [OUTPUT_DIR]      (default: build/eval)
@@ -112,6 +113,38 @@ for ax, quantity in zip(axes, ["robot", "formation"]):
     ax.legend()
 fig.suptitle("Reliability of the model's probabilities")
 fig.tight_layout(); fig.savefig(os.path.join(out, "reliability.png"), dpi=110)
+
+# The same for every grid of the paper (grid-sweep), all game states together, each horizon's
+# line labelled with its expected calibration error (10 bins). Bins of fewer than 50 predictions
+# are left out of the lines (the ECE weighs every bin by its count): a handful of robots at a
+# rare probability only draws noise.
+sweep_reliability = [r for r in rows("grid-sweep-reliability.csv") if r["game_state"] == "all"
+                     and r["horizon_steps"] == "1"]
+sweep_ece = {(r["grid"], r["quantity"], r["horizon_s"]): float(r["ece"])
+             for r in rows("grid-sweep-calibration.csv")
+             if r["game_state"] == "all" and r["horizon_steps"] == "1"}
+sweep_grids = list(dict.fromkeys(r["grid"] for r in sweep_reliability))
+fig, axes = plt.subplots(2, len(sweep_grids), figsize=(3.2 * len(sweep_grids), 6.6), squeeze=False)
+for row, quantity in enumerate(["robot", "formation"]):
+    for column, grid in enumerate(sweep_grids):
+        ax = axes[row][column]
+        ax.plot([0, 1], [0, 1], color="grey", linestyle=":")
+        lines = {}
+        for r in sweep_reliability:
+            if r["grid"] == grid and r["quantity"] == quantity and int(r["count"]) >= 50:
+                lines.setdefault(r["horizon_s"], []).append(
+                    (float(r["mean_confidence"]), float(r["observed_frequency"])))
+        for horizon, points in lines.items():
+            ece = sweep_ece.get((grid, quantity, horizon), float("nan"))
+            ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", markersize=3,
+                    label=f"{float(horizon):g} s, ECE {ece:.3f}")
+        ax.set_title(f"{grid}: {'robot' if quantity == 'robot' else 'formation'}")
+        ax.set_xlim(0, 1); ax.set_ylim(0, 1); ax.legend(fontsize=7, loc="upper left")
+        if row == 1: ax.set_xlabel("stated probability")
+        if column == 0: ax.set_ylabel("observed frequency")
+fig.suptitle("Reliability of the model's probabilities on every grid (held out; bins of 50 or "
+             "more predictions)")
+fig.tight_layout(); fig.savefig(os.path.join(out, "reliability-by-grid.png"), dpi=100)
 
 sweep = rows("grid-sweep.csv")
 grids = [r["grid"] for r in sweep]
