@@ -118,22 +118,28 @@ fig.tight_layout(); fig.savefig(os.path.join(out, "reliability.png"), dpi=110)
 # line labelled with its expected calibration error (10 bins). Bins of fewer than 50 predictions
 # are left out of the lines (the ECE weighs every bin by its count): a handful of robots at a
 # rare probability only draws noise.
-sweep_reliability = [r for r in rows("grid-sweep-reliability.csv") if r["game_state"] == "all"
-                     and r["horizon_steps"] == "1"]
-sweep_ece = {(r["grid"], r["quantity"], r["horizon_s"]): float(r["ece"])
-             for r in rows("grid-sweep-calibration.csv")
-             if r["game_state"] == "all" and r["horizon_steps"] == "1"}
-sweep_grids = list(dict.fromkeys(r["grid"] for r in sweep_reliability))
+# A horizon's own model comes first in the files; the chain's first step, which may have the same
+# horizon, after it: each (grid, quantity, horizon) takes its first block of bins and first ECE.
+sweep_bins = {}
+for r in rows("grid-sweep-reliability.csv"):
+    if r["game_state"] != "all" or r["horizon_steps"] != "1":
+        continue
+    bins = sweep_bins.setdefault((r["grid"], r["quantity"], r["horizon_s"]), [])
+    if len(bins) < 10:
+        bins.append(r)
+sweep_ece = {}
+for r in rows("grid-sweep-calibration.csv"):
+    if r["game_state"] == "all" and r["horizon_steps"] == "1":
+        sweep_ece.setdefault((r["grid"], r["quantity"], r["horizon_s"]), float(r["ece"]))
+sweep_grids = list(dict.fromkeys(grid for grid, _, _ in sweep_bins))
 fig, axes = plt.subplots(2, len(sweep_grids), figsize=(3.2 * len(sweep_grids), 6.6), squeeze=False)
 for row, quantity in enumerate(["robot", "formation"]):
     for column, grid in enumerate(sweep_grids):
         ax = axes[row][column]
         ax.plot([0, 1], [0, 1], color="grey", linestyle=":")
-        lines = {}
-        for r in sweep_reliability:
-            if r["grid"] == grid and r["quantity"] == quantity and int(r["count"]) >= 50:
-                lines.setdefault(r["horizon_s"], []).append(
-                    (float(r["mean_confidence"]), float(r["observed_frequency"])))
+        lines = {horizon: [(float(r["mean_confidence"]), float(r["observed_frequency"]))
+                           for r in bins if int(r["count"]) >= 50]
+                 for (g, q, horizon), bins in sweep_bins.items() if g == grid and q == quantity}
         for horizon, points in lines.items():
             ece = sweep_ece.get((grid, quantity, horizon), float("nan"))
             ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", markersize=3,

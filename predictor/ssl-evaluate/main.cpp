@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
         "write the tables as CSV files into DIR too (none without it)")(
         "write-samples", po::value(&o.write_samples)->value_name("FILE"),
         "holdout, grid-sweep: also write every scored robot to this CSV file, a line per robot, "
-        "instant and horizon (where it was, where it went, every method's forecast; about 150 "
+        "instant and horizon (where it was, where it went, every method's forecast; about 170 "
         "bytes a line, 1.4 million lines for the default simulated match)")(
         "simulation", po::value(&o.simulation)->default_value(o.simulation),
         "holdout without logs: match (a simulated match with its referee, --train-seconds of "
@@ -96,6 +96,9 @@ int main(int argc, char** argv) {
     o.horizons = sf::evaluate::parse_horizons(horizons);
     (void)sf::app::recalibration_settings(o.recalibration_half_life_s);  // checked before any work
     sf::app::init_logging("ssl-evaluate");
+    if (!o.write_samples.empty() && o.mode != "holdout" && o.mode != "grid-sweep") {
+      throw sf::app::UsageError("--write-samples is for holdout and grid-sweep, not " + o.mode);
+    }
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});
     if (o.mode == "grid-sweep") return sf::evaluate::run_holdout(o, o.grids);

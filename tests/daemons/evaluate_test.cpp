@@ -11,6 +11,7 @@
 #include <map>
 #include <regex>
 #include <sstream>
+#include <tuple>
 
 #include "child_process.hpp"
 #include "moving_robots.hpp"
@@ -318,36 +319,62 @@ TEST(Evaluate, HoldoutWritesEveryScoredRobotAsItsTablesCountedIt) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto lines = csv_rows(read(samples));
   ASSERT_GT(lines.size(), 1000u);
-  const std::vector<std::string>& header = lines.front();
-  const auto column = [&](const std::string& name) {
-    const auto it = std::find(header.begin(), header.end(), name);
-    EXPECT_NE(it, header.end()) << name;
-    return static_cast<std::size_t>(it - header.begin());
+  std::map<std::string, std::size_t> column;
+  for (std::size_t c = 0; c < lines.front().size(); ++c) column[lines.front()[c]] = c;
+  const auto number = [&](const std::vector<std::string>& line, const std::string& name) {
+    return std::stod(line.at(column.at(name)));
   };
-  const std::size_t horizon = column("horizon_s"), state = column("game_state"),
-                    truth_x = column("truth_x_mm"), truth_y = column("truth_y_mm");
-  // Per game state at 1 s (its own section), how many robots and each method's mean error.
+  const auto text = [&](const std::vector<std::string>& line, const std::string& name) {
+    return line.at(column.at(name));
+  };
+  const auto error = [&](const std::vector<std::string>& line, const std::string& method) {
+    return std::hypot(number(line, method + "_x_mm") - number(line, "truth_x_mm"),
+                      number(line, method + "_y_mm") - number(line, "truth_y_mm"));
+  };
+  // Per game state at 1 s (its own model, not the chain's), how many robots, each method's mean
+  // error and how many the model's 90% radius held.
   struct Sums {
     std::uint64_t robots = 0;
+    std::uint64_t within90 = 0;
     std::map<std::string, double> error;
   };
   std::map<std::string, Sums> by_state;
+  std::map<std::tuple<std::string, std::string, long>, std::pair<double, double>> at_second;
   const std::vector<std::string> methods{"model", "persistence", "damped-constant-acceleration"};
+  std::uint64_t chained = 0;
   for (std::size_t i = 1; i < lines.size(); ++i) {
     const std::vector<std::string>& line = lines[i];
-    ASSERT_EQ(line.size(), header.size()) << i;
-    if (line[horizon] != "1" || line[column("horizon_steps")] != "1") continue;
-    for (const std::string& name : {std::string("all"), line[state]}) {
+    ASSERT_EQ(line.size(), column.size()) << i;
+    if (text(line, "chain") == "1") {
+      ++chained;
+      continue;
+    }
+    if (text(line, "horizon_s") != "1" || text(line, "horizon_steps") != "1") continue;
+    at_second[{text(line, "stream"), text(line, "robot_id"),
+               std::lround(number(line, "time_s") * 1000)}] = {number(line, "x_mm"),
+                                                               number(line, "y_mm")};
+    for (const std::string& name : {std::string("all"), text(line, "game_state")}) {
       Sums& sums = by_state[name];
       ++sums.robots;
-      for (const std::string& method : methods) {
-        sums.error[method] +=
-            std::hypot(std::stod(line[column(method + "_x_mm")]) - std::stod(line[truth_x]),
-                       std::stod(line[column(method + "_y_mm")]) - std::stod(line[truth_y]));
-      }
+      if (error(line, "model") <= number(line, "model_radius90_mm")) ++sums.within90;
+      for (const std::string& method : methods) sums.error[method] += error(line, method);
     }
   }
-  // The same robots and the same errors as the accuracy table (positions written to 0.1 mm).
+  EXPECT_GT(chained, 0u);  // the chain's steps are written too, told apart
+  // Where a robot went is where it was a second later, when it was scored then too.
+  std::size_t followed = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string>& line = lines[i];
+    if (text(line, "chain") != "0" || text(line, "horizon_s") != "1") continue;
+    const auto later = at_second.find({text(line, "stream"), text(line, "robot_id"),
+                                       std::lround(number(line, "time_s") * 1000) + 1000});
+    if (later == at_second.end()) continue;
+    EXPECT_NEAR(later->second.first, number(line, "truth_x_mm"), 0.05) << i;
+    EXPECT_NEAR(later->second.second, number(line, "truth_y_mm"), 0.05) << i;
+    ++followed;
+  }
+  EXPECT_GT(followed, 1000u);
+  // The same robots, errors and radii as the tables (positions written to 0.1 mm).
   const std::map<std::string, std::string> label{
       {"model", "model"},
       {"persistence", "persistence"},
@@ -365,14 +392,28 @@ TEST(Evaluate, HoldoutWritesEveryScoredRobotAsItsTablesCountedIt) {
     }
   }
   EXPECT_GE(compared, 3u * 4u);  // all, running and at least two stoppages
+  std::size_t radii = 0;
+  for (const auto& row : csv_rows(read(dir / "samples" / "holdout-calibration.csv"))) {
+    if (row[1] != "1" || row[2] != "1" || row[5] != "robot" || !by_state.contains(row[3])) continue;
+    const Sums& sums = by_state[row[3]];
+    EXPECT_NEAR(std::stod(row[10]),
+                static_cast<double>(sums.within90) / static_cast<double>(sums.robots), 0.002)
+        << row[3];
+    ++radii;
+  }
+  EXPECT_GE(radii, 4u);
   EXPECT_GT(by_state["all"].robots, by_state["running"].robots);
 
-  // A file it cannot write stops it before any work, saying which.
+  // A file it cannot write stops it before any work, saying which; other modes refuse it.
   const auto unwritable =
       evaluate(dir, {"holdout", "--write-samples", (dir / "no-such-dir" / "samples.csv").string()},
                "unwritable");
   EXPECT_NE(unwritable.exit_code, 0);
   EXPECT_NE(unwritable.err.find("no-such-dir"), std::string::npos) << unwritable.err;
+  EXPECT_EQ(
+      evaluate(dir, {"paper", "--write-samples", (dir / "paper.csv").string()}, "paper").exit_code,
+      2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "paper.csv"));
 }
 
 TEST(Evaluate, BadModeAndOptionsExitWithTwo) {

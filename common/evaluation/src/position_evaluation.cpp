@@ -61,10 +61,11 @@ struct Method {
   std::unique_ptr<Training> training;
 };
 
-// Scores the model's instant `i` of a stream and every method's prediction at its nearest
-// instant, at every horizon, into the rows "all" and the instant's phase.
+// Scores the model's instant `i` of test stream `stream` and every method's prediction at its
+// nearest instant, at every horizon, into the rows "all" and the instant's phase.
 void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& config,
-                   const std::vector<StreamPredictions>& by_method, std::size_t i) {
+                   const std::vector<StreamPredictions>& by_method, std::size_t stream,
+                   std::size_t i) {
   const StreamPredictions& model = by_method.front();
   const Instant& instant = model.instants[i];
   const Formation& now = model.formations[i];
@@ -109,8 +110,9 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
     if (scored.empty()) continue;
     if (config.on_sample) {
       for (const Scored& s : scored) {
-        config.on_sample(ScoredSample{step_s, k + 1, instant.time_s, s.now->robot_id, instant.phase,
-                                      s.now->feed_position, s.actual->feed_position, &s.guesses});
+        config.on_sample(ScoredSample{step_s, k + 1, stream, instant.time_s, s.now->robot_id,
+                                      instant.phase, s.now->feed_position, s.actual->feed_position,
+                                      &s.guesses});
       }
     }
     for (const std::size_t row : rows) {
@@ -254,7 +256,8 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
           if (m == 0) out.formations.push_back(p.formation());
         }));
   }
-  for (const RecordedMatch& stream : test) {
+  for (std::size_t t = 0; t < test.size(); ++t) {
+    const RecordedMatch& stream = test[t];
     result.test_has_referee = result.test_has_referee || stream.has_referee();
     for (std::size_t m = 0; m < methods.size(); ++m) {
       by_method[m] = StreamPredictions{};
@@ -263,7 +266,7 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     }
     result.test_formations += by_method.front().formations.size();
     for (std::size_t i = 0; i < by_method.front().instants.size(); ++i) {
-      score_instant(result, config, by_method, i);
+      score_instant(result, config, by_method, t, i);
     }
   }
   return result;

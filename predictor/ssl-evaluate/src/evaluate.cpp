@@ -6,6 +6,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -90,7 +91,8 @@ class CsvFile {
 
 // --write-samples: every robot as it was scored (ev::ScoredSample), a line each, for cutting the
 // tables another way (by how the robot moved, by robot, by time). Positions in the feed's
-// coordinates, mm.
+// coordinates, mm. `chain` tells the sections apart: 0 for a horizon's own model (--horizons), 1
+// for the chain of --step steps, whose first step may be a horizon of its own too.
 class SampleFile {
  public:
   explicit SampleFile(const std::string& path) : path_(path) {
@@ -98,34 +100,37 @@ class SampleFile {
     out_.open(path_);
     if (!out_) throw std::runtime_error("cannot write " + path_);
     spdlog::info("writing every scored robot to {}", path_);
-    out_ << "grid,step_s,horizon_steps,horizon_s,time_s,robot_id,game_state,x_mm,y_mm,"
+    out_ << "grid,chain,step_s,horizon_steps,horizon_s,stream,time_s,robot_id,game_state,x_mm,y_mm,"
             "truth_x_mm,truth_y_mm,model_x_mm,model_y_mm";
-    for (const ModelKind baseline : ev::PositionEvaluationConfig{}.baselines) {
+    for (const ModelKind baseline : baselines_) {
       out_ << ',' << describe(baseline).name << "_x_mm," << describe(baseline).name << "_y_mm";
     }
     out_ << ",model_radius50_mm,model_radius90_mm,model_stays\n";
   }
   bool enabled() const { return out_.is_open(); }
-  void write(const std::string& grid, const ev::ScoredSample& sample) {
-    char buffer[96];
-    const auto put = [&](int written) {
-      out_.write(buffer, std::clamp(written, 0, static_cast<int>(sizeof buffer) - 1));
-    };
-    out_ << grid;
-    put(std::snprintf(buffer, sizeof buffer, ",%g,%d,%g,%.3f,%u,", sample.step_s, sample.steps,
-                      sample.steps * sample.step_s, sample.time_s, sample.robot_id));
+  // The baselines a section must score, in the header's order.
+  const std::vector<ModelKind>& baselines() const { return baselines_; }
+  void write(const std::string& grid, bool chain, const ev::ScoredSample& sample) {
+    if (sample.forecasts->size() != 1 + baselines_.size()) {
+      throw std::logic_error("--write-samples: a section scored other methods than the header's");
+    }
+    out_ << grid << (chain ? ",1" : ",0");
+    put(",%g,%d,%g,%zu,%.3f,%u,", sample.step_s, sample.steps, sample.steps * sample.step_s,
+        sample.stream, sample.time_s, sample.robot_id);
     out_ << ev::state_row_name(ev::state_row_of(sample.phase));
-    put(std::snprintf(buffer, sizeof buffer, ",%.1f,%.1f,%.1f,%.1f", sample.position.x,
-                      sample.position.y, sample.truth.x, sample.truth.y));
+    put(",%.1f,%.1f,%.1f,%.1f", sample.position.x, sample.position.y, sample.truth.x,
+        sample.truth.y);
     for (const RobotPrediction* forecast : *sample.forecasts) {
-      put(std::snprintf(buffer, sizeof buffer, ",%.1f,%.1f", forecast->feed_position.x,
-                        forecast->feed_position.y));
+      put(",%.1f,%.1f", forecast->feed_position.x, forecast->feed_position.y);
     }
     const RobotPrediction& model = *sample.forecasts->front();
-    put(std::snprintf(buffer, sizeof buffer, ",%.1f,%.1f,%d\n", model.radius50_mm,
-                      model.radius90_mm, model.stays ? 1 : 0));
+    put(",%.1f,%.1f,%d\n", model.radius50_mm, model.radius90_mm, model.stays ? 1 : 0);
   }
-  // Throws if anything failed to be written (a full disk).
+  // Throws if anything failed to be written so far (a full disk): checked after each grid, so a
+  // failed file stops the run rather than its end.
+  void check() const {
+    if (enabled() && !out_) throw std::runtime_error("cannot write " + path_);
+  }
   void close() {
     if (!enabled()) return;
     out_.close();
@@ -133,8 +138,24 @@ class SampleFile {
   }
 
  private:
+  // One field or a few, formatted in place (a stream's formatting of doubles was most of the
+  // writing time). A line cut short would run into the next: that throws instead. (The format
+  // attribute has the compiler check each call's values against its format.)
+  [[gnu::format(printf, 2, 3)]] void put(const char* format, ...) {
+    char buffer[256];
+    std::va_list values;
+    va_start(values, format);
+    const int written = std::vsnprintf(buffer, sizeof buffer, format, values);
+    va_end(values);
+    if (written < 0 || written >= static_cast<int>(sizeof buffer)) {
+      throw std::runtime_error("--write-samples: a field too long to write");
+    }
+    out_.write(buffer, written);
+  }
+
   std::string path_;
   std::ofstream out_;
+  std::vector<ModelKind> baselines_ = ev::PositionEvaluationConfig{}.baselines;
 };
 
 }  // namespace
@@ -315,7 +336,7 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
   report.grid = base.grid;
   // A prior serves the sections of its own step (the chained steps, and the single horizon equal
   // to it): a table's rows are learned for one step.
-  const auto evaluate = [&](double step_s, int steps) {
+  const auto evaluate = [&](double step_s, int steps, bool chain) {
     ev::PositionEvaluationConfig config;
     config.sampler = base;
     config.sampler.step_s = step_s;
@@ -327,14 +348,14 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.tracked_vision = options.network.tracked();
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
     if (samples.enabled()) {
-      config.on_sample = [&samples, name = base.grid.to_string()](const ev::ScoredSample& s) {
-        samples.write(name, s);
-      };
+      config.baselines = samples.baselines();
+      config.on_sample = [&samples, chain, name = base.grid.to_string()](
+                             const ev::ScoredSample& s) { samples.write(name, chain, s); };
     }
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
-  for (const double horizon_s : options.horizons) evaluate(horizon_s, 1);
-  evaluate(base.step_s, options.chain_steps);
+  for (const double horizon_s : options.horizons) evaluate(horizon_s, 1, false);
+  evaluate(base.step_s, options.chain_steps, true);
   if (const auto& table = report.sections.back().evaluation.table) {
     report.prediction_us = time_predictions(table->table, test, base);
   }
@@ -537,9 +558,9 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     reports.push_back(holdout_for_grid(options, grid, train, test, prior, samples));
     print_holdout(reports.back(), base);
     write_holdout_csv(accuracy, calibration, reliability, reports.back());
+    samples.check();
     std::printf("\n");
   }
-  samples.close();
   if (grids.size() > 1) {
     CsvFile sweep(options, "grid-sweep.csv");
     sweep << "grid,states,transitions,table_memory_bytes,prediction_us,model_cell_accuracy_h1,"
@@ -572,6 +593,7 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
             << '\n';
     }
   }
+  samples.close();
   return 0;
 }
 

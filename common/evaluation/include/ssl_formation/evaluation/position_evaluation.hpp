@@ -76,7 +76,8 @@ struct HorizonScore {
 struct ScoredSample {
   double step_s = 0.0;
   int steps = 0;
-  double time_s = 0.0;  // of the instant the predictions were made at
+  std::size_t stream = 0;  // which test stream, from 0: each has its own clock
+  double time_s = 0.0;     // of the instant the predictions were made at
   std::uint32_t robot_id = 0;
   GamePhase phase = GamePhase::running;
   Point position;  // at time_s
