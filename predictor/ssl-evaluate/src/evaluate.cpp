@@ -102,16 +102,15 @@ class SampleFile {
     spdlog::info("writing every scored robot to {}", path_);
     out_ << "grid,chain,step_s,horizon_steps,horizon_s,stream,time_s,robot_id,game_state,x_mm,y_mm,"
             "truth_x_mm,truth_y_mm,model_x_mm,model_y_mm";
-    for (const ModelKind baseline : baselines_) {
+    // The baselines every section scores (PositionEvaluationConfig's default), in their order.
+    for (const ModelKind baseline : baseline_kinds) {
       out_ << ',' << describe(baseline).name << "_x_mm," << describe(baseline).name << "_y_mm";
     }
     out_ << ",model_radius50_mm,model_radius90_mm,model_stays\n";
   }
   bool enabled() const { return out_.is_open(); }
-  // The baselines a section must score, in the header's order.
-  const std::vector<ModelKind>& baselines() const { return baselines_; }
   void write(const std::string& grid, bool chain, const ev::ScoredSample& sample) {
-    if (sample.forecasts->size() != 1 + baselines_.size()) {
+    if (sample.forecasts->size() != 1 + baseline_kinds.size()) {
       throw std::logic_error("--write-samples: a section scored other methods than the header's");
     }
     out_ << grid << (chain ? ",1" : ",0");
@@ -155,7 +154,6 @@ class SampleFile {
 
   std::string path_;
   std::ofstream out_;
-  std::vector<ModelKind> baselines_ = ev::PositionEvaluationConfig{}.baselines;
 };
 
 }  // namespace
@@ -348,7 +346,6 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.tracked_vision = options.network.tracked();
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
     if (samples.enabled()) {
-      config.baselines = samples.baselines();
       config.on_sample = [&samples, chain, name = base.grid.to_string()](
                              const ev::ScoredSample& s) { samples.write(name, chain, s); };
     }
