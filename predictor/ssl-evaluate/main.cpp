@@ -53,6 +53,13 @@ int main(int argc, char** argv) {
         "holdout, grid-sweep: also write every scored robot to this CSV file, a line per robot, "
         "instant and horizon (where it was, where it went, every method's forecast; about 170 "
         "bytes a line, 1.4 million lines for the default simulated match)")(
+        "bootstrap", po::value(&o.bootstrap)->default_value(o.bootstrap)->value_name("N"),
+        "holdout, grid-sweep: a 95% interval for every mean error and every ratio to the best "
+        "baseline, from N resamples of a block bootstrap over blocks of data time (a fixed seed; "
+        "0: no intervals)")(
+        "bootstrap-block", po::value(&o.bootstrap_block_s)->default_value(o.bootstrap_block_s),
+        "holdout, grid-sweep: the bootstrap's blocks, seconds of data time (neighbouring frames "
+        "are nearly the same: a block holds what is independent of the next)")(
         "simulation", po::value(&o.simulation)->default_value(o.simulation),
         "holdout without logs: match (a simulated match with its referee, --train-seconds of "
         "--seed against --test-seconds of --test-seed), paper (the paper's simulated opponent, "
@@ -98,6 +105,12 @@ int main(int argc, char** argv) {
     sf::app::init_logging("ssl-evaluate");
     if (!o.write_samples.empty() && o.mode != "holdout" && o.mode != "grid-sweep") {
       throw sf::app::UsageError("--write-samples is for holdout and grid-sweep, not " + o.mode);
+    }
+    if (o.bootstrap < 0 || o.bootstrap > 100000) {
+      throw sf::app::UsageError("--bootstrap takes 0 (no intervals) to 100000 resamples");
+    }
+    if (!(o.bootstrap_block_s > 0.0)) {
+      throw sf::app::UsageError("--bootstrap-block must be a positive number of seconds");
     }
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});

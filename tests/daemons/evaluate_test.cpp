@@ -133,11 +133,34 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
                                                    "game_state", "method", "state_accuracy",
                                                    "cell_accuracy", "mean_cell_distance",
                                                    "mean_error_mm", "median_error_mm",
-                                                   "p90_error_mm", "robots"}));
+                                                   "p90_error_mm", "robots",
+                                                   "mean_error_mm_ci_low", "mean_error_mm_ci_high",
+                                                   "best_baseline", "ratio_to_best_baseline",
+                                                   "ratio_ci_low", "ratio_ci_high",
+                                                   "bootstrap_blocks"}));
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
-    ASSERT_EQ(accuracy[i].size(), 12u);
+    ASSERT_EQ(accuracy[i].size(), 19u);
     EXPECT_EQ(accuracy[i][0], "3x2");
     EXPECT_TRUE(accuracy[i][3] == "all" || accuracy[i][3] == "running") << accuracy[i][3];
+    // Every mean has its interval (300 formations 2 s apart: 60 blocks of 10 s), and every
+    // method its ratio to the best baseline, with an interval too. The 1 s section scores no
+    // robot (its formations are 2 s apart): no interval, no blocks.
+    if (accuracy[i][11] == "0") {
+      EXPECT_TRUE(accuracy[i][12].empty() && accuracy[i][15].empty()) << i;
+      EXPECT_EQ(accuracy[i][18], "0");
+      continue;
+    }
+    const double mean = std::stod(accuracy[i][8]);
+    EXPECT_LE(std::stod(accuracy[i][12]), mean + 1e-9) << i;
+    EXPECT_GE(std::stod(accuracy[i][13]), mean - 1e-9) << i;
+    EXPECT_FALSE(accuracy[i][14].empty());
+    const double ratio = std::stod(accuracy[i][15]);
+    EXPECT_LE(std::stod(accuracy[i][16]), ratio + 1e-9) << i;
+    EXPECT_GE(std::stod(accuracy[i][17]), ratio - 1e-9) << i;
+    if (accuracy[i][4] == accuracy[i][14]) {
+      EXPECT_EQ(accuracy[i][15], "1");
+    }
+    EXPECT_GE(std::stoi(accuracy[i][18]), 55) << i;
     const double cell = std::stod(accuracy[i][6]);
     EXPECT_GE(cell, 0.0);
     EXPECT_LE(cell, 1.0);
@@ -237,7 +260,7 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   std::size_t all_rows = 0;
   for (std::size_t i = 1; i < accuracy.size(); i += 6) {
     // Rows of one horizon and game state: the model, then the five baselines.
-    ASSERT_EQ(accuracy[i].size(), 12u);
+    ASSERT_EQ(accuracy[i].size(), 19u);
     EXPECT_EQ(accuracy[i][4], "model");
     if (accuracy[i][3] != "all") continue;
     ++all_rows;
@@ -306,6 +329,36 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
   for (const auto& [state, n] : robots) by_state += state == "all" ? 0 : n;
   EXPECT_EQ(by_state, robots["all"]);  // every instant in exactly one state
   EXPECT_NE(run.out.find("by phase of the game"), std::string::npos) << run.out;
+
+  // Intervals where a state spans enough 10 s blocks (90 s of test: 9 blocks at most), none
+  // where it spans fewer than 5; the printed ratio table names the best baseline.
+  for (std::size_t i = 1; i < accuracy.size(); ++i) {
+    const int blocks = std::stoi(accuracy[i][18]);
+    EXPECT_LE(blocks, 10) << i;
+    EXPECT_EQ(accuracy[i][12].empty(), blocks < 5) << accuracy[i][3] << " " << blocks;
+    if (accuracy[i][3] == "all") {
+      EXPECT_GE(blocks, 8);
+    }
+  }
+  EXPECT_TRUE(std::regex_search(
+      run.out, std::regex(R"(1\.00 s\s+1 all\s+\d+ damped constant (velocity|acceleration)\s+[\d.]+\s+\[[\d.]+, [\d.]+\])")))
+      << run.out;
+
+  // --bootstrap 0: the same means, no intervals.
+  const auto plain =
+      evaluate(dir,
+               {"holdout", "--train-seconds", "120", "--test-seconds", "90", "--horizons", "1",
+                "--chain-steps", "1", "--learn-during", "all", "--bootstrap", "0"},
+               "plain");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto plain_accuracy = csv_rows(read(dir / "plain" / "holdout-accuracy.csv"));
+  ASSERT_EQ(plain_accuracy.size(), accuracy.size());
+  for (std::size_t i = 1; i < plain_accuracy.size(); ++i) {
+    EXPECT_EQ(plain_accuracy[i][8], accuracy[i][8]) << i;
+    EXPECT_EQ(plain_accuracy[i][15], accuracy[i][15]) << i;
+    EXPECT_TRUE(plain_accuracy[i][12].empty() && plain_accuracy[i][16].empty()) << i;
+  }
+  EXPECT_EQ(plain.out.find("95% interval"), std::string::npos) << plain.out;
 }
 
 TEST(Evaluate, HoldoutWritesEveryScoredRobotAsItsTablesCountedIt) {
@@ -432,6 +485,8 @@ TEST(Evaluate, BadModeAndOptionsExitWithTwo) {
   EXPECT_NE(no_test.err.find("--test-log"), std::string::npos) << no_test.err;
   EXPECT_EQ(
       evaluate(dir, {"holdout", "--recalibration-half-life", "-1"}, "recalibration").exit_code, 2);
+  EXPECT_EQ(evaluate(dir, {"holdout", "--bootstrap", "-1"}, "bootstrap").exit_code, 2);
+  EXPECT_EQ(evaluate(dir, {"holdout", "--bootstrap-block", "0"}, "bootstrap-block").exit_code, 2);
 }
 
 }  // namespace

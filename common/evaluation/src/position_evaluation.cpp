@@ -143,6 +143,16 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
         }
       }
       score.formation.add(at[0]->steps[h].formation_probability, every_cell_right);
+      if (config.bootstrap.enabled()) {
+        std::vector<double> errors(at.size());
+        const DataBlock block = data_block(stream, instant.time_s, config.bootstrap.block_s);
+        for (const Scored& s : scored) {
+          for (std::size_t m = 0; m < at.size(); ++m) {
+            errors[m] = distance(s.guesses[m]->feed_position, s.actual->feed_position);
+          }
+          add_to_block(score.blocks, block, errors);
+        }
+      }
     }
   }
 }
@@ -151,6 +161,15 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
 
 std::string_view state_row_name(std::size_t row) {
   return row == 0 ? std::string_view("all") : to_string(all_game_phases[row - 1]);
+}
+
+std::optional<std::size_t> best_baseline(const HorizonScore& score) {
+  std::optional<std::size_t> best;
+  for (std::size_t m = 1; m < score.methods.size(); ++m) {
+    if (score.methods[m].error.count() == 0) continue;
+    if (!best || score.methods[m].error.mean() < score.methods[*best].error.mean()) best = m;
+  }
+  return best;
 }
 
 double ErrorStats::mean() const {
@@ -267,6 +286,19 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     result.test_formations += by_method.front().formations.size();
     for (std::size_t i = 0; i < by_method.front().instants.size(); ++i) {
       score_instant(result, config, by_method, t, i);
+    }
+  }
+  if (config.bootstrap.enabled()) {
+    // One set of draws for every row and horizon: the blocks any robot was scored in.
+    std::vector<DataBlock> universe;
+    for (const HorizonScore& score : result.all()) {
+      for (const auto& [block, sums] : score.blocks) universe.push_back(block);
+    }
+    const BlockResamples draws(std::move(universe), config.bootstrap);
+    for (auto& row : result.rows) {
+      for (HorizonScore& score : row) {
+        score.intervals = bootstrap_row(score.blocks, draws, best_baseline(score));
+      }
     }
   }
   return result;

@@ -345,6 +345,8 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
     config.tracked_vision = options.network.tracked();
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
+    config.bootstrap.resamples = options.bootstrap;
+    config.bootstrap.block_s = options.bootstrap_block_s;
     if (samples.enabled()) {
       config.on_sample = [&samples, chain, name = base.grid.to_string()](
                              const ev::ScoredSample& s) { samples.write(name, chain, s); };
@@ -377,7 +379,59 @@ std::vector<std::size_t> reported_rows(const ev::PositionEvaluation& evaluation)
   return {0, ev::state_row_of(GamePhase::running)};
 }
 
-void print_holdout(const GridReport& report, const SamplerConfig& base) {
+bool has_intervals(const ev::HorizonScore& score) {
+  return score.intervals.mean.size() == score.methods.size();
+}
+
+// "[145.2, 151.0]"; a row over too few blocks for one, "(3 blocks)"; "" without the bootstrap.
+std::string interval_text(const ev::HorizonScore& score, std::size_t m, bool bootstrap) {
+  if (!bootstrap) return "";
+  char text[64];
+  if (!has_intervals(score)) {
+    std::snprintf(text, sizeof text, "(%zu block%s)", score.intervals.blocks,
+                  score.intervals.blocks == 1 ? "" : "s");
+  } else {
+    const ev::Interval& i = score.intervals.mean[m];
+    std::snprintf(text, sizeof text, "[%.1f, %.1f]", i.low, i.high);
+  }
+  return text;
+}
+
+// The model against the best baseline of each row, with the intervals of their ratio.
+void print_ratios(const GridReport& report, const EvaluateOptions& options) {
+  std::printf("The model against the best baseline of each row: mean error over the best's, 95%% "
+              "intervals from %d resamples of %.0f s blocks (none for a row over fewer than %zu "
+              "blocks):\n",
+              options.bootstrap, options.bootstrap_block_s, ev::BootstrapConfig{}.min_blocks);
+  std::printf("%9s %5s %-24s %7s %-30s %10s %18s %20s\n", "horizon", "steps", "game state",
+              "blocks", "best baseline", "model/best", "95% interval", "model below best");
+  for (const Section& section : report.sections) {
+    const ev::PositionEvaluation& evaluation = section.evaluation;
+    for (const std::size_t row : reported_rows(evaluation)) {
+      for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
+        const ev::HorizonScore& score = evaluation.rows[row][h];
+        const std::optional<std::size_t> best = ev::best_baseline(score);
+        if (score.methods.front().cells.robots == 0 || !best) continue;
+        const double ratio = score.methods[0].error.mean() / score.methods[*best].error.mean();
+        char range[64] = "";
+        char below[64];
+        std::snprintf(below, sizeof below, "%.1f%%", 100.0 * (1.0 - ratio));
+        if (!score.intervals.ratio.empty()) {
+          const ev::Interval& i = score.intervals.ratio[0];
+          std::snprintf(range, sizeof range, "[%.3f, %.3f]", i.low, i.high);
+          std::snprintf(below, sizeof below, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - ratio),
+                        100.0 * (1.0 - i.high), 100.0 * (1.0 - i.low));
+        }
+        std::printf("%7.2f s %5zu %-24s %7zu %-30s %10.3f %18s %20s\n", score.horizon_s, h + 1,
+                    std::string(ev::state_row_name(row)).c_str(), score.intervals.blocks,
+                    method_label(evaluation, *best).c_str(), ratio, range, below);
+      }
+    }
+  }
+}
+
+void print_holdout(const GridReport& report, const SamplerConfig& base,
+                   const EvaluateOptions& options) {
   const ev::PositionEvaluation& chains = report.sections.back().evaluation;
   std::printf(
       "Held-out evaluation, grid %s, %s sampling: %llu test formations; the chains' table: %llu "
@@ -391,8 +445,10 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
     std::printf("The test streams carry no referee messages: every instant counts as running "
                 "play, and only the rows 'all' and 'running' are given.\n");
   }
-  std::printf("%9s %5s %-30s %11s %11s %9s %9s %9s %9s %9s\n", "horizon", "steps", "method",
-              "exact state", "exact cell", "cells off", "mean mm", "median mm", "p90 mm", "robots");
+  const bool intervals = options.bootstrap > 0;
+  std::printf("%9s %5s %-30s %11s %11s %9s %9s %s%9s %9s %9s\n", "horizon", "steps", "method",
+              "exact state", "exact cell", "cells off", "mean mm", intervals ? "     95% interval " : "",
+              "median mm", "p90 mm", "robots");
   for (const Section& section : report.sections) {
     const ev::PositionEvaluation& evaluation = section.evaluation;
     for (std::size_t h = 0; h < evaluation.all().size(); ++h) {
@@ -400,18 +456,26 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
       for (std::size_t m = 0; m < score.methods.size(); ++m) {
         const ev::Accuracy& a = score.methods[m].cells;
         const ev::ErrorStats& e = score.methods[m].error;
-        std::printf("%7.2f s %5zu %-30s %10.2f%% %10.2f%% %9.3f %9.1f %9.1f %9.1f %9llu\n",
+        char interval[64] = "";
+        if (intervals) {
+          std::snprintf(interval, sizeof interval, " %18s",
+                        interval_text(score, m, intervals).c_str());
+        }
+        std::printf("%7.2f s %5zu %-30s %10.2f%% %10.2f%% %9.3f %9.1f%s %9.1f %9.1f %9llu\n",
                     score.horizon_s, h + 1, method_label(evaluation, m).c_str(),
                     100.0 * a.state_accuracy(), 100.0 * a.cell_accuracy(), a.mean_distance(),
-                    e.mean(), e.median(), e.percentile(90), static_cast<unsigned long long>(a.robots));
+                    e.mean(), interval, e.median(), e.percentile(90),
+                    static_cast<unsigned long long>(a.robots));
       }
     }
   }
   // By phase of the game: the mean error of every method, for the rows with anything in them.
-  std::printf("Mean error (mm) by phase of the game:\n%9s %5s %-24s %9s", "horizon", "steps",
-              "game state", "robots");
+  std::printf("Mean error (mm) by phase of the game%s:\n%9s %5s %-24s %9s",
+              intervals ? ", with its 95% interval" : "", "horizon", "steps", "game state",
+              "robots");
+  const int width = intervals ? 28 : 12;
   for (std::size_t m = 0; m < chains.methods.size(); ++m) {
-    std::printf(" %12.12s", method_label(chains, m).c_str());
+    std::printf(" %*.*s", width, width, method_label(chains, m).c_str());
   }
   std::printf("\n");
   for (const Section& section : report.sections) {
@@ -423,13 +487,17 @@ void print_holdout(const GridReport& report, const SamplerConfig& base) {
         std::printf("%7.2f s %5zu %-24s %9llu", score.horizon_s, h + 1,
                     std::string(ev::state_row_name(row)).c_str(),
                     static_cast<unsigned long long>(score.methods.front().cells.robots));
-        for (const ev::MethodScore& method : score.methods) {
-          std::printf(" %12.1f", method.error.mean());
+        for (std::size_t m = 0; m < score.methods.size(); ++m) {
+          char cell[96];
+          std::snprintf(cell, sizeof cell, "%.1f%s%s", score.methods[m].error.mean(),
+                        intervals ? " " : "", interval_text(score, m, intervals).c_str());
+          std::printf(" %*s", width, cell);
         }
         std::printf("\n");
       }
     }
   }
+  if (intervals) print_ratios(report, options);
   std::printf("Calibration of the model's probabilities (10 equal bins):\n");
   std::printf("%9s %5s %-10s %9s %9s %12s\n", "horizon", "steps", "quantity", "Brier", "ECE",
               "predictions");
@@ -472,7 +540,28 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
           accuracy << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state << ','
                    << method_label(evaluation, m) << ',' << a.state_accuracy() << ','
                    << a.cell_accuracy() << ',' << a.mean_distance() << ',' << e.mean() << ','
-                   << e.median() << ',' << e.percentile(90) << ',' << a.robots << '\n';
+                   << e.median() << ',' << e.percentile(90) << ',' << a.robots;
+          // The intervals, empty without --bootstrap; the ratio is this method's mean over the
+          // best baseline's (1 for the best baseline itself).
+          const ev::RowIntervals& intervals = score.intervals;
+          if (has_intervals(score)) {
+            accuracy << ',' << intervals.mean[m].low << ',' << intervals.mean[m].high;
+          } else {
+            accuracy << ",,";
+          }
+          const std::optional<std::size_t> best = ev::best_baseline(score);
+          if (best && a.robots > 0) {
+            accuracy << ',' << method_label(evaluation, *best) << ','
+                     << e.mean() / score.methods[*best].error.mean();
+          } else {
+            accuracy << ",,";
+          }
+          if (!intervals.ratio.empty()) {
+            accuracy << ',' << intervals.ratio[m].low << ',' << intervals.ratio[m].high;
+          } else {
+            accuracy << ",,";
+          }
+          accuracy << ',' << intervals.blocks << '\n';
         }
         for (const bool robot : {true, false}) {
           const ev::Calibration& c = robot ? score.robot : score.formation;
@@ -541,7 +630,9 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
   CsvFile accuracy(options, prefix + "accuracy.csv");
   accuracy << "grid,horizon_steps,horizon_s,game_state,method,state_accuracy,cell_accuracy,"
-              "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots\n";
+              "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots,mean_error_mm_ci_low,"
+              "mean_error_mm_ci_high,best_baseline,ratio_to_best_baseline,ratio_ci_low,"
+              "ratio_ci_high,bootstrap_blocks\n";
   CsvFile calibration(options, prefix + "calibration.csv");
   calibration << "grid,horizon_steps,horizon_s,game_state,method,quantity,brier,ece,predictions,"
                  "within_radius_50,within_radius_90\n";
@@ -553,7 +644,7 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   std::vector<GridReport> reports;
   for (const std::string& grid : grids) {
     reports.push_back(holdout_for_grid(options, grid, train, test, prior, samples));
-    print_holdout(reports.back(), base);
+    print_holdout(reports.back(), base, options);
     write_holdout_csv(accuracy, calibration, reliability, reports.back());
     samples.check();
     std::printf("\n");
@@ -562,7 +653,8 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     CsvFile sweep(options, "grid-sweep.csv");
     sweep << "grid,states,transitions,table_memory_bytes,prediction_us,model_cell_accuracy_h1,"
              "persistence_cell_accuracy_h1,constant_velocity_cell_accuracy_h1,"
-             "damped_constant_velocity_cell_accuracy_h1,model_mean_error_mm_h1\n";
+             "damped_constant_velocity_cell_accuracy_h1,model_mean_error_mm_h1,"
+             "model_mean_error_mm_h1_ci_low,model_mean_error_mm_h1_ci_high\n";
     std::printf("Grid sweep (one step of --step)\n%-6s %12s %12s %14s %14s %12s %12s %12s\n",
                 "grid", "states", "transitions", "table memory", "predict 2 (us)", "model cell",
                 "persist cell", "const-v cell");
@@ -586,8 +678,12 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
             << chains.table_memory_bytes << ',' << r.prediction_us << ','
             << h1.methods[0].cells.cell_accuracy() << ',' << cell(ModelKind::persistence) << ','
             << cell(ModelKind::constant_velocity) << ','
-            << cell(ModelKind::damped_constant_velocity) << ',' << h1.methods[0].error.mean()
-            << '\n';
+            << cell(ModelKind::damped_constant_velocity) << ',' << h1.methods[0].error.mean();
+      if (has_intervals(h1)) {
+        sweep << ',' << h1.intervals.mean[0].low << ',' << h1.intervals.mean[0].high << '\n';
+      } else {
+        sweep << ",,\n";
+      }
     }
   }
   samples.close();

@@ -223,6 +223,54 @@ TEST(PositionEvaluation, StepSamplingStillTakesVelocitiesFromEveryObservedFrame)
   EXPECT_LT(score.methods[2].error.mean(), 0.5 * score.methods[1].error.mean());
 }
 
+TEST(PositionEvaluation, EveryMeanHasAnIntervalFromBlocksThatAddUpToIt) {
+  PositionEvaluationConfig config;
+  config.sampler.grid = Grid(6, 4);
+  config.sampler.step_s = 0.5;
+  config.sampler.sampling = Sampling::frame;
+  config.steps = 2;
+  config.bootstrap.block_s = 1.0;  // ten blocks in the 10 s test stream
+  const PositionEvaluation result = evaluate_positions(config, {stream(20.0)}, {stream(10.0)});
+  for (const std::size_t row : {std::size_t{0}, state_row_of(GamePhase::running)}) {
+    for (const HorizonScore& score : result.rows[row]) {
+      SCOPED_TRACE(score.horizon_s);
+      // The blocks hold every scored robot once, and their sums make each method's mean.
+      std::uint64_t robots = 0;
+      std::vector<double> sums(score.methods.size(), 0.0);
+      for (const auto& [block, block_sums] : score.blocks) {
+        EXPECT_EQ(block.stream, 0u);
+        robots += block_sums.robots;
+        for (std::size_t m = 0; m < sums.size(); ++m) sums[m] += block_sums.error_sums[m];
+      }
+      EXPECT_EQ(score.blocks.size(), 10u);
+      ASSERT_EQ(robots, score.methods[0].error.count());
+      ASSERT_EQ(score.intervals.mean.size(), score.methods.size());
+      for (std::size_t m = 0; m < sums.size(); ++m) {
+        const double mean = score.methods[m].error.mean();
+        EXPECT_NEAR(sums[m] / static_cast<double>(robots), mean, 1e-9);
+        EXPECT_LE(score.intervals.mean[m].low, mean);
+        EXPECT_GE(score.intervals.mean[m].high, mean);
+        EXPECT_LT(score.intervals.mean[m].low, score.intervals.mean[m].high);
+      }
+      // The ratios are to the baseline of lowest mean, which is 1 against itself.
+      const std::optional<std::size_t> best = best_baseline(score);
+      ASSERT_TRUE(best.has_value());
+      for (std::size_t m = 1; m < score.methods.size(); ++m) {
+        EXPECT_LE(score.methods[*best].error.mean(), score.methods[m].error.mean());
+      }
+      ASSERT_EQ(score.intervals.ratio.size(), score.methods.size());
+      EXPECT_DOUBLE_EQ(score.intervals.ratio[*best].low, 1.0);
+      EXPECT_DOUBLE_EQ(score.intervals.ratio[*best].high, 1.0);
+    }
+  }
+  // Without the bootstrap nothing is kept or drawn.
+  config.bootstrap.resamples = 0;
+  const PositionEvaluation plain = evaluate_positions(config, {stream(20.0)}, {stream(10.0)});
+  EXPECT_TRUE(plain.all()[0].blocks.empty());
+  EXPECT_TRUE(plain.all()[0].intervals.mean.empty());
+  EXPECT_DOUBLE_EQ(plain.all()[0].methods[0].error.mean(), result.all()[0].methods[0].error.mean());
+}
+
 TEST(PositionEvaluation, PercentilesInterpolateBetweenOrderStatistics) {
   ErrorStats stats;
   for (const double e : {40.0, 10.0, 30.0, 20.0, 50.0}) stats.add(e);

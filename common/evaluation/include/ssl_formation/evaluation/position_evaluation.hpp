@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ssl_formation/evaluation/block_bootstrap.hpp"
 #include "ssl_formation/evaluation/evaluation.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/match_event.hpp"
@@ -67,6 +68,10 @@ struct HorizonScore {
   Calibration robot;                 // the model's per-robot probability that its cell is right
   Calibration formation;             // the model's probability that every cell is right
   RadiusCoverage radii;              // the model's 50% and 90% radii
+  // Each block of data time's summed errors (with PositionEvaluationConfig::bootstrap), and the
+  // intervals of the means and of their ratios to the best baseline drawn from them.
+  BlockedErrors blocks;
+  RowIntervals intervals;
 };
 
 // One robot scored at one horizon: where it was, where it was `steps` steps of `step_s` later, and
@@ -84,6 +89,10 @@ struct ScoredSample {
   Point truth;     // steps x step_s later
   const std::vector<const RobotPrediction*>* forecasts = nullptr;
 };
+
+// The baseline of lowest mean error in `score` (methods after the first, the model), if any
+// baseline was scored.
+std::optional<std::size_t> best_baseline(const HorizonScore& score);
 
 struct PositionEvaluationConfig {
   SamplerConfig sampler = sampler_config_for(default_model);  // the model's
@@ -108,6 +117,8 @@ struct PositionEvaluationConfig {
   // Sees every robot as it is scored, at every horizon (ssl-evaluate --write-samples): what the
   // tables average, one robot at a time, for whoever wants to cut them another way.
   std::function<void(const ScoredSample&)> on_sample;
+  // The intervals of every mean error and ratio (ssl-evaluate --bootstrap): resamples 0 for none.
+  BootstrapConfig bootstrap;
 };
 
 struct PositionEvaluation {

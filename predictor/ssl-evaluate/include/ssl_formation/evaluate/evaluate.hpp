@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/evaluation/block_bootstrap.hpp"
 
 namespace ssl_formation::evaluate {
 
@@ -52,6 +53,10 @@ struct EvaluateOptions {
   std::string output_dir;  // none: no CSV files
   // holdout, grid-sweep: every scored robot as a CSV line (ev::ScoredSample); none without it.
   std::string write_samples;
+  // holdout, grid-sweep: the resamples of the block bootstrap behind every interval (0: none)
+  // and its blocks of data time (evaluation/block_bootstrap.hpp).
+  int bootstrap = evaluation::BootstrapConfig{}.resamples;
+  double bootstrap_block_s = evaluation::BootstrapConfig{}.block_s;
   std::vector<std::string> grids{"3x2", "6x4", "9x6", "12x9"};
   // as-real-log: the recording, the log written and the mess (parse_real_log_mess); `seed`
   // places its ghosts and draws its noise.
