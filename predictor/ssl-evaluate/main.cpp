@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
         "test on these official logs (each its own stream) instead of the simulation")(
         "split", po::value(&o.split)->default_value(o.split),
         "train on this first fraction of every --train-log and test on the rest of each")(
+        "tune", po::bool_switch(&o.tune),
+        "with --split F: the tuning split (docs/tuning.md): train on the first F of each log's "
+        "first F and test on the rest of that; the last 1 - F, which reports, is not read")(
         "horizons", po::value(&horizons)->default_value(horizons),
         "holdout: horizons in seconds, each evaluated as a model of its own (step = horizon)")(
         "chain-steps", po::value(&o.chain_steps)->default_value(o.chain_steps),

@@ -137,9 +137,10 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
                                                    "mean_error_mm_ci_low", "mean_error_mm_ci_high",
                                                    "best_baseline", "ratio_to_best_baseline",
                                                    "ratio_ci_low", "ratio_ci_high",
-                                                   "bootstrap_blocks"}));
+                                                   "model_ratio_to_method", "model_ratio_ci_low",
+                                                   "model_ratio_ci_high", "bootstrap_blocks"}));
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
-    ASSERT_EQ(accuracy[i].size(), 19u);
+    ASSERT_EQ(accuracy[i].size(), 22u);
     EXPECT_EQ(accuracy[i][0], "3x2");
     EXPECT_TRUE(accuracy[i][3] == "all" || accuracy[i][3] == "running") << accuracy[i][3];
     // Every mean has its interval (300 formations 2 s apart: 60 blocks of 10 s), and every
@@ -147,7 +148,7 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
     // robot (its formations are 2 s apart): no interval, no blocks.
     if (accuracy[i][11] == "0") {
       EXPECT_TRUE(accuracy[i][12].empty() && accuracy[i][15].empty()) << i;
-      EXPECT_EQ(accuracy[i][18], "0");
+      EXPECT_EQ(accuracy[i][21], "0");
       continue;
     }
     const double mean = std::stod(accuracy[i][8]);
@@ -160,7 +161,14 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
     if (accuracy[i][4] == accuracy[i][14]) {
       EXPECT_EQ(accuracy[i][15], "1");
     }
-    EXPECT_GE(std::stoi(accuracy[i][18]), 55) << i;
+    // The model over this method, with its interval.
+    const double model_ratio = std::stod(accuracy[i][18]);
+    EXPECT_LE(std::stod(accuracy[i][19]), model_ratio + 1e-9) << i;
+    EXPECT_GE(std::stod(accuracy[i][20]), model_ratio - 1e-9) << i;
+    if (accuracy[i][4] == "model") {
+      EXPECT_EQ(accuracy[i][18], "1");
+    }
+    EXPECT_GE(std::stoi(accuracy[i][21]), 55) << i;
     const double cell = std::stod(accuracy[i][6]);
     EXPECT_GE(cell, 0.0);
     EXPECT_LE(cell, 1.0);
@@ -211,6 +219,19 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   ASSERT_EQ(split.exit_code, 0) << split.err;
   // Two streams of 300 formations, the last 40% of each tested: 2 x 120 formations.
   EXPECT_NE(split.out.find(": 240 test formations"), std::string::npos) << split.out;
+  // The tuning split: the first 60% of each split again, 36% trained on and 24% tested, and the
+  // last 40%, which reports, never read.
+  const auto tune =
+      evaluate(dir,
+               {"holdout", "--train-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
+                "--split", "0.6", "--tune", "--horizons", "2", "--model", "paper"},
+               "tune");
+  ASSERT_EQ(tune.exit_code, 0) << tune.err;
+  EXPECT_NE(tune.out.find(": 144 test formations"), std::string::npos) << tune.out;
+  EXPECT_NE(tune.out.find("transitions from 216 formations"), std::string::npos) << tune.out;
+  EXPECT_NE(tune.out.find("the last 0.4, which reports, is not scored"), std::string::npos)
+      << tune.out;
+  EXPECT_EQ(evaluate(dir, {"holdout", "--tune"}, "tune-without-split").exit_code, 2);
   const auto separate =
       evaluate(dir,
                {"holdout", "--train-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
@@ -256,12 +277,14 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   EXPECT_NE(run.out.find("The model's radii"), std::string::npos) << run.out;
 
   const auto accuracy = csv_rows(read(dir / "motion" / "holdout-accuracy.csv"));
-  ASSERT_EQ(accuracy.size(), 1u + 5u * 6u * 2u);
+  ASSERT_EQ(accuracy.size(), 1u + 5u * 7u * 2u);
   std::size_t all_rows = 0;
-  for (std::size_t i = 1; i < accuracy.size(); i += 6) {
-    // Rows of one horizon and game state: the model, then the five baselines.
-    ASSERT_EQ(accuracy[i].size(), 19u);
+  for (std::size_t i = 1; i < accuracy.size(); i += 7) {
+    // Rows of one horizon and game state: the model, the five baselines, the pooled model.
+    ASSERT_EQ(accuracy[i].size(), 22u);
     EXPECT_EQ(accuracy[i][4], "model");
+    EXPECT_EQ(accuracy[i + 6][4], "pooled model");
+    EXPECT_EQ(accuracy[i + 6][11], accuracy[i][11]);  // scored on the same robots
     if (accuracy[i][3] != "all") continue;
     ++all_rows;
     const double model_mm = std::stod(accuracy[i][8]);
@@ -308,8 +331,9 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
                             "match");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto accuracy = csv_rows(read(dir / "match" / "holdout-accuracy.csv"));
-  // Two sections (1 s, and one step of 0.5 s), 11 rows of game state, 6 methods.
-  ASSERT_EQ(accuracy.size(), 1u + 2u * 11u * 6u);
+  // Two sections (1 s, and one step of 0.5 s), 11 rows of game state, 7 methods (the model,
+  // five baselines, the pooled model).
+  ASSERT_EQ(accuracy.size(), 1u + 2u * 11u * 7u);
   std::map<std::string, std::uint64_t> robots;
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
     if (accuracy[i][4] == "model" && accuracy[i][1] == "1" && accuracy[i][2] == "1") {
@@ -333,7 +357,7 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
   // Intervals where a state spans enough 10 s blocks (90 s of test: 9 blocks at most), none
   // where it spans fewer than 5; the printed ratio table names the best baseline.
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
-    const int blocks = std::stoi(accuracy[i][18]);
+    const int blocks = std::stoi(accuracy[i][21]);
     EXPECT_LE(blocks, 10) << i;
     EXPECT_EQ(accuracy[i][12].empty(), blocks < 5) << accuracy[i][3] << " " << blocks;
     if (accuracy[i][3] == "all") {

@@ -70,13 +70,16 @@ BlockResamples::BlockResamples(std::vector<DataBlock> universe, const BootstrapC
 }
 
 RowIntervals bootstrap_row(const BlockedErrors& row, const BlockResamples& draws,
-                           std::optional<std::size_t> best_baseline) {
+                           std::optional<std::size_t> best_baseline,
+                           const std::vector<std::size_t>& model_over) {
   RowIntervals out;
   out.blocks = row.size();
   if (row.empty() || row.size() < draws.min_blocks() || draws.resamples() == 0) return out;
   const std::size_t methods = row.begin()->second.error_sums.size();
-  if (best_baseline && *best_baseline >= methods) {
-    throw std::invalid_argument("the best baseline is not one of the row's methods");
+  if ((best_baseline && *best_baseline >= methods) ||
+      std::any_of(model_over.begin(), model_over.end(),
+                  [&](std::size_t m) { return m >= methods; })) {
+    throw std::invalid_argument("a ratio's method is not one of the row's methods");
   }
   // The row's blocks' places in the universe.
   std::vector<std::pair<std::size_t, const BlockSums*>> blocks;
@@ -90,6 +93,7 @@ RowIntervals bootstrap_row(const BlockedErrors& row, const BlockResamples& draws
   }
   std::vector<std::vector<double>> means(methods);
   std::vector<std::vector<double>> ratios(best_baseline ? methods : 0);
+  std::vector<std::vector<double>> model_ratios(model_over.size());
   std::vector<double> sums(methods);
   for (std::size_t r = 0; r < draws.resamples(); ++r) {
     std::uint64_t robots = 0;
@@ -101,6 +105,9 @@ RowIntervals bootstrap_row(const BlockedErrors& row, const BlockResamples& draws
       for (std::size_t m = 0; m < methods; ++m) sums[m] += times * block->error_sums[m];
     }
     if (robots == 0) continue;
+    for (std::size_t j = 0; j < model_over.size(); ++j) {
+      if (sums[model_over[j]] > 0.0) model_ratios[j].push_back(sums[0] / sums[model_over[j]]);
+    }
     for (std::size_t m = 0; m < methods; ++m) {
       means[m].push_back(sums[m] / static_cast<double>(robots));
       if (best_baseline && sums[*best_baseline] > 0.0) {
@@ -110,6 +117,9 @@ RowIntervals bootstrap_row(const BlockedErrors& row, const BlockResamples& draws
   }
   out.mean.resize(methods);
   for (std::size_t m = 0; m < methods; ++m) out.mean[m] = interval_of(means[m], draws.level());
+  for (auto& ratios_over : model_ratios) {
+    out.model_ratio.push_back(interval_of(ratios_over, draws.level()));
+  }
   if (best_baseline) {
     out.ratio.resize(methods);
     for (std::size_t m = 0; m < methods; ++m) out.ratio[m] = interval_of(ratios[m], draws.level());

@@ -163,9 +163,9 @@ std::string_view state_row_name(std::size_t row) {
   return row == 0 ? std::string_view("all") : to_string(all_game_phases[row - 1]);
 }
 
-std::optional<std::size_t> best_baseline(const HorizonScore& score) {
+std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t baselines_end) {
   std::optional<std::size_t> best;
-  for (std::size_t m = 1; m < score.methods.size(); ++m) {
+  for (std::size_t m = 1; m < std::min(baselines_end, score.methods.size()); ++m) {
     if (score.methods[m].error.count() == 0) continue;
     if (!best || score.methods[m].error.mean() < score.methods[*best].error.mean()) best = m;
   }
@@ -201,6 +201,13 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   PositionEvaluation result;
   result.methods.push_back(config.model);
   result.methods.insert(result.methods.end(), config.baselines.begin(), config.baselines.end());
+  result.baselines_end = result.methods.size();
+  result.labels.emplace_back("model");
+  for (const ModelKind kind : config.baselines) result.labels.emplace_back(describe(kind).label);
+  if (config.pooled_ablation && config.model == ModelKind::motion) {
+    result.methods.push_back(ModelKind::motion);
+    result.labels.emplace_back("pooled model");
+  }
   ModelSettings settings;
   settings.grid = config.sampler.grid;
   settings.step_s = config.sampler.step_s;
@@ -212,7 +219,9 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   // Training: each method through its own Training, with the sampling it needs (the baselines
   // read every frame's velocities even where the model samples every step).
   std::vector<Method> methods;
-  for (const ModelKind kind : result.methods) {
+  for (std::size_t m = 0; m < result.methods.size(); ++m) {
+    const ModelKind kind = result.methods[m];
+    const bool ablation = m >= result.baselines_end;
     PredictionConfig prediction;
     prediction.sampler = config.sampler;
     if (kind != config.model && sampling_problem(kind, prediction.sampler.sampling)) {
@@ -228,7 +237,10 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     training.sampler = prediction.sampler;
     training.rules = config.rules;
     training.tracked_vision = config.tracked_vision;
-    auto trained = std::make_unique<Training>(training, kind, make_learner(kind, settings));
+    // The ablation learns the model's table again (the same counts) for forecasters of its own.
+    ModelSettings own_settings = settings;
+    own_settings.pooled_motion = ablation;
+    auto trained = std::make_unique<Training>(training, kind, make_learner(kind, own_settings));
     for (const RecordedMatch& stream : train) {
       trained->start_new_stream();
       stream.replay(*trained);
@@ -267,7 +279,8 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     own.field = method.training->sampler().field();
     pipelines.push_back(std::make_unique<PredictionPipeline>(
         method.prediction,
-        method.training->learner().forecaster(own, m == 0 ? config.prior_table : nullptr),
+        method.training->learner().forecaster(
+            own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr),
         [&by_method, &config, m](const PredictedFormation& p) {
           if (m == 0 && config.on_model_prediction) config.on_model_prediction(p);
           StreamPredictions& out = by_method[m];
@@ -295,9 +308,13 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
       for (const auto& [block, sums] : score.blocks) universe.push_back(block);
     }
     const BlockResamples draws(std::move(universe), config.bootstrap);
+    // The model against every other method: RowIntervals::model_ratio[m - 1] is over method m.
+    std::vector<std::size_t> others;
+    for (std::size_t m = 1; m < result.methods.size(); ++m) others.push_back(m);
     for (auto& row : result.rows) {
       for (HorizonScore& score : row) {
-        score.intervals = bootstrap_row(score.blocks, draws, best_baseline(score));
+        score.intervals =
+            bootstrap_row(score.blocks, draws, result.best_baseline(score), others);
       }
     }
   }

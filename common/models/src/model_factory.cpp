@@ -112,7 +112,8 @@ std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& setti
       const MotionConfig config = settings.motion_config();
       if (!config.valid()) throw std::invalid_argument("invalid step or horizon for the motion model");
       return std::make_unique<models::MotionLearner>(TransitionTable(settings.grid),
-                                                     MotionTable(config), settings.recalibration);
+                                                     MotionTable(config), settings.recalibration,
+                                                     settings.pooled_motion);
     }
     case ModelKind::persistence:
     case ModelKind::constant_velocity:

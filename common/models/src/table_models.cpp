@@ -69,12 +69,14 @@ void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction&
 // ---- The motion model -----------------------------------------------------------------------
 
 MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
-                             std::optional<OnlineCalibrationSettings> recalibration)
+                             std::optional<OnlineCalibrationSettings> recalibration,
+                             bool pooled)
     : table_(std::move(table)),
       motion_(std::move(motion)),
       history_(motion_.config()),
       set_plays_(motion_.config().horizons * motion_.config().step_s),
-      recalibration_(recalibration) {}
+      recalibration_(recalibration),
+      pooled_(pooled) {}
 
 void MotionLearner::observe(const MatchMoment& moment) {
   // Followed in every state, so that velocities are known when learning starts again.
@@ -117,6 +119,7 @@ std::unique_ptr<Forecaster> MotionLearner::forecaster(
   settings.step_s = motion_.config().step_s;
   settings.horizons = motion_.config().horizons;
   settings.recalibration = recalibration_;
+  settings.pooled_motion = pooled_;
   auto forecaster = std::make_unique<MotionForecaster>(settings);
   forecaster->set_table(
       std::make_shared<const StoredTable>(StoredTable{table_, metadata, motion_}));
@@ -140,7 +143,7 @@ MotionForecaster::MotionForecaster(const ModelSettings& settings)
       throw std::invalid_argument("the prior table's motion model was trained with another step");
     }
     prior_model_ = std::make_shared<const MotionModel>(*settings_.prior_table, settings_.grid,
-                                                       settings_.prior_field);
+                                                       settings_.prior_field, model_settings());
     model_ = prior_model_;
   }
 }
@@ -157,7 +160,7 @@ void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
       throw std::invalid_argument("the table's motion model was trained with another step");
     }
     model = std::make_shared<const MotionModel>(*table->motion, settings_.grid,
-                                                table->metadata.field, MotionModelSettings{},
+                                                table->metadata.field, model_settings(),
                                                 prior_model_.get());
   }
   model_ = model ? std::move(model) : prior_model_;

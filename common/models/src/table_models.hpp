@@ -34,8 +34,10 @@ class PaperLearner : public Learner {
 class MotionLearner : public Learner {
  public:
   // `recalibration`: what the forecasters it makes recalibrate with.
+  // `pooled`: its forecasters are the pooled ablation (ModelSettings::pooled_motion).
   MotionLearner(TransitionTable table, MotionTable motion,
-                std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{});
+                std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{},
+                bool pooled = false);
   void observe(const MatchMoment& moment) override;
   void learn(const MatchMoment& moment) override;
   void forget_match() override;
@@ -56,6 +58,7 @@ class MotionLearner : public Learner {
   MotionHistory history_;
   SetPlayRecorder set_plays_;
   std::optional<OnlineCalibrationSettings> recalibration_;
+  bool pooled_ = false;
 };
 
 class PaperForecaster : public Forecaster {
@@ -81,6 +84,11 @@ class MotionForecaster : public Forecaster {
   void forget_match() override;
 
  private:
+  MotionModelSettings model_settings() const {
+    MotionModelSettings settings;
+    settings.pooled = settings_.pooled_motion;
+    return settings;
+  }
   ModelSettings settings_;
   std::shared_ptr<const StoredTable> table_;
   // Every team's model (settings.prior_table), built for the first table's field; serves alone

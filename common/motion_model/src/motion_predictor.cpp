@@ -336,6 +336,12 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   const auto phase = static_cast<std::size_t>(MotionFeatures::phase_of_game_context(game));
   const double mean_weight = horizon.mean_weight[phase];  // 0 in HALT: the same drift each time
   const std::int8_t place = place_regressor(context);
+  if (settings_.pooled) {
+    const Estimate& pooled = horizon.root;
+    return Resolved{pooled.mean_x,      pooled.mean_y,      pooled.mean_square,
+                    pooled.coefficients, horizon.z50[phase], horizon.z90[phase],
+                    MotionLevel::all,   place,              halted};
+  }
   for (std::size_t level = halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
        level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {

@@ -95,7 +95,9 @@ class CsvFile {
 // for the chain of --step steps, whose first step may be a horizon of its own too.
 class SampleFile {
  public:
-  explicit SampleFile(const std::string& path) : path_(path) {
+  // `pooled`: the sections score the model's pooled ablation too (PositionEvaluationConfig::
+  // pooled_ablation with the motion model), after the baselines.
+  SampleFile(const std::string& path, bool pooled) : path_(path), pooled_(pooled) {
     if (path_.empty()) return;
     out_.open(path_);
     if (!out_) throw std::runtime_error("cannot write " + path_);
@@ -106,11 +108,12 @@ class SampleFile {
     for (const ModelKind baseline : baseline_kinds) {
       out_ << ',' << describe(baseline).name << "_x_mm," << describe(baseline).name << "_y_mm";
     }
+    if (pooled_) out_ << ",model_pooled_x_mm,model_pooled_y_mm";
     out_ << ",model_radius50_mm,model_radius90_mm,model_stays\n";
   }
   bool enabled() const { return out_.is_open(); }
   void write(const std::string& grid, bool chain, const ev::ScoredSample& sample) {
-    if (sample.forecasts->size() != 1 + baseline_kinds.size()) {
+    if (sample.forecasts->size() != 1 + baseline_kinds.size() + (pooled_ ? 1 : 0)) {
       throw std::logic_error("--write-samples: a section scored other methods than the header's");
     }
     out_ << grid << (chain ? ",1" : ",0");
@@ -153,6 +156,7 @@ class SampleFile {
   }
 
   std::string path_;
+  bool pooled_ = false;
   std::ofstream out_;
 };
 
@@ -252,9 +256,25 @@ std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options,
     if (options.train_logs.empty()) throw app::UsageError("--split needs --train-log");
     for (const std::string& log : options.train_logs) {
       auto [head, tail] = read_log(log).split(options.split);
-      train.push_back(std::move(head));
-      test.push_back(std::move(tail));
+      if (options.tune) {
+        // The inner split (docs/tuning.md): the reported part, `tail`, is left unread.
+        auto [inner_head, inner_tail] = head.split(options.split);
+        train.push_back(std::move(inner_head));
+        test.push_back(std::move(inner_tail));
+      } else {
+        train.push_back(std::move(head));
+        test.push_back(std::move(tail));
+      }
     }
+    if (options.tune) {
+      std::printf("Tuning split: trained on the first %.4g of each log, tested on the next %.4g; "
+                  "the last %.4g, which reports, is not scored.\n",
+                  options.split * options.split, options.split * (1.0 - options.split),
+                  1.0 - options.split);
+    }
+  } else if (options.tune) {
+    throw app::UsageError("--tune is for --split F: it trains on the first F of each log's first F "
+                          "and tests on the rest of that, leaving the reported part unread");
   } else if (!options.train_logs.empty() && options.test_logs.empty()) {
     throw app::UsageError(
         "--train-log needs --test-log (other logs to test on) or --split F (the rest of each "
@@ -365,7 +385,7 @@ const char* quantity_name(bool robot) { return robot ? "robot" : "formation"; }
 
 // How a method is named in the tables: the model as "model", the baselines by their labels.
 std::string method_label(const ev::PositionEvaluation& evaluation, std::size_t m) {
-  return m == 0 ? std::string("model") : std::string(describe(evaluation.methods[m]).label);
+  return evaluation.labels.at(m);
 }
 
 // The rows a report shows: every row when the test streams had a referee, else "all" and
@@ -403,14 +423,22 @@ void print_ratios(const GridReport& report, const EvaluateOptions& options) {
               "intervals from %d resamples of %.0f s blocks (none for a row over fewer than %zu "
               "blocks):\n",
               options.bootstrap, options.bootstrap_block_s, ev::BootstrapConfig{}.min_blocks);
-  std::printf("%9s %5s %-24s %7s %-30s %10s %18s %20s\n", "horizon", "steps", "game state",
+  const ev::PositionEvaluation& first = report.sections.front().evaluation;
+  // The model's first ablation (the pooled model), if the evaluation ran one.
+  const bool has_ablation = first.baselines_end < first.methods.size();
+  const std::size_t ablation = first.baselines_end;
+  std::printf("%9s %5s %-24s %7s %-30s %10s %18s %20s", "horizon", "steps", "game state",
               "blocks", "best baseline", "model/best", "95% interval", "model below best");
+  if (has_ablation) {
+    std::printf(" %26s", ("model below '" + method_label(first, ablation) + "'").c_str());
+  }
+  std::printf("\n");
   for (const Section& section : report.sections) {
     const ev::PositionEvaluation& evaluation = section.evaluation;
     for (const std::size_t row : reported_rows(evaluation)) {
       for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
         const ev::HorizonScore& score = evaluation.rows[row][h];
-        const std::optional<std::size_t> best = ev::best_baseline(score);
+        const std::optional<std::size_t> best = evaluation.best_baseline(score);
         if (score.methods.front().cells.robots == 0 || !best) continue;
         const double ratio = score.methods[0].error.mean() / score.methods[*best].error.mean();
         char range[64] = "";
@@ -422,9 +450,21 @@ void print_ratios(const GridReport& report, const EvaluateOptions& options) {
           std::snprintf(below, sizeof below, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - ratio),
                         100.0 * (1.0 - i.high), 100.0 * (1.0 - i.low));
         }
-        std::printf("%7.2f s %5zu %-24s %7zu %-30s %10.3f %18s %20s\n", score.horizon_s, h + 1,
+        std::printf("%7.2f s %5zu %-24s %7zu %-30s %10.3f %18s %20s", score.horizon_s, h + 1,
                     std::string(ev::state_row_name(row)).c_str(), score.intervals.blocks,
                     method_label(evaluation, *best).c_str(), ratio, range, below);
+        if (has_ablation && ablation < score.methods.size()) {
+          const double over = score.methods[0].error.mean() / score.methods[ablation].error.mean();
+          char text[64];
+          std::snprintf(text, sizeof text, "%.1f%%", 100.0 * (1.0 - over));
+          if (score.intervals.model_ratio.size() >= ablation) {
+            const ev::Interval& i = score.intervals.model_ratio[ablation - 1];
+            std::snprintf(text, sizeof text, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - over),
+                          100.0 * (1.0 - i.high), 100.0 * (1.0 - i.low));
+          }
+          std::printf(" %26s", text);
+        }
+        std::printf("\n");
       }
     }
   }
@@ -549,7 +589,7 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
           } else {
             accuracy << ",,";
           }
-          const std::optional<std::size_t> best = ev::best_baseline(score);
+          const std::optional<std::size_t> best = evaluation.best_baseline(score);
           if (best && a.robots > 0) {
             accuracy << ',' << method_label(evaluation, *best) << ','
                      << e.mean() / score.methods[*best].error.mean();
@@ -558,6 +598,20 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
           }
           if (!intervals.ratio.empty()) {
             accuracy << ',' << intervals.ratio[m].low << ',' << intervals.ratio[m].high;
+          } else {
+            accuracy << ",,";
+          }
+          // The model's mean over this method's (1 on the model's own row).
+          if (a.robots > 0 && e.mean() > 0.0) {
+            accuracy << ',' << score.methods[0].error.mean() / e.mean();
+          } else {
+            accuracy << ',';
+          }
+          if (m == 0 && has_intervals(score)) {
+            accuracy << ",1,1";
+          } else if (m > 0 && intervals.model_ratio.size() >= m) {
+            accuracy << ',' << intervals.model_ratio[m - 1].low << ','
+                     << intervals.model_ratio[m - 1].high;
           } else {
             accuracy << ",,";
           }
@@ -625,14 +679,16 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     throw app::UsageError("--simulation must be auto, paper or match, not '" + options.simulation +
                           "'");
   }
-  SampleFile samples(options.write_samples);  // before any work: a path it cannot write stops it
+  // Before any work: a path it cannot write stops it.
+  SampleFile samples(options.write_samples, options.model.parsed_model() == ModelKind::motion);
   const auto [train, test] = holdout_streams(options, simulation);
   const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
   CsvFile accuracy(options, prefix + "accuracy.csv");
   accuracy << "grid,horizon_steps,horizon_s,game_state,method,state_accuracy,cell_accuracy,"
               "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots,mean_error_mm_ci_low,"
               "mean_error_mm_ci_high,best_baseline,ratio_to_best_baseline,ratio_ci_low,"
-              "ratio_ci_high,bootstrap_blocks\n";
+              "ratio_ci_high,model_ratio_to_method,model_ratio_ci_low,model_ratio_ci_high,"
+              "bootstrap_blocks\n";
   CsvFile calibration(options, prefix + "calibration.csv");
   calibration << "grid,horizon_steps,horizon_s,game_state,method,quantity,brier,ece,predictions,"
                  "within_radius_50,within_radius_90\n";

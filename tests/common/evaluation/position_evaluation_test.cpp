@@ -95,7 +95,13 @@ TEST(PositionEvaluation, BaselineErrorsInMillimetresMatchTheKnownMotion) {
   config.velocity_window_s = 0.1;
   const PositionEvaluation result = evaluate_positions(config, {stream(20.0)}, {stream(10.0)});
   ASSERT_EQ(result.all().size(), 2u);
-  ASSERT_EQ(result.methods.size(), 6u);
+  // The model, five baselines, then the model's pooled ablation.
+  ASSERT_EQ(result.methods.size(), 7u);
+  EXPECT_EQ(result.baselines_end, 6u);
+  EXPECT_EQ(result.methods[6], ModelKind::motion);
+  EXPECT_EQ(result.labels[0], "model");
+  EXPECT_EQ(result.labels[3], "damped constant velocity");
+  EXPECT_EQ(result.labels[6], "pooled model");
   EXPECT_EQ(result.methods[1], ModelKind::persistence);
   EXPECT_EQ(result.methods[2], ModelKind::constant_velocity);
   EXPECT_EQ(result.methods[3], ModelKind::damped_constant_velocity);
@@ -253,14 +259,20 @@ TEST(PositionEvaluation, EveryMeanHasAnIntervalFromBlocksThatAddUpToIt) {
         EXPECT_LT(score.intervals.mean[m].low, score.intervals.mean[m].high);
       }
       // The ratios are to the baseline of lowest mean, which is 1 against itself.
-      const std::optional<std::size_t> best = best_baseline(score);
+      const std::optional<std::size_t> best = result.best_baseline(score);
       ASSERT_TRUE(best.has_value());
       for (std::size_t m = 1; m < score.methods.size(); ++m) {
         EXPECT_LE(score.methods[*best].error.mean(), score.methods[m].error.mean());
       }
+      EXPECT_LT(*best, result.baselines_end);  // never the pooled model
       ASSERT_EQ(score.intervals.ratio.size(), score.methods.size());
       EXPECT_DOUBLE_EQ(score.intervals.ratio[*best].low, 1.0);
       EXPECT_DOUBLE_EQ(score.intervals.ratio[*best].high, 1.0);
+      // The model over every other method, drawn from the same resamples: over the best
+      // baseline it is the same interval as the ratios'.
+      ASSERT_EQ(score.intervals.model_ratio.size(), score.methods.size() - 1);
+      EXPECT_DOUBLE_EQ(score.intervals.model_ratio[*best - 1].low, score.intervals.ratio[0].low);
+      EXPECT_DOUBLE_EQ(score.intervals.model_ratio[*best - 1].high, score.intervals.ratio[0].high);
     }
   }
   // Without the bootstrap nothing is kept or drawn.

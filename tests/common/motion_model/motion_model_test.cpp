@@ -346,6 +346,33 @@ TEST(MotionModel, ARichRowWithFewCountsDefersToTheCoarserRow) {
   EXPECT_EQ(far.level, sf::MotionLevel::velocity);
 }
 
+TEST(MotionModel, ThePooledAblationForecastsEveryRobotFromOneFitOfAllItsInstances) {
+  // Robot 2 in one cell always went 800 mm sideways, robot 7 in another always stopped, as
+  // many times: the keyed model follows each, the pooled one gives both the fit of all of them.
+  const sf::Point here{-2000.0, 1000.0}, there{3000.0, -2500.0}, velocity{1000.0, 0.0};
+  sf::MotionTable table(one_second());
+  table.add_row(key_of(2, here, velocity), row_of(20000, velocity, {0.0, 800.0}));
+  table.add_row(key_of(7, there, velocity), row_of(20000, velocity, {0.0, 0.0}));
+  const sf::MotionModel keyed(table, grid, field);
+  sf::MotionModelSettings settings;
+  settings.pooled = true;
+  const sf::MotionModel pooled(table, grid, field, settings);
+
+  const sf::MotionForecast keyed_2 = keyed.forecast(0, moving_robot(2, here, velocity));
+  const sf::MotionForecast keyed_7 = keyed.forecast(0, moving_robot(7, there, velocity));
+  EXPECT_NEAR(keyed_2.position.y - here.y, 800.0, 20.0);
+  EXPECT_NEAR(keyed_7.position.y - there.y, 0.0, 20.0);
+
+  const sf::MotionForecast pooled_2 = pooled.forecast(0, moving_robot(2, here, velocity));
+  const sf::MotionForecast pooled_7 = pooled.forecast(0, moving_robot(7, there, velocity));
+  EXPECT_EQ(pooled_2.level, sf::MotionLevel::all);
+  // Both moved as the fit of all 40,000 says, whatever their rows: the same displacement.
+  EXPECT_NEAR(pooled_2.position.x - here.x, pooled_7.position.x - there.x, 1e-6);
+  EXPECT_NEAR(pooled_2.position.y - here.y, pooled_7.position.y - there.y, 1e-6);
+  EXPECT_GT(pooled_2.position.y - here.y, 100.0);  // half of them went sideways
+  EXPECT_LT(pooled_2.position.y - here.y, 700.0);
+}
+
 // Every value of two predictions, compared exactly.
 void expect_same_prediction(const sf::Prediction& a, const sf::Prediction& b) {
   ASSERT_EQ(a.steps.size(), b.steps.size());

@@ -79,12 +79,16 @@ class BlockResamples {
 struct RowIntervals {
   std::vector<Interval> mean;   // by method
   std::vector<Interval> ratio;  // by method; empty without a best baseline
-  std::size_t blocks = 0;       // the blocks the row was scored in
+  // The first method's (the model's) mean over each of `model_over`'s methods' (bootstrap_row).
+  std::vector<Interval> model_ratio;
+  std::size_t blocks = 0;  // the blocks the row was scored in
 };
 
-// The intervals of one row: each method's mean error, and its ratio to method `best_baseline`'s
-// (none: no ratios). A resample that drew none of the row's blocks is left out.
+// The intervals of one row: each method's mean error, its ratio to method `best_baseline`'s
+// (none: no ratios), and the first method's ratio to each method of `model_over` (the model's
+// ablations). A resample that drew none of the row's blocks is left out.
 RowIntervals bootstrap_row(const BlockedErrors& row, const BlockResamples& draws,
-                           std::optional<std::size_t> best_baseline);
+                           std::optional<std::size_t> best_baseline,
+                           const std::vector<std::size_t>& model_over = {});
 
 }  // namespace ssl_formation::evaluation

@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -69,7 +70,8 @@ struct HorizonScore {
   Calibration formation;             // the model's probability that every cell is right
   RadiusCoverage radii;              // the model's 50% and 90% radii
   // Each block of data time's summed errors (with PositionEvaluationConfig::bootstrap), and the
-  // intervals of the means and of their ratios to the best baseline drawn from them.
+  // intervals drawn from them: of the means, of their ratios to the best baseline, and of the
+  // model's mean over every other method's (intervals.model_ratio[m - 1] for method m).
   BlockedErrors blocks;
   RowIntervals intervals;
 };
@@ -90,14 +92,18 @@ struct ScoredSample {
   const std::vector<const RobotPrediction*>* forecasts = nullptr;
 };
 
-// The baseline of lowest mean error in `score` (methods after the first, the model), if any
-// baseline was scored.
-std::optional<std::size_t> best_baseline(const HorizonScore& score);
+// The baseline of lowest mean error in `score`: of methods 1 to `baselines_end` - 1 (the first
+// is the model), if any was scored.
+std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t baselines_end);
 
 struct PositionEvaluationConfig {
   SamplerConfig sampler = sampler_config_for(default_model);  // the model's
   ModelKind model = default_model;
   std::vector<ModelKind> baselines{baseline_kinds.begin(), baseline_kinds.end()};
+  // With the motion model, also its pooled ablation ("pooled model", MotionModelSettings::
+  // pooled): the model's regressors fitted once for every robot and state, scored after the
+  // baselines. What the model wins over it is what its keyed rows add.
+  bool pooled_ablation = true;
   int steps = 1;  // horizons 1..steps, step k being k x step_s ahead
   double velocity_window_s = 0.1;
   // How far from t + horizon the truth may be sampled, and from t a baseline's instant.
@@ -122,7 +128,14 @@ struct PositionEvaluationConfig {
 };
 
 struct PositionEvaluation {
-  std::vector<ModelKind> methods;  // the model, then the baselines
+  std::vector<ModelKind> methods;  // the model, then the baselines, then the ablations
+  std::vector<std::string> labels;  // by method: "model", a baseline's label, "pooled model"
+  // Methods 1 to baselines_end - 1 are the baselines; from it on, the model's ablations (no
+  // row's best baseline is one of them).
+  std::size_t baselines_end = 0;
+  std::optional<std::size_t> best_baseline(const HorizonScore& score) const {
+    return evaluation::best_baseline(score, baselines_end);
+  }
   // rows[row][step - 1], row as state_row_of / 0 for every instant.
   std::vector<std::vector<HorizonScore>> rows;
   std::uint64_t train_formations = 0;

@@ -106,6 +106,9 @@ struct ModelSettings {
   std::shared_ptr<const MotionTable> prior_table = nullptr;
   // The field the prior's probabilities are calibrated for until a table brings its own.
   FieldSize prior_field{9000.0, 6000.0};
+  // The motion model as an ablation: one fit for every robot and state instead of its keyed
+  // rows (MotionModelSettings::pooled; ssl-evaluate's "pooled model").
+  bool pooled_motion = false;
   // The motion model's table settings for these (its step and horizons from above).
   MotionConfig motion_config() const;
 };

@@ -49,6 +49,11 @@ struct MotionModelSettings {
   // How many held-out instances of a game phase weigh as much as keeping its rows' mean
   // displacement whole (MotionModel's mean weights).
   double mean_weight_shrinkage = 20.0;
+  // An ablation (ssl-evaluate's "pooled model"): every robot, in every state, takes the
+  // horizon's one fit of the regressors over all the table's instances instead of its keyed
+  // rows; the rules, the standing robots' places and the calibration are the model's. What the
+  // model wins over it is what its keys (robot, cell, velocity class, contexts) add.
+  bool pooled = false;
 };
 
 // What the rules of the game say of where the opponent's robots can go under the referee's

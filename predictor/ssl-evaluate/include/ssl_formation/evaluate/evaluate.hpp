@@ -42,6 +42,9 @@ struct EvaluateOptions {
   std::vector<std::string> train_logs;
   std::vector<std::string> test_logs;
   double split = 0.0;
+  // With split: the inner split that tunes (docs/tuning.md), the first split x split of each log
+  // against the next split x (1 - split); the last 1 - split, which reports, is not read.
+  bool tune = false;
   // holdout: every horizon (seconds) is a model of its own (step = horizon, one step ahead),
   // besides the chains of up to chain_steps steps of --step.
   std::vector<double> horizons{0.2, 0.5, 1.0, 2.0};
