@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
                                   "ends at half time; noise: 0.3 mm, the real logs', or noise=MM)";
     po::options_description general("Options");
     general.add_options()("mode", po::value(&o.mode)->required(),
-                          "paper, holdout, grid-sweep or as-real-log")(
+                          "paper, holdout, grid-sweep, as-real-log or score")(
         "seed", po::value(&o.seed)->default_value(o.seed),
         "seed of the simulated training stream; as-real-log: of the ghosts and the noise")(
         "test-seed", po::value(&o.test_seed)->default_value(o.test_seed),
@@ -77,7 +77,13 @@ int main(int argc, char** argv) {
         "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
         "write-log", po::value(&o.write_log)->value_name("FILE"),
         "as-real-log: the log to write (gzip if it ends in .gz)")(
-        "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str());
+        "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str())(
+        "log", po::value(&o.log)->value_name("FILE"),
+        "score: the recorded match (an official log) the predictions were made for")(
+        "predictions", po::value(&o.predictions)->value_name("CSV"),
+        "score: the predictions, with the columns of ssl-predictor --from-log's CSV (at least "
+        "t_capture, robot_id, horizon_s, predicted_feed_x_mm, predicted_feed_y_mm; radii, cells "
+        "and probabilities if given); --train-log: where the damped baselines are fitted");
     sf::app::add_model_options(general, o.model);
     sf::app::add_learn_during_option(general, o.learn_during);
     sf::app::add_vision_source_option(general, o.network);
@@ -86,10 +92,11 @@ int main(int argc, char** argv) {
     po::positional_options_description positional;
     positional.add("mode", 1);
     if (!sf::app::parse_command_line(argc, argv, general,
-                                     "ssl-evaluate paper|holdout|grid-sweep|as-real-log [options]",
+                                     "ssl-evaluate paper|holdout|grid-sweep|as-real-log|score [options]",
                                      "Evaluates the predictions: the paper's protocol, held-out "
-                                     "accuracy against baselines, and a grid sweep; writes a "
-                                     "recording the way real match logs come, to evaluate on.",
+                                     "accuracy against baselines, and a grid sweep; scores "
+                                     "predictions made elsewhere; writes a recording the way "
+                                     "real match logs come, to evaluate on.",
                                      &positional)) {
       return 0;
     }
@@ -119,7 +126,8 @@ int main(int argc, char** argv) {
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});
     if (o.mode == "grid-sweep") return sf::evaluate::run_holdout(o, o.grids);
     if (o.mode == "as-real-log") return sf::evaluate::run_as_real_log(o);
-    throw sf::app::UsageError("mode must be paper, holdout, grid-sweep or as-real-log, not '" +
-                              o.mode + "'");
+    if (o.mode == "score") return sf::evaluate::run_score(o);
+    throw sf::app::UsageError(
+        "mode must be paper, holdout, grid-sweep, as-real-log or score, not '" + o.mode + "'");
   });
 }

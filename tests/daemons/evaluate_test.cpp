@@ -493,6 +493,102 @@ TEST(Evaluate, HoldoutWritesEveryScoredRobotAsItsTablesCountedIt) {
   EXPECT_FALSE(std::filesystem::exists(dir / "paper.csv"));
 }
 
+// The mean error of `method` at `steps` steps in the row "all" of an accuracy CSV: the last such
+// row (holdout's chains come after its horizons).
+double mean_error_of(const std::vector<std::vector<std::string>>& accuracy,
+                     const std::string& method, const std::string& steps) {
+  double found = -1.0;
+  for (std::size_t i = 1; i < accuracy.size(); ++i) {
+    if (accuracy[i][3] == "all" && accuracy[i][4] == method && accuracy[i][1] == steps) {
+      found = std::stod(accuracy[i][8]);
+    }
+  }
+  return found;
+}
+
+TEST(Evaluate, ScoresThePredictorsOwnCsvAsHoldoutScoresItsChains) {
+  TempDir dir;
+  const auto train_log = dir / "train.log.gz";
+  const auto test_log = dir / "test.log";
+  ASSERT_EQ(testing::write_vision_log(train_log,
+                                      testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
+            "");
+  ASSERT_EQ(testing::write_vision_log(test_log,
+                                      testing::moving_robots_packets(
+                                          {.seed = 2, .seconds = 20.0, .start_time_s = 1000.0})),
+            "");
+  // What a team does: train a table from one log, predict another with the daemon's pipeline.
+  const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
+  const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
+  const auto table = dir / "table.bin";
+  const auto csv = dir / "predictions.csv";
+  const auto trained = testing::run_to_end(
+      trainer_program, {"--from-log", train_log.string(), "--table", table.string()}, dir.path(),
+      "trainer", 60s);
+  ASSERT_EQ(trained.exit_code, 0) << trained.err;
+  const auto predicted = testing::run_to_end(
+      predictor_program,
+      {"--from-log", test_log.string(), "--table", table.string(), "--output", csv.string()},
+      dir.path(), "predictor", 60s);
+  ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
+
+  const auto scored =
+      evaluate(dir,
+               {"score", "--log", test_log.string(), "--predictions", csv.string(), "--train-log",
+                train_log.string(), "--bootstrap-block", "2"},  // 20 s: 10 blocks
+               "score");
+  ASSERT_EQ(scored.exit_code, 0) << scored.err;
+  EXPECT_NE(scored.out.find("Scored predictions from"), std::string::npos) << scored.out;
+  EXPECT_NE(scored.out.find("The predictions against the best baseline"), std::string::npos)
+      << scored.out;
+  EXPECT_NE(scored.out.find("The model's radii"), std::string::npos) << scored.out;
+  const auto holdout = evaluate(dir,
+                                {"holdout", "--train-log", train_log.string(), "--test-log",
+                                 test_log.string(), "--horizons", "0.5", "--chain-steps", "2"},
+                                "holdout");
+  ASSERT_EQ(holdout.exit_code, 0) << holdout.err;
+
+  // The daemon's own predictions, scored, are holdout's chains of 0.5 s steps (the same table,
+  // the same pipeline), within a millimetre; so are the baselines beside them.
+  const auto score_rows = csv_rows(read(dir / "score" / "score-accuracy.csv"));
+  const auto holdout_rows = csv_rows(read(dir / "holdout" / "holdout-accuracy.csv"));
+  for (const std::string steps : {"1", "2"}) {
+    SCOPED_TRACE(steps);
+    const double predictions = mean_error_of(score_rows, "predictions", steps);
+    const double chain = mean_error_of(holdout_rows, "model", steps);
+    ASSERT_GT(predictions, 0.0) << scored.out;
+    ASSERT_GT(chain, 0.0) << holdout.out;
+    EXPECT_NEAR(predictions, chain, 1.0);
+    EXPECT_NEAR(mean_error_of(score_rows, "damped constant acceleration", steps),
+                mean_error_of(holdout_rows, "damped constant acceleration", steps), 1.0);
+  }
+  // Every row has its interval (over 2 s blocks), and the predictions' ratio to the best
+  // baseline.
+  for (std::size_t i = 1; i < score_rows.size(); ++i) {
+    if (score_rows[i][11] == "0") continue;
+    EXPECT_FALSE(score_rows[i][12].empty()) << i;
+    EXPECT_FALSE(score_rows[i][15].empty()) << i;
+  }
+
+  // Predictions of another log score nothing, and say so; a file that is not there, likewise.
+  const auto other_log = dir / "other.log";
+  ASSERT_EQ(testing::write_vision_log(other_log,
+                                      testing::moving_robots_packets(
+                                          {.seed = 3, .seconds = 20.0, .start_time_s = 5000.0})),
+            "");
+  const auto mismatched =
+      evaluate(dir, {"score", "--log", other_log.string(), "--predictions", csv.string()},
+               "mismatched");
+  EXPECT_EQ(mismatched.exit_code, 1);
+  EXPECT_NE(mismatched.err.find("is it that log's CSV?"), std::string::npos) << mismatched.err;
+  const auto missing = evaluate(
+      dir, {"score", "--log", test_log.string(), "--predictions", (dir / "none.csv").string()},
+      "missing");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("none.csv"), std::string::npos) << missing.err;
+  EXPECT_EQ(evaluate(dir, {"score", "--log", test_log.string()}, "no-predictions").exit_code, 2);
+}
+
 TEST(Evaluate, BadModeAndOptionsExitWithTwo) {
   TempDir dir;
   EXPECT_EQ(evaluate(dir, {"guess"}, "bad").exit_code, 2);

@@ -79,6 +79,9 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
     at[m] = &by_method[m].instants[*j];
   }
   const std::array<std::size_t, 2> rows{0, state_row_of(instant.phase)};
+  // A file of predictions without cells and probabilities states nothing to calibrate.
+  const bool states_probabilities =
+      !config.recorded_predictions || config.recorded_predictions->has_cells;
   const double step_s = config.sampler.step_s;
   for (int k = 0; k < config.steps; ++k) {
     const auto h = static_cast<std::size_t>(k);
@@ -138,11 +141,13 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
             if (error <= guess.radius50_mm) ++score.radii.within50;
             if (error <= guess.radius90_mm) ++score.radii.within90;
           }
-          score.robot.add(guess.probability, right);
+          if (states_probabilities) score.robot.add(guess.probability, right);
           every_cell_right = every_cell_right && right;
         }
       }
-      score.formation.add(at[0]->steps[h].formation_probability, every_cell_right);
+      if (states_probabilities) {
+        score.formation.add(at[0]->steps[h].formation_probability, every_cell_right);
+      }
       if (config.bootstrap.enabled()) {
         std::vector<double> errors(at.size());
         const DataBlock block = data_block(stream, instant.time_s, config.bootstrap.block_s);
@@ -202,9 +207,13 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   result.methods.push_back(config.model);
   result.methods.insert(result.methods.end(), config.baselines.begin(), config.baselines.end());
   result.baselines_end = result.methods.size();
-  result.labels.emplace_back("model");
+  const RecordedPredictions* recorded = config.recorded_predictions.get();
+  if (recorded && test.size() != 1) {
+    throw std::invalid_argument("recorded predictions are scored against one test stream");
+  }
+  result.labels.emplace_back(recorded ? "predictions" : "model");
   for (const ModelKind kind : config.baselines) result.labels.emplace_back(describe(kind).label);
-  if (config.pooled_ablation && config.model == ModelKind::motion) {
+  if (config.pooled_ablation && config.model == ModelKind::motion && !recorded) {
     result.methods.push_back(ModelKind::motion);
     result.labels.emplace_back("pooled model");
   }
@@ -281,10 +290,21 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
         method.prediction,
         method.training->learner().forecaster(
             own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr),
-        [&by_method, &config, m](const PredictedFormation& p) {
+        [&by_method, &config, m, recorded](const PredictedFormation& p) {
           if (m == 0 && config.on_model_prediction) config.on_model_prediction(p);
           StreamPredictions& out = by_method[m];
-          out.instants.push_back({p.formation().time_s, p.context.phase, p.prediction.steps});
+          const double time_s = p.formation().time_s;
+          if (m == 0 && recorded) {
+            // The file's predictions at this instant, if it made any (written with every digit:
+            // the very time), in place of the sampling model's.
+            const auto at = nearest_index(recorded->instants, time_s, 1e-6,
+                                          [](const RecordedPrediction& r) { return r.time_s; });
+            out.instants.push_back({time_s, p.context.phase,
+                                    at ? recorded->instants[*at].prediction.steps
+                                       : std::vector<PredictedStep>{}});
+          } else {
+            out.instants.push_back({time_s, p.context.phase, p.prediction.steps});
+          }
           if (m == 0) out.formations.push_back(p.formation());
         }));
   }

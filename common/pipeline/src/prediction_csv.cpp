@@ -1,6 +1,12 @@
 #include "ssl_formation/pipeline/prediction_csv.hpp"
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
 
 namespace ssl_formation {
 
@@ -82,6 +88,152 @@ void append_prediction_csv(const PredictedFormation& predicted, std::string& out
       out += '\n';
     }
   }
+}
+
+}  // namespace ssl_formation
+
+namespace ssl_formation {
+
+namespace {
+
+// The fields of one line, split at commas (no quoting: the predictor writes none, and names
+// with commas are not among its columns).
+std::vector<std::string_view> fields_of(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', begin);
+    fields.push_back(line.substr(begin, comma == std::string_view::npos ? comma : comma - begin));
+    if (comma == std::string_view::npos) return fields;
+    begin = comma + 1;
+  }
+}
+
+template <typename Number>
+bool parse_number(std::string_view text, Number& value) {
+  while (!text.empty() && (text.back() == '\r' || text.back() == ' ')) text.remove_suffix(1);
+  while (!text.empty() && text.front() == ' ') text.remove_prefix(1);
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return error == std::errc() && end == text.data() + text.size();
+}
+
+}  // namespace
+
+Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::string_view source) {
+  const std::string where(source);
+  std::size_t line_end = text.find('\n');
+  std::string_view header = text.substr(0, line_end);
+  if (!header.empty() && header.back() == '\r') header.remove_suffix(1);
+  const std::vector<std::string_view> names = fields_of(header);
+  const auto column = [&](std::string_view name) -> std::optional<std::size_t> {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) return std::nullopt;
+    return static_cast<std::size_t>(it - names.begin());
+  };
+  for (const std::string_view required :
+       {"t_capture", "robot_id", "horizon_s", "predicted_feed_x_mm", "predicted_feed_y_mm"}) {
+    if (!column(required)) {
+      return fail(where + ": the header has no column '" + std::string(required) +
+                  "' (needed: t_capture, robot_id, horizon_s, predicted_feed_x_mm, "
+                  "predicted_feed_y_mm)");
+    }
+  }
+  const std::size_t time = *column("t_capture"), robot = *column("robot_id"),
+                    horizon = *column("horizon_s"), x = *column("predicted_feed_x_mm"),
+                    y = *column("predicted_feed_y_mm");
+  const auto step_column = column("step"), r50 = column("radius_50_mm"),
+             r90 = column("radius_90_mm"), cell_x = column("predicted_cell_x"),
+             cell_y = column("predicted_cell_y"), probability = column("probability"),
+             state = column("state_index"), formation = column("formation_probability");
+  RecordedPredictions out;
+  out.has_radii = r50 && r90;
+  out.has_cells = cell_x && cell_y && probability;
+
+  struct Line {
+    double time_s, horizon_s;
+    int step;  // 0: from the horizon
+    double formation_probability;
+    RobotPrediction robot;
+  };
+  std::vector<Line> lines;
+  std::size_t number = 1;
+  double smallest_horizon = std::numeric_limits<double>::infinity();
+  while (line_end != std::string_view::npos) {
+    const std::size_t begin = line_end + 1;
+    line_end = text.find('\n', begin);
+    std::string_view line = text.substr(begin, line_end == std::string_view::npos ? line_end : line_end - begin);
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty()) continue;
+    const std::vector<std::string_view> fields = fields_of(line);
+    if (fields.size() != names.size()) {
+      return fail(where + ":" + std::to_string(number) + ": " + std::to_string(fields.size()) +
+                  " fields where the header has " + std::to_string(names.size()));
+    }
+    Line l{0.0, 0.0, 0, 0.0, {}};
+    const auto number_at = [&](std::size_t index, auto& value) {
+      return parse_number(fields[index], value);
+    };
+    const auto bad = [&](std::size_t index) {
+      return fail(where + ":" + std::to_string(number) + ": column '" + std::string(names[index]) +
+                  "' holds '" + std::string(fields[index]) + "', not a number");
+    };
+    if (!number_at(time, l.time_s) || !std::isfinite(l.time_s)) return bad(time);
+    if (!number_at(robot, l.robot.robot_id)) return bad(robot);
+    if (!number_at(horizon, l.horizon_s) || !(l.horizon_s > 0.0)) return bad(horizon);
+    if (!number_at(x, l.robot.feed_position.x) || !std::isfinite(l.robot.feed_position.x)) {
+      return bad(x);
+    }
+    if (!number_at(y, l.robot.feed_position.y) || !std::isfinite(l.robot.feed_position.y)) {
+      return bad(y);
+    }
+    if (step_column && (!number_at(*step_column, l.step) || l.step < 1)) return bad(*step_column);
+    if (r50 && !number_at(*r50, l.robot.radius50_mm)) return bad(*r50);
+    if (r90 && !number_at(*r90, l.robot.radius90_mm)) return bad(*r90);
+    if (cell_x && !number_at(*cell_x, l.robot.position.x)) return bad(*cell_x);
+    if (cell_y && !number_at(*cell_y, l.robot.position.y)) return bad(*cell_y);
+    if (probability && !number_at(*probability, l.robot.probability)) return bad(*probability);
+    if (state && !number_at(*state, l.robot.state)) return bad(*state);
+    if (formation && !number_at(*formation, l.formation_probability)) return bad(*formation);
+    smallest_horizon = std::min(smallest_horizon, l.horizon_s);
+    lines.push_back(l);
+  }
+  if (lines.empty()) return fail(where + ": no predictions after the header");
+  out.step_s = smallest_horizon;
+  // Lines of one instant come together, in time order, as the predictor writes them; any order
+  // is taken.
+  std::stable_sort(lines.begin(), lines.end(),
+                   [](const Line& a, const Line& b) { return a.time_s < b.time_s; });
+  for (const Line& l : lines) {
+    const double steps = l.horizon_s / out.step_s;
+    const int step = l.step > 0 ? l.step : static_cast<int>(std::lround(steps));
+    if (std::abs(steps - step) > 1e-6 * std::max(1.0, steps)) {
+      return fail(where + ": horizon " + std::to_string(l.horizon_s) +
+                  " s is not a whole number of steps of the smallest horizon, " +
+                  std::to_string(out.step_s) + " s");
+    }
+    if (out.instants.empty() || out.instants.back().time_s != l.time_s) {
+      out.instants.push_back({l.time_s, {}});
+    }
+    Prediction& prediction = out.instants.back().prediction;
+    if (prediction.steps.size() < static_cast<std::size_t>(step)) {
+      prediction.steps.resize(static_cast<std::size_t>(step));
+    }
+    PredictedStep& predicted = prediction.steps[static_cast<std::size_t>(step - 1)];
+    predicted.formation_probability = l.formation_probability;
+    predicted.robots.push_back(l.robot);
+    out.steps = std::max(out.steps, step);
+  }
+  return out;
+}
+
+Result<RecordedPredictions> read_prediction_csv(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail("cannot read " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return fail("cannot read " + path);
+  return parse_prediction_csv(text.str(), path);
 }
 
 }  // namespace ssl_formation

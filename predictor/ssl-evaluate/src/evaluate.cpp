@@ -417,18 +417,22 @@ std::string interval_text(const ev::HorizonScore& score, std::size_t m, bool boo
   return text;
 }
 
-// The model against the best baseline of each row, with the intervals of their ratio.
+// The model (or the scored predictions) against the best baseline of each row, with the
+// intervals of their ratio.
 void print_ratios(const GridReport& report, const EvaluateOptions& options) {
-  std::printf("The model against the best baseline of each row: mean error over the best's, 95%% "
+  const ev::PositionEvaluation& first = report.sections.front().evaluation;
+  const std::string scored = method_label(first, 0);  // "model" or "predictions"
+  std::printf("The %s against the best baseline of each row: mean error over the best's, 95%% "
               "intervals from %d resamples of %.0f s blocks (none for a row over fewer than %zu "
               "blocks):\n",
-              options.bootstrap, options.bootstrap_block_s, ev::BootstrapConfig{}.min_blocks);
-  const ev::PositionEvaluation& first = report.sections.front().evaluation;
+              scored.c_str(), options.bootstrap, options.bootstrap_block_s,
+              ev::BootstrapConfig{}.min_blocks);
   // The model's first ablation (the pooled model), if the evaluation ran one.
   const bool has_ablation = first.baselines_end < first.methods.size();
   const std::size_t ablation = first.baselines_end;
-  std::printf("%9s %5s %-24s %7s %-30s %10s %18s %20s", "horizon", "steps", "game state",
-              "blocks", "best baseline", "model/best", "95% interval", "model below best");
+  std::printf("%9s %5s %-24s %7s %-30s %12s %18s %20s", "horizon", "steps", "game state",
+              "blocks", "best baseline", (scored + "/best").c_str(), "95% interval",
+              (scored + " below best").c_str());
   if (has_ablation) {
     std::printf(" %26s", ("model below '" + method_label(first, ablation) + "'").c_str());
   }
@@ -450,7 +454,7 @@ void print_ratios(const GridReport& report, const EvaluateOptions& options) {
           std::snprintf(below, sizeof below, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - ratio),
                         100.0 * (1.0 - i.high), 100.0 * (1.0 - i.low));
         }
-        std::printf("%7.2f s %5zu %-24s %7zu %-30s %10.3f %18s %20s", score.horizon_s, h + 1,
+        std::printf("%7.2f s %5zu %-24s %7zu %-30s %12.3f %18s %20s", score.horizon_s, h + 1,
                     std::string(ev::state_row_name(row)).c_str(), score.intervals.blocks,
                     method_label(evaluation, *best).c_str(), ratio, range, below);
         if (has_ablation && ablation < score.methods.size()) {
@@ -470,16 +474,28 @@ void print_ratios(const GridReport& report, const EvaluateOptions& options) {
   }
 }
 
+void print_calibration(const GridReport& report);
+void print_radii(const GridReport& report);
+
 void print_holdout(const GridReport& report, const SamplerConfig& base,
                    const EvaluateOptions& options) {
   const ev::PositionEvaluation& chains = report.sections.back().evaluation;
-  std::printf(
-      "Held-out evaluation, grid %s, %s sampling: %llu test formations; the chains' table: %llu "
-      "transitions from %llu formations\n",
-      report.grid.to_string().c_str(), std::string(to_string(base.sampling)).c_str(),
-      static_cast<unsigned long long>(chains.test_formations),
-      static_cast<unsigned long long>(chains.transitions),
-      static_cast<unsigned long long>(chains.train_formations));
+  if (chains.labels.front() == "predictions") {
+    std::printf("Scored predictions from %s against %s, grid %s: %llu formations of the log; "
+                "the damped baselines fitted on %llu formations\n",
+                options.predictions.c_str(), options.log.c_str(),
+                report.grid.to_string().c_str(),
+                static_cast<unsigned long long>(chains.test_formations),
+                static_cast<unsigned long long>(chains.train_formations));
+  } else {
+    std::printf(
+        "Held-out evaluation, grid %s, %s sampling: %llu test formations; the chains' table: "
+        "%llu transitions from %llu formations\n",
+        report.grid.to_string().c_str(), std::string(to_string(base.sampling)).c_str(),
+        static_cast<unsigned long long>(chains.test_formations),
+        static_cast<unsigned long long>(chains.transitions),
+        static_cast<unsigned long long>(chains.train_formations));
+  }
   if (chains.feed_problem) std::printf("warning: %s\n", chains.feed_problem->c_str());
   if (!chains.test_has_referee) {
     std::printf("The test streams carry no referee messages: every instant counts as running "
@@ -538,7 +554,21 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
     }
   }
   if (intervals) print_ratios(report, options);
-  std::printf("Calibration of the model's probabilities (10 equal bins):\n");
+  print_calibration(report);
+  print_radii(report);
+}
+
+// The calibration of the probabilities stated (none: nothing printed, as for a file of
+// predictions without them).
+void print_calibration(const GridReport& report) {
+  const bool stated = std::any_of(
+      report.sections.begin(), report.sections.end(), [](const Section& section) {
+        return std::any_of(section.evaluation.all().begin(), section.evaluation.all().end(),
+                           [](const ev::HorizonScore& score) { return score.robot.n > 0; });
+      });
+  if (!stated) return;
+  std::printf("Calibration of the %s's probabilities (10 equal bins):\n",
+              method_label(report.sections.front().evaluation, 0).c_str());
   std::printf("%9s %5s %-10s %9s %9s %12s\n", "horizon", "steps", "quantity", "Brier", "ECE",
               "predictions");
   for (const Section& section : report.sections) {
@@ -552,6 +582,10 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
       }
     }
   }
+}
+
+// How often the robots were within the radii stated (none: nothing printed).
+void print_radii(const GridReport& report) {
   if (report.sections.front().evaluation.all().front().radii.robots == 0) return;
   std::printf("The model's radii: how often the robot was within them (aim: 50%% and 90%%):\n");
   std::printf("%9s %5s %12s %12s %12s\n", "horizon", "steps", "within r50", "within r90", "robots");
@@ -636,6 +670,28 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
   }
 }
 
+// The report's three CSV files (accuracy, calibration, reliability) with their headers, in
+// --output-dir with `prefix` ("holdout-", "grid-sweep-", "score-").
+struct ReportFiles {
+  ReportFiles(const EvaluateOptions& options, const std::string& prefix)
+      : accuracy(options, prefix + "accuracy.csv"),
+        calibration(options, prefix + "calibration.csv"),
+        reliability(options, prefix + "reliability.csv") {
+    accuracy << "grid,horizon_steps,horizon_s,game_state,method,state_accuracy,cell_accuracy,"
+                "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots,"
+                "mean_error_mm_ci_low,mean_error_mm_ci_high,best_baseline,ratio_to_best_baseline,"
+                "ratio_ci_low,ratio_ci_high,model_ratio_to_method,model_ratio_ci_low,"
+                "model_ratio_ci_high,bootstrap_blocks\n";
+    calibration << "grid,horizon_steps,horizon_s,game_state,method,quantity,brier,ece,"
+                   "predictions,within_radius_50,within_radius_90\n";
+    reliability << "grid,horizon_steps,horizon_s,game_state,quantity,bin,count,mean_confidence,"
+                   "observed_frequency\n";
+  }
+  CsvFile accuracy;
+  CsvFile calibration;
+  CsvFile reliability;
+};
+
 }  // namespace
 
 std::vector<double> parse_horizons(const std::string& text) {
@@ -683,18 +739,10 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   SampleFile samples(options.write_samples, options.model.parsed_model() == ModelKind::motion);
   const auto [train, test] = holdout_streams(options, simulation);
   const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
-  CsvFile accuracy(options, prefix + "accuracy.csv");
-  accuracy << "grid,horizon_steps,horizon_s,game_state,method,state_accuracy,cell_accuracy,"
-              "mean_cell_distance,mean_error_mm,median_error_mm,p90_error_mm,robots,mean_error_mm_ci_low,"
-              "mean_error_mm_ci_high,best_baseline,ratio_to_best_baseline,ratio_ci_low,"
-              "ratio_ci_high,model_ratio_to_method,model_ratio_ci_low,model_ratio_ci_high,"
-              "bootstrap_blocks\n";
-  CsvFile calibration(options, prefix + "calibration.csv");
-  calibration << "grid,horizon_steps,horizon_s,game_state,method,quantity,brier,ece,predictions,"
-                 "within_radius_50,within_radius_90\n";
-  CsvFile reliability(options, prefix + "reliability.csv");
-  reliability << "grid,horizon_steps,horizon_s,game_state,quantity,bin,count,mean_confidence,"
-                 "observed_frequency\n";
+  ReportFiles files(options, prefix);
+  CsvFile& accuracy = files.accuracy;
+  CsvFile& calibration = files.calibration;
+  CsvFile& reliability = files.reliability;
   const std::shared_ptr<const MotionTable> prior =
       app::loaded_prior_table(options.prior_table, options.model.step());
   std::vector<GridReport> reports;
@@ -743,6 +791,76 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     }
   }
   samples.close();
+  return 0;
+}
+
+// ---- score
+
+int run_score(const EvaluateOptions& options) {
+  if (options.log.empty() || options.predictions.empty()) {
+    throw app::UsageError("score needs --log (the recorded match) and --predictions (a CSV of "
+                          "ssl-predictor --from-log's columns for that log)");
+  }
+  if (!options.test_logs.empty() || options.split > 0.0) {
+    throw app::UsageError("score takes one --log; --test-log and --split are for holdout");
+  }
+  Result<RecordedPredictions> read = read_prediction_csv(options.predictions);
+  if (!read) throw std::runtime_error(read.error().message);
+  auto recorded = std::make_shared<const RecordedPredictions>(std::move(*read));
+  app::ModelOptions model = options.model;
+  SamplerConfig sampler = model.sampler_config();
+  if (recorded->has_cells) {
+    for (const RecordedPrediction& instant : recorded->instants) {
+      for (const PredictedStep& step : instant.prediction.steps) {
+        for (const RobotPrediction& robot : step.robots) {
+          if (robot.position.x < 0 || robot.position.y < 0 ||
+              robot.position.x >= sampler.grid.length() ||
+              robot.position.y >= sampler.grid.width()) {
+            throw app::UsageError("the predictions' cells do not fit --grid " +
+                                  sampler.grid.to_string() +
+                                  ": give the grid the predictor ran with");
+          }
+        }
+      }
+    }
+  }
+  sampler.step_s = recorded->step_s;
+  sampler.sampling = Sampling::frame;
+  Streams test;
+  test.push_back(read_log(options.log));
+  Streams train;
+  for (const std::string& log : options.train_logs) train.push_back(read_log(log));
+  if (train.empty()) {
+    std::printf("No --train-log: the damped baselines' factors are fitted on the scored log "
+                "itself, which favours them.\n");
+    train.push_back(test.front());
+  }
+  ev::PositionEvaluationConfig config;
+  config.sampler = sampler;
+  config.steps = recorded->steps;
+  config.model = ModelKind::persistence;  // samples the instants; the file predicts
+  config.velocity_window_s = options.velocity_window_s;
+  config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
+  config.tracked_vision = options.network.tracked();
+  config.bootstrap.resamples = options.bootstrap;
+  config.bootstrap.block_s = options.bootstrap_block_s;
+  config.recorded_predictions = recorded;
+  GridReport report;
+  report.grid = sampler.grid;
+  report.sections.push_back({sampler.step_s, ev::evaluate_positions(config, train, test)});
+  std::uint64_t scored = 0;
+  for (const ev::HorizonScore& score : report.sections.back().evaluation.all()) {
+    scored += score.methods.front().cells.robots;
+  }
+  if (scored == 0) {
+    throw std::runtime_error("none of the " + std::to_string(recorded->instants.size()) +
+                             " instants of " + options.predictions + " is a frame of " +
+                             options.log + " with its robots there at every horizon: is it that "
+                             "log's CSV?");
+  }
+  ReportFiles files(options, "score-");
+  print_holdout(report, sampler, options);
+  write_holdout_csv(files.accuracy, files.calibration, files.reliability, report);
   return 0;
 }
 

@@ -424,3 +424,101 @@ TEST(PredictionCsv, TheMotionModelsLinesOfThePipelineCarryItsPositionsAndRadii) 
 
 }  // namespace
 }  // namespace ssl_formation
+
+namespace ssl_formation {
+namespace {
+
+TEST(PredictionCsvReader, ReadsBackWhatThePredictorWrites) {
+  HandBuilt built(AttackDirection::negative_x, 0.5);
+  built.context.model = ModelKind::motion;
+  double x = -4321.123456789;
+  for (PredictedStep& step : built.prediction.steps) {
+    for (RobotPrediction& robot : step.robots) {
+      robot.feed_position = Point{x, 1.0 / 3.0 - x};
+      robot.radius50_mm = 1150.0;
+      robot.radius90_mm = 2500.0 + x / 10.0;
+      x += 1234.5678;
+    }
+  }
+  std::string text(prediction_csv_header());
+  append_prediction_csv(built.predicted(), text);
+  const Result<RecordedPredictions> read = parse_prediction_csv(text, "p.csv");
+  ASSERT_TRUE(read) << read.error().message;
+  ASSERT_EQ(read->instants.size(), 1u);
+  EXPECT_EQ(read->instants[0].time_s, built.sample.formation.time_s);
+  EXPECT_DOUBLE_EQ(read->step_s, 0.5);
+  EXPECT_EQ(read->steps, static_cast<int>(built.prediction.steps.size()));
+  EXPECT_TRUE(read->has_radii);
+  EXPECT_TRUE(read->has_cells);
+  const Prediction& back = read->instants[0].prediction;
+  ASSERT_EQ(back.steps.size(), built.prediction.steps.size());
+  for (std::size_t k = 0; k < back.steps.size(); ++k) {
+    const PredictedStep& want = built.prediction.steps[k];
+    ASSERT_EQ(back.steps[k].robots.size(), want.robots.size());
+    EXPECT_EQ(back.steps[k].formation_probability, want.formation_probability);
+    for (std::size_t r = 0; r < want.robots.size(); ++r) {
+      const RobotPrediction& a = back.steps[k].robots[r];
+      const RobotPrediction& b = want.robots[r];
+      EXPECT_EQ(a.robot_id, b.robot_id);
+      // Read as written: the message's float, to the last digit.
+      EXPECT_EQ(static_cast<float>(a.feed_position.x), static_cast<float>(b.feed_position.x));
+      EXPECT_EQ(static_cast<float>(a.feed_position.y), static_cast<float>(b.feed_position.y));
+      EXPECT_EQ(static_cast<float>(a.radius90_mm), static_cast<float>(b.radius90_mm));
+      EXPECT_NEAR(a.feed_position.x, b.feed_position.x, 1e-3);
+      EXPECT_EQ(a.position, b.position);
+      EXPECT_EQ(a.state, b.state);
+      EXPECT_EQ(a.probability, b.probability);
+    }
+  }
+}
+
+TEST(PredictionCsvReader, TakesTheKeyColumnsInAnyOrderAndGroupsByInstantAndStep) {
+  // A team's own file: five columns, shuffled, lines out of order, no step column.
+  const std::string text =
+      "robot_id,predicted_feed_y_mm,horizon_s,t_capture,predicted_feed_x_mm\r\n"
+      "3,20,1.0,2.5,10\r\n"
+      "3,21,0.5,2.5,11\n"
+      "4,30,0.5,1.25,-5\n"
+      "\n"
+      "5,31,0.5,2.5,-6\n";
+  const Result<RecordedPredictions> read = parse_prediction_csv(text, "team.csv");
+  ASSERT_TRUE(read) << read.error().message;
+  EXPECT_DOUBLE_EQ(read->step_s, 0.5);
+  EXPECT_EQ(read->steps, 2);
+  EXPECT_FALSE(read->has_radii);
+  EXPECT_FALSE(read->has_cells);
+  ASSERT_EQ(read->instants.size(), 2u);
+  EXPECT_EQ(read->instants[0].time_s, 1.25);
+  ASSERT_EQ(read->instants[0].prediction.steps.size(), 1u);
+  EXPECT_EQ(read->instants[0].prediction.steps[0].robots[0].robot_id, 4u);
+  const Prediction& later = read->instants[1].prediction;
+  ASSERT_EQ(later.steps.size(), 2u);
+  ASSERT_EQ(later.steps[0].robots.size(), 2u);  // robots 3 and 5 at 0.5 s
+  EXPECT_EQ(later.steps[0].robots[0].feed_position.x, 11.0);
+  ASSERT_EQ(later.steps[1].robots.size(), 1u);  // robot 3 at 1 s
+  EXPECT_EQ(later.steps[1].robots[0].feed_position.y, 20.0);
+}
+
+TEST(PredictionCsvReader, BadInputNamesTheFileTheLineAndTheColumn) {
+  const auto error = [](const std::string& text) {
+    const Result<RecordedPredictions> read = parse_prediction_csv(text, "p.csv");
+    return read ? std::string("no error") : read.error().message;
+  };
+  EXPECT_NE(error("t_capture,robot_id,horizon_s,predicted_feed_x_mm\n1,2,0.5,3\n")
+                .find("no column 'predicted_feed_y_mm'"),
+            std::string::npos);
+  const std::string header = "t_capture,robot_id,horizon_s,predicted_feed_x_mm,predicted_feed_y_mm\n";
+  EXPECT_NE(error(header + "1,2,0.5,3,4\n1,2,0.5,x,4\n").find("p.csv:3: column 'predicted_feed_x_mm' holds 'x'"),
+            std::string::npos)
+      << error(header + "1,2,0.5,3,4\n1,2,0.5,x,4\n");
+  EXPECT_NE(error(header + "1,2,0.5,3\n").find("p.csv:2: 4 fields where the header has 5"),
+            std::string::npos);
+  EXPECT_NE(error(header + "1,2,0.5,3,4\n1,2,0.75,3,4\n").find("not a whole number of steps"),
+            std::string::npos);
+  EXPECT_NE(error(header + "1,2,0,3,4\n").find("column 'horizon_s'"), std::string::npos);
+  EXPECT_NE(error(header).find("no predictions"), std::string::npos);
+  EXPECT_FALSE(read_prediction_csv("/nonexistent/p.csv"));
+}
+
+}  // namespace
+}  // namespace ssl_formation

@@ -23,6 +23,7 @@
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/match_event.hpp"
 #include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/pipeline/prediction_csv.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 
@@ -125,6 +126,12 @@ struct PositionEvaluationConfig {
   std::function<void(const ScoredSample&)> on_sample;
   // The intervals of every mean error and ratio (ssl-evaluate --bootstrap): resamples 0 for none.
   BootstrapConfig bootstrap;
+  // Predictions made elsewhere (ssl-evaluate score: ssl-predictor --from-log's CSV, or a team's
+  // own) scored in the model's place, labelled "predictions": at each instant of the single test
+  // stream the file predicted, its robots are scored against where they were and beside the
+  // baselines. `model` then only samples the instants (persistence does, learning nothing), and
+  // the sampler's step and `steps` must be the file's.
+  std::shared_ptr<const RecordedPredictions> recorded_predictions;
 };
 
 struct PositionEvaluation {

@@ -30,7 +30,9 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "ssl_formation/base/result.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 
 namespace ssl_formation {
@@ -40,5 +42,27 @@ std::string_view prediction_csv_header();
 
 // Appends the lines of one prediction (each with its newline) to `out`.
 void append_prediction_csv(const PredictedFormation& predicted, std::string& out);
+
+// One instant's predictions read back from such a file (or any file with its key columns): the
+// instant on the data clock and every step's robots, in the order of their steps.
+struct RecordedPrediction {
+  double time_s = 0.0;
+  Prediction prediction;  // steps[k] is step k + 1; a robot's fields the file lacks stay default
+};
+struct RecordedPredictions {
+  std::vector<RecordedPrediction> instants;  // in time order
+  double step_s = 0.0;                       // horizon_s of step 1
+  int steps = 0;                             // the most steps of any instant
+  bool has_radii = false;                    // radius_50_mm and radius_90_mm were given
+  bool has_cells = false;                    // predicted_cell_x/_y, probability were given
+};
+
+// Reads predictions from CSV text with a header naming its columns, in any order: at least
+// t_capture, robot_id, horizon_s, predicted_feed_x_mm and predicted_feed_y_mm; optionally step
+// (else horizon_s over the smallest horizon), radius_50_mm, radius_90_mm, predicted_cell_x,
+// predicted_cell_y, probability, state_index and formation_probability. Every horizon must be a
+// whole number of the smallest. The error names `source`, the line and the column.
+Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::string_view source);
+Result<RecordedPredictions> read_prediction_csv(const std::string& path);
 
 }  // namespace ssl_formation

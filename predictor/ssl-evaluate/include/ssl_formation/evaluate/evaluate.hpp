@@ -8,6 +8,8 @@
 //   grid-sweep  the holdout report for several grids, with table memory and prediction time
 //   as-real-log a clean recording rewritten as real match logs come (half-field packets with
 //               camera id 0, no geometry) with the mess chosen, to evaluate on
+//   score       predictions made elsewhere (ssl-predictor --from-log's CSV, or a team's own)
+//               scored against where the robots were, beside the baselines, by game state
 
 #include <cstdint>
 #include <string>
@@ -66,6 +68,9 @@ struct EvaluateOptions {
   std::string from_log;
   std::string write_log;
   std::string mess = "none";
+  // score: the recorded match and the predictions made for it (ssl-predictor --from-log's CSV).
+  std::string log;
+  std::string predictions;
 };
 
 // "0.2,0.5,1,2" -> {0.2, 0.5, 1, 2}; throws app::UsageError naming --horizons.
@@ -75,5 +80,6 @@ std::vector<double> parse_horizons(const std::string& text);
 int run_paper(const EvaluateOptions& options);
 int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& grids);
 int run_as_real_log(const EvaluateOptions& options);
+int run_score(const EvaluateOptions& options);
 
 }  // namespace ssl_formation::evaluate
