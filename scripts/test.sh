@@ -12,7 +12,7 @@ build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 # The field view's browser test drives Debian's Chromium with playwright-core from npm (it
 # downloads no browser). It needs node 20 or newer; where there is none, that test is skipped
 # and says why.
-SSLF_PACKAGES+=(chromium fonts-dejavu-core)
+SSLF_PACKAGES+=(chromium fonts-dejavu-core python3 python3-protobuf)
 sslf_install_packages
 if command -v node >/dev/null && command -v npm >/dev/null &&
   [ "$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)" -ge 20 ]; then
