@@ -30,6 +30,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 
 CSV_HEADER = [
     "t_capture", "frame", "robot_id", "step", "horizon_s", "state_index", "predicted_cell_x",
@@ -253,8 +254,16 @@ def main():
             continue
         message = schema.FormationPrediction()
         try:
-            message.ParseFromString(datagram)
+            with warnings.catch_warnings():
+                # Some protobuf versions warn, rather than fail, on bytes that are no message.
+                warnings.simplefilter("ignore")
+                message.ParseFromString(datagram)
         except Exception:  # a datagram that is not a FormationPrediction: counted, skipped
+            undecodable += 1
+            continue
+        if not message.IsInitialized():
+            # Python's parser does not check proto2's required fields: bytes that happen to
+            # parse (even none at all) lack them.
             undecodable += 1
             continue
         received += 1

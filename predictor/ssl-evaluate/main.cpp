@@ -57,11 +57,11 @@ int main(int argc, char** argv) {
         "instant and horizon (where it was, where it went, every method's forecast; about 170 "
         "bytes a line, 1.4 million lines for the default simulated match)")(
         "bootstrap", po::value(&o.bootstrap)->default_value(o.bootstrap)->value_name("N"),
-        "holdout, grid-sweep: a 95% interval for every mean error and every ratio to the best "
+        "holdout, grid-sweep, score: a 95% interval for every mean error and every ratio to the best "
         "baseline, from N resamples of a block bootstrap over blocks of data time (a fixed seed; "
         "0: no intervals)")(
         "bootstrap-block", po::value(&o.bootstrap_block_s)->default_value(o.bootstrap_block_s),
-        "holdout, grid-sweep: the bootstrap's blocks, seconds of data time (neighbouring frames "
+        "holdout, grid-sweep, score: the bootstrap's blocks, seconds of data time (neighbouring frames "
         "are nearly the same: a block holds what is independent of the next)")(
         "simulation", po::value(&o.simulation)->default_value(o.simulation),
         "holdout without logs: match (a simulated match with its referee, --train-seconds of "
@@ -78,6 +78,11 @@ int main(int argc, char** argv) {
         "write-log", po::value(&o.write_log)->value_name("FILE"),
         "as-real-log: the log to write (gzip if it ends in .gz)")(
         "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str())(
+        "report", po::value(&o.report)->value_name("FILE.html"),
+        "holdout, score: also write one self-contained page to open: the table by game state "
+        "with intervals, error against horizon, reliability diagrams, the radii's coverage, the "
+        "error per robot id and a field heat map of where the model wins and loses (holdout: "
+        "the chains of --step, the predictor's own figures)")(
         "log", po::value(&o.log)->value_name("FILE"),
         "score: the recorded match (an official log) the predictions were made for")(
         "predictions", po::value(&o.predictions)->value_name("CSV"),
@@ -122,6 +127,13 @@ int main(int argc, char** argv) {
     if (!(o.bootstrap_block_s > 0.0)) {
       throw sf::app::UsageError("--bootstrap-block must be a positive number of seconds");
     }
+    if (o.tune && o.mode != "holdout") {
+      throw sf::app::UsageError("--tune is for holdout --split F, not " + o.mode);
+    }
+    if (!o.report.empty() && o.mode != "holdout" && o.mode != "score") {
+      throw sf::app::UsageError("--report is for holdout and score, not " + o.mode);
+    }
+    for (int i = 0; i < argc; ++i) o.command_line += (i ? " " : "") + std::string(argv[i]);
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
     if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});
     if (o.mode == "grid-sweep") return sf::evaluate::run_holdout(o, o.grids);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -232,6 +233,13 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   EXPECT_NE(tune.out.find("the last 0.4, which reports, is not scored"), std::string::npos)
       << tune.out;
   EXPECT_EQ(evaluate(dir, {"holdout", "--tune"}, "tune-without-split").exit_code, 2);
+  // The tuning split never reads reported data: other logs to test on are refused.
+  EXPECT_EQ(evaluate(dir,
+                     {"holdout", "--train-log", (dir / "a.log").string(), "--split", "0.6",
+                      "--tune", "--test-log", (dir / "c.log").string(), "--model", "paper"},
+                     "tune-with-test-log")
+                .exit_code,
+            2);
   const auto separate =
       evaluate(dir,
                {"holdout", "--train-log", (dir / "a.log").string(), (dir / "b.log.gz").string(),
@@ -569,6 +577,51 @@ TEST(Evaluate, ScoresThePredictorsOwnCsvAsHoldoutScoresItsChains) {
     EXPECT_FALSE(score_rows[i][12].empty()) << i;
     EXPECT_FALSE(score_rows[i][15].empty()) << i;
   }
+
+  EXPECT_NE(scored.out.find("1200 of the file's 1200 instants are frames of the log"),
+            std::string::npos)
+      << scored.out;
+
+  // A team's own file, with the five key columns only and half its instants: scored in mm on what
+  // it has, without the cells and states it does not state.
+  {
+    const std::vector<std::string> lines = [&] {
+      std::vector<std::string> out;
+      std::istringstream in(read(csv));
+      for (std::string line; std::getline(in, line);) out.push_back(line);
+      return out;
+    }();
+    std::ofstream team(dir / "team.csv");
+    team << "t_capture,robot_id,horizon_s,predicted_feed_x_mm,predicted_feed_y_mm\n";
+    std::set<std::string> instants;
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      std::vector<std::string> f;
+      std::stringstream fields(lines[i]);
+      for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
+      instants.insert(f[0]);
+      if (instants.size() % 2 == 0) continue;  // every other instant left out
+      team << f[0] << ',' << f[2] << ',' << f[4] << ',' << f[18] << ',' << f[19] << '\n';
+    }
+  }
+  const auto team = evaluate(dir,
+                             {"score", "--log", test_log.string(), "--predictions",
+                              (dir / "team.csv").string(), "--train-log", train_log.string()},
+                             "team");
+  ASSERT_EQ(team.exit_code, 0) << team.err;
+  EXPECT_NE(team.out.find("600 of the file's 600 instants are frames of the log"),
+            std::string::npos)
+      << team.out;
+  EXPECT_EQ(team.out.find("Calibration of"), std::string::npos) << team.out;
+  const auto team_rows = csv_rows(read(dir / "team" / "score-accuracy.csv"));
+  for (std::size_t i = 1; i < team_rows.size(); ++i) {
+    if (team_rows[i][4] != "predictions") continue;
+    EXPECT_TRUE(team_rows[i][5].empty() && team_rows[i][6].empty() && team_rows[i][7].empty())
+        << i;
+    EXPECT_GT(std::stod(team_rows[i][8]), 0.0) << i;
+  }
+  // Half the instants, the same predictions on them: about the whole file's error.
+  EXPECT_NEAR(mean_error_of(team_rows, "predictions", "1"),
+              mean_error_of(score_rows, "predictions", "1"), 15.0);
 
   // Predictions of another log score nothing, and say so; a file that is not there, likewise.
   const auto other_log = dir / "other.log";

@@ -5,12 +5,17 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <boost/asio/io_context.hpp>
 #include <fstream>
 #include <set>
+#include <span>
+#include <thread>
 
 #include "child_process.hpp"
 #include "moving_robots.hpp"
+#include "formation_prediction.pb.h"
 #include "prediction_rows.hpp"
+#include "ssl_formation/net/multicast.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -158,6 +163,36 @@ TEST(PredictionClient, DecodesEveryMessageOfTheLivePredictorAndWritesTheFromLogC
 
   daemon.signal(SIGTERM);
   EXPECT_EQ(daemon.wait(5s), 0) << daemon.stderr_text();
+}
+
+TEST(PredictionClient, SkipsWhatIsNotAPredictionAndStopsOnSigterm) {
+  TempDir dir;
+  const std::string group = new_group();
+  ChildProcess client(python, {client_script.string(), "--group", group, "--count", "1"},
+                      dir.path(), "client");
+  ASSERT_TRUE(client.wait_for_stderr("listening on " + group, 20s)) << client.stderr_text();
+  // Text, nothing, a truncated message: none is a prediction, and none uses up --count 1.
+  boost::asio::io_context io;
+  net::MulticastSender sender(io, net::parse_multicast_endpoint(group).value());
+  sender.open();
+  proto::FormationPrediction whole;
+  whole.set_frame_number(7);
+  whole.set_t_capture(1.5);
+  whole.mutable_centroid_cell()->set_x(1);
+  whole.mutable_centroid_cell()->set_y(0);
+  const std::string bytes = whole.SerializeAsString();
+  const std::string hello = "hello world";
+  for (const std::string& junk : {hello, std::string(), bytes.substr(0, 3)}) {
+    ASSERT_TRUE(sender.send(std::as_bytes(std::span(junk.data(), junk.size()))));
+  }
+  std::this_thread::sleep_for(1s);
+  EXPECT_TRUE(client.running()) << client.stderr_text();
+  client.signal(SIGTERM);
+  ASSERT_EQ(client.wait(10s), 0) << client.stderr_text();
+  EXPECT_NE(client.stderr_text().find("0 predictions received, 3 datagrams that did not decode"),
+            std::string::npos)
+      << client.stderr_text();
+  EXPECT_EQ(client.stdout_text(), "");
 }
 
 TEST(PredictionClient, SaysWhatIsWrongWithItsOptionsAndStopsWhenTold) {

@@ -34,38 +34,6 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 const std::filesystem::path web_test_dir = SSLF_WEB_TEST_DIR;
 const std::filesystem::path screenshot_dir = SSLF_WEB_SCREENSHOT_DIR;
 
-std::optional<std::filesystem::path> find_program(const std::string& name) {
-  const char* path = std::getenv("PATH");
-  std::string dirs = path ? path : "/usr/bin:/bin";
-  std::size_t start = 0;
-  while (start <= dirs.size()) {
-    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
-    const std::filesystem::path candidate =
-        std::filesystem::path(dirs.substr(start, end - start)) / name;
-    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
-    start = end + 1;
-  }
-  return std::nullopt;
-}
-
-// Why the browser test cannot run here, or nothing.
-std::optional<std::string> missing_browser_tools(std::filesystem::path& chromium,
-                                                 std::filesystem::path& node) {
-  chromium = std::getenv("SSLF_CHROMIUM") ? std::getenv("SSLF_CHROMIUM") : "/usr/bin/chromium";
-  if (::access(chromium.c_str(), X_OK) != 0) {
-    return chromium.string() +
-           " is missing: apt-get install chromium (Debian) to run the browser test";
-  }
-  const auto found = find_program("node");
-  if (!found) return "node is missing: apt-get install nodejs (node 18 or newer)";
-  node = *found;
-  if (!std::filesystem::exists(web_test_dir / "node_modules" / "playwright-core" /
-                               "package.json")) {
-    return "playwright-core is missing: run npm ci --prefix " + web_test_dir.string();
-  }
-  return std::nullopt;
-}
-
 void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const std::string& group,
                     const std::string& name) {
   out.reset();
@@ -95,7 +63,9 @@ void start_predictor(std::optional<ChildProcess>& out, const TempDir& dir,
 TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   std::filesystem::path chromium;
   std::filesystem::path node;
-  if (const auto reason = missing_browser_tools(chromium, node)) GTEST_SKIP() << *reason;
+  if (const auto reason = web_testing::missing_browser_tools(chromium, node, web_test_dir)) {
+    GTEST_SKIP() << *reason;
+  }
 
   TempDir dir;
   const auto table_path = dir / "table.bin";

@@ -8,8 +8,12 @@
 #include <unistd.h>
 
 #include <boost/asio/io_context.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -25,6 +29,41 @@
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::web_testing {
+
+// `name` on the PATH, if it is there.
+inline std::optional<std::filesystem::path> find_program(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/bin:/bin";
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+    const std::filesystem::path candidate =
+        std::filesystem::path(dirs.substr(start, end - start)) / name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+    start = end + 1;
+  }
+  return std::nullopt;
+}
+
+// Why the browser tests cannot run here (Chromium, node or playwright-core in `web_test_dir`
+// missing), or nothing; sets `chromium` and `node`.
+inline std::optional<std::string> missing_browser_tools(std::filesystem::path& chromium,
+                                                        std::filesystem::path& node,
+                                                        const std::filesystem::path& web_test_dir) {
+  chromium = std::getenv("SSLF_CHROMIUM") ? std::getenv("SSLF_CHROMIUM") : "/usr/bin/chromium";
+  if (::access(chromium.c_str(), X_OK) != 0) {
+    return chromium.string() +
+           " is missing: apt-get install chromium (Debian) to run the browser test";
+  }
+  const auto found = find_program("node");
+  if (!found) return "node is missing: apt-get install nodejs (node 18 or newer)";
+  node = *found;
+  if (!std::filesystem::exists(web_test_dir / "node_modules" / "playwright-core" /
+                               "package.json")) {
+    return "playwright-core is missing: run npm ci --prefix " + web_test_dir.string();
+  }
+  return std::nullopt;
+}
 
 // A TCP port nothing listens on right now (the kernel picks it on 127.0.0.1).
 inline std::uint16_t free_tcp_port() {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -20,10 +21,12 @@ double quantile(std::vector<double>& values, double q) {
   return values[below] + (rank - static_cast<double>(below)) * (values[above] - values[below]);
 }
 
-Interval interval_of(std::vector<double>& values, double level) {
-  if (values.empty()) return {};
+// None when no resample counted (every one drew none of the row's blocks, or a zero
+// denominator): an interval of zeros would look like a real one.
+std::optional<Interval> interval_of(std::vector<double>& values, double level) {
+  if (values.empty()) return std::nullopt;
   const double tail = (1.0 - level) / 2.0;
-  return {quantile(values, tail), quantile(values, 1.0 - tail)};
+  return Interval{quantile(values, tail), quantile(values, 1.0 - tail)};
 }
 
 }  // namespace
@@ -53,8 +56,8 @@ BlockResamples::BlockResamples(std::vector<DataBlock> universe, const BootstrapC
   std::sort(universe_.begin(), universe_.end());
   universe_.erase(std::unique(universe_.begin(), universe_.end()), universe_.end());
   if (universe_.empty()) return;
-  // mt19937_64 and a plain modulo-free draw: uniform_int_distribution's algorithm is the
-  // library's, and the intervals should not move between standard libraries.
+  // mt19937_64 and a draw by rejection then modulo, without bias: uniform_int_distribution's
+  // algorithm is the library's, and the intervals should not move between standard libraries.
   std::mt19937_64 random(config.seed);
   const std::uint64_t n = universe_.size();
   const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
@@ -115,15 +118,20 @@ RowIntervals bootstrap_row(const BlockedErrors& row, const BlockResamples& draws
       }
     }
   }
-  out.mean.resize(methods);
-  for (std::size_t m = 0; m < methods; ++m) out.mean[m] = interval_of(means[m], draws.level());
-  for (auto& ratios_over : model_ratios) {
-    out.model_ratio.push_back(interval_of(ratios_over, draws.level()));
-  }
-  if (best_baseline) {
-    out.ratio.resize(methods);
-    for (std::size_t m = 0; m < methods; ++m) out.ratio[m] = interval_of(ratios[m], draws.level());
-  }
+  // Each set whole or not at all: a reader takes an interval for every method or none.
+  const auto all_of = [&](std::vector<std::vector<double>>& sets) {
+    std::vector<Interval> intervals;
+    for (auto& values : sets) {
+      const std::optional<Interval> interval = interval_of(values, draws.level());
+      if (!interval) return std::vector<Interval>{};
+      intervals.push_back(*interval);
+    }
+    return intervals;
+  };
+  out.mean = all_of(means);
+  if (out.mean.empty()) return out;
+  out.ratio = all_of(ratios);
+  out.model_ratio = all_of(model_ratios);
   return out;
 }
 

@@ -79,9 +79,14 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
     at[m] = &by_method[m].instants[*j];
   }
   const std::array<std::size_t, 2> rows{0, state_row_of(instant.phase)};
-  // A file of predictions without cells and probabilities states nothing to calibrate.
-  const bool states_probabilities =
-      !config.recorded_predictions || config.recorded_predictions->has_cells;
+  // What a file of predictions does not state is not scored for it (method 0): its cells, its
+  // states, and the probabilities that need them.
+  const RecordedPredictions* file = config.recorded_predictions.get();
+  const bool scores_cells = !file || file->has_cells;
+  const bool scores_states = !file || file->has_states;
+  const bool scores_robot_probability = !file || (file->has_cells && file->has_probabilities);
+  const bool scores_formation_probability =
+      !file || (file->has_cells && file->has_formation_probability);
   const double step_s = config.sampler.step_s;
   for (int k = 0; k < config.steps; ++k) {
     const auto h = static_cast<std::size_t>(k);
@@ -129,23 +134,27 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
           const double error = distance(guess.feed_position, s.actual->feed_position);
           method.error.add(error);
           ++method.cells.robots;
-          if (guess.state == s.actual->state) ++method.cells.exact_states;
+          if ((m != 0 || scores_states) && guess.state == s.actual->state) {
+            ++method.cells.exact_states;
+          }
           const bool right = guess.position == s.actual->cell;
-          if (right) ++method.cells.exact_cells;
-          method.cells.cell_distance += static_cast<std::uint64_t>(
-              std::abs(guess.position.x - s.actual->cell.x) +
-              std::abs(guess.position.y - s.actual->cell.y));
+          if ((m != 0 || scores_cells) && right) ++method.cells.exact_cells;
+          if (m != 0 || scores_cells) {
+            method.cells.cell_distance += static_cast<std::uint64_t>(
+                std::abs(guess.position.x - s.actual->cell.x) +
+                std::abs(guess.position.y - s.actual->cell.y));
+          }
           if (m != 0) continue;
           if (guess.radius90_mm > 0.0) {
             ++score.radii.robots;
             if (error <= guess.radius50_mm) ++score.radii.within50;
             if (error <= guess.radius90_mm) ++score.radii.within90;
           }
-          if (states_probabilities) score.robot.add(guess.probability, right);
+          if (scores_robot_probability) score.robot.add(guess.probability, right);
           every_cell_right = every_cell_right && right;
         }
       }
-      if (states_probabilities) {
+      if (scores_formation_probability) {
         score.formation.add(at[0]->steps[h].formation_probability, every_cell_right);
       }
       if (config.bootstrap.enabled()) {
@@ -212,6 +221,8 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     throw std::invalid_argument("recorded predictions are scored against one test stream");
   }
   result.labels.emplace_back(recorded ? "predictions" : "model");
+  result.model_states_cells = !recorded || recorded->has_cells;
+  result.model_states_states = !recorded || recorded->has_states;
   for (const ModelKind kind : config.baselines) result.labels.emplace_back(describe(kind).label);
   if (config.pooled_ablation && config.model == ModelKind::motion && !recorded) {
     result.methods.push_back(ModelKind::motion);
@@ -290,15 +301,16 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
         method.prediction,
         method.training->learner().forecaster(
             own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr),
-        [&by_method, &config, m, recorded](const PredictedFormation& p) {
+        [&by_method, &config, &result, m, recorded](const PredictedFormation& p) {
           if (m == 0 && config.on_model_prediction) config.on_model_prediction(p);
           StreamPredictions& out = by_method[m];
           const double time_s = p.formation().time_s;
           if (m == 0 && recorded) {
-            // The file's predictions at this instant, if it made any (written with every digit:
-            // the very time), in place of the sampling model's.
-            const auto at = nearest_index(recorded->instants, time_s, 1e-6,
+            // The file's predictions at this instant, if it made any, in place of the sampling
+            // model's.
+            const auto at = nearest_index(recorded->instants, time_s, recorded_time_tolerance_s,
                                           [](const RecordedPrediction& r) { return r.time_s; });
+            if (at) ++result.recorded_matched;
             out.instants.push_back({time_s, p.context.phase,
                                     at ? recorded->instants[*at].prediction.steps
                                        : std::vector<PredictedStep>{}});

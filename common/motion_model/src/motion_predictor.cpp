@@ -337,10 +337,18 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   const double mean_weight = horizon.mean_weight[phase];  // 0 in HALT: the same drift each time
   const std::int8_t place = place_regressor(context);
   if (settings_.pooled) {
-    const Estimate& pooled = horizon.root;
-    return Resolved{pooled.mean_x,      pooled.mean_y,      pooled.mean_square,
-                    pooled.coefficients, horizon.z50[phase], horizon.z90[phase],
-                    MotionLevel::all,   place,              halted};
+    // What a robot with no row at all gets: the pooled fit (the rules' prior in HALT), as much of
+    // its mean as the phase keeps.
+    const Estimate& pooled = horizon.prior_of(context);
+    return Resolved{mean_weight * pooled.mean_x,
+                    mean_weight * pooled.mean_y,
+                    pooled.mean_square,
+                    pooled.coefficients,
+                    horizon.z50[phase],
+                    horizon.z90[phase],
+                    MotionLevel::all,
+                    place,
+                    halted};
   }
   for (std::size_t level = halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
        level < keys.size(); ++level) {

@@ -147,7 +147,10 @@ Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::str
              state = column("state_index"), formation = column("formation_probability");
   RecordedPredictions out;
   out.has_radii = r50 && r90;
-  out.has_cells = cell_x && cell_y && probability;
+  out.has_cells = cell_x && cell_y;
+  out.has_states = state.has_value();
+  out.has_probabilities = probability.has_value();
+  out.has_formation_probability = formation.has_value();
 
   struct Line {
     double time_s, horizon_s;

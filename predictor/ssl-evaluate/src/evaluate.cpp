@@ -12,6 +12,7 @@
 #include <memory>
 #include <random>
 
+#include "ssl_formation/evaluate/html_report.hpp"
 #include "ssl_formation/evaluation/evaluation.hpp"
 #include "ssl_formation/evaluation/position_evaluation.hpp"
 #include "ssl_formation/files/log_events.hpp"
@@ -252,6 +253,10 @@ std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options,
                                             const std::string& simulation) {
   Streams train;
   Streams test;
+  if (options.tune && !options.test_logs.empty()) {
+    throw app::UsageError("--tune reads only the first --split of each --train-log; --test-log "
+                          "files are reported data (docs/tuning.md), not tuning data");
+  }
   if (options.split > 0.0) {
     if (options.train_logs.empty()) throw app::UsageError("--split needs --train-log");
     for (const std::string& log : options.train_logs) {
@@ -308,6 +313,7 @@ struct GridReport {
   Grid grid{3, 2};
   std::vector<Section> sections;  // one per --horizons entry, then the chains of --step
   double prediction_us = 0.0;     // mean two-step prediction time of the chains' table
+  ReportSamples chain_samples;    // the last section's robots, for --report
 };
 
 // Two-step predictions of the paper's model from the test formations, timed.
@@ -367,9 +373,13 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
     config.bootstrap.resamples = options.bootstrap;
     config.bootstrap.block_s = options.bootstrap_block_s;
-    if (samples.enabled()) {
-      config.on_sample = [&samples, chain, name = base.grid.to_string()](
-                             const ev::ScoredSample& s) { samples.write(name, chain, s); };
+    const bool report_this = chain && !options.report.empty();
+    if (samples.enabled() || report_this) {
+      config.on_sample = [&samples, chain, report_this, &report, name = base.grid.to_string()](
+                             const ev::ScoredSample& s) {
+        if (samples.enabled()) samples.write(name, chain, s);
+        if (report_this) report.chain_samples.add(s);
+      };
     }
     report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
   };
@@ -517,10 +527,20 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
           std::snprintf(interval, sizeof interval, " %18s",
                         interval_text(score, m, intervals).c_str());
         }
-        std::printf("%7.2f s %5zu %-30s %10.2f%% %10.2f%% %9.3f %9.1f%s %9.1f %9.1f %9llu\n",
-                    score.horizon_s, h + 1, method_label(evaluation, m).c_str(),
-                    100.0 * a.state_accuracy(), 100.0 * a.cell_accuracy(), a.mean_distance(),
-                    e.mean(), interval, e.median(), e.percentile(90),
+        // What the scored file does not state (its states, its cells) is shown as '-'.
+        char state[32] = "          -";
+        char cell[32] = "          -";
+        char cells_off[32] = "        -";
+        if (m != 0 || evaluation.model_states_states) {
+          std::snprintf(state, sizeof state, "%10.2f%%", 100.0 * a.state_accuracy());
+        }
+        if (m != 0 || evaluation.model_states_cells) {
+          std::snprintf(cell, sizeof cell, "%10.2f%%", 100.0 * a.cell_accuracy());
+          std::snprintf(cells_off, sizeof cells_off, "%9.3f", a.mean_distance());
+        }
+        std::printf("%7.2f s %5zu %-30s %s %s %s %9.1f%s %9.1f %9.1f %9llu\n", score.horizon_s,
+                    h + 1, method_label(evaluation, m).c_str(), state, cell, cells_off, e.mean(),
+                    interval, e.median(), e.percentile(90),
                     static_cast<unsigned long long>(a.robots));
       }
     }
@@ -567,8 +587,9 @@ void print_calibration(const GridReport& report) {
                            [](const ev::HorizonScore& score) { return score.robot.n > 0; });
       });
   if (!stated) return;
-  std::printf("Calibration of the %s's probabilities (10 equal bins):\n",
-              method_label(report.sections.front().evaluation, 0).c_str());
+  const bool file = method_label(report.sections.front().evaluation, 0) == "predictions";
+  std::printf("Calibration of the %s probabilities (10 equal bins):\n",
+              file ? "file's" : "model's");
   std::printf("%9s %5s %-10s %9s %9s %12s\n", "horizon", "steps", "quantity", "Brier", "ECE",
               "predictions");
   for (const Section& section : report.sections) {
@@ -612,9 +633,17 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
           const ev::Accuracy& a = score.methods[m].cells;
           const ev::ErrorStats& e = score.methods[m].error;
           accuracy << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state << ','
-                   << method_label(evaluation, m) << ',' << a.state_accuracy() << ','
-                   << a.cell_accuracy() << ',' << a.mean_distance() << ',' << e.mean() << ','
-                   << e.median() << ',' << e.percentile(90) << ',' << a.robots;
+                   << method_label(evaluation, m) << ',';
+          // Empty where the scored file states no states or cells.
+          if (m != 0 || evaluation.model_states_states) accuracy << a.state_accuracy();
+          accuracy << ',';
+          if (m != 0 || evaluation.model_states_cells) {
+            accuracy << a.cell_accuracy() << ',' << a.mean_distance();
+          } else {
+            accuracy << ',';
+          }
+          accuracy << ',' << e.mean() << ',' << e.median() << ',' << e.percentile(90) << ','
+                   << a.robots;
           // The intervals, empty without --bootstrap; the ratio is this method's mean over the
           // best baseline's (1 for the best baseline itself).
           const ev::RowIntervals& intervals = score.intervals;
@@ -692,6 +721,34 @@ struct ReportFiles {
   CsvFile reliability;
 };
 
+// Stops before any work if --report's path cannot be written.
+void check_report_path(const EvaluateOptions& options) {
+  if (options.report.empty()) return;
+  const bool existed = std::filesystem::exists(options.report);
+  {
+    std::ofstream probe(options.report, std::ios::app);
+    if (!probe) throw std::runtime_error("cannot write the report " + options.report);
+  }
+  if (!existed) std::filesystem::remove(options.report);  // the probe leaves nothing behind
+}
+
+// --report's page for one section (the predictor's chain, or score's file).
+void write_report(const EvaluateOptions& options, const std::string& title, const Grid& grid,
+                  const Section& section, const ReportSamples& samples) {
+  if (options.report.empty()) return;
+  ReportInput input;
+  input.title = title;
+  input.command = options.command_line;
+  input.grid = grid.to_string();
+  input.step_s = section.step_s;
+  input.evaluation = &section.evaluation;
+  input.samples = &samples;
+  input.bootstrap = options.bootstrap;
+  input.bootstrap_block_s = options.bootstrap_block_s;
+  write_html_report(options.report, input);
+  spdlog::info("wrote the report {}", options.report);
+}
+
 }  // namespace
 
 std::vector<double> parse_horizons(const std::string& text) {
@@ -737,6 +794,10 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
   }
   // Before any work: a path it cannot write stops it.
   SampleFile samples(options.write_samples, options.model.parsed_model() == ModelKind::motion);
+  check_report_path(options);
+  if (!options.report.empty() && grids.size() > 1) {
+    throw app::UsageError("--report is for holdout (one grid), not grid-sweep");
+  }
   const auto [train, test] = holdout_streams(options, simulation);
   const std::string prefix = grids.size() > 1 ? "grid-sweep-" : "holdout-";
   ReportFiles files(options, prefix);
@@ -750,6 +811,9 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     reports.push_back(holdout_for_grid(options, grid, train, test, prior, samples));
     print_holdout(reports.back(), base, options);
     write_holdout_csv(accuracy, calibration, reliability, reports.back());
+    write_report(options, "ssl-formation: held-out evaluation, the predictor's steps",
+                 reports.back().grid, reports.back().sections.back(),
+                 reports.back().chain_samples);
     samples.check();
     std::printf("\n");
   }
@@ -804,6 +868,7 @@ int run_score(const EvaluateOptions& options) {
   if (!options.test_logs.empty() || options.split > 0.0) {
     throw app::UsageError("score takes one --log; --test-log and --split are for holdout");
   }
+  check_report_path(options);
   Result<RecordedPredictions> read = read_prediction_csv(options.predictions);
   if (!read) throw std::runtime_error(read.error().message);
   auto recorded = std::make_shared<const RecordedPredictions>(std::move(*read));
@@ -847,11 +912,21 @@ int run_score(const EvaluateOptions& options) {
   config.recorded_predictions = recorded;
   GridReport report;
   report.grid = sampler.grid;
+  if (!options.report.empty()) {
+    config.on_sample = [&report](const ev::ScoredSample& s) { report.chain_samples.add(s); };
+  }
   report.sections.push_back({sampler.step_s, ev::evaluate_positions(config, train, test)});
   std::uint64_t scored = 0;
   for (const ev::HorizonScore& score : report.sections.back().evaluation.all()) {
     scored += score.methods.front().cells.robots;
   }
+  const ev::PositionEvaluation& evaluation = report.sections.back().evaluation;
+  std::printf("%zu of the file's %zu instants are frames of the log (within %.0f ms), which has "
+              "%llu frames: a frame without a prediction is not scored, nor is a robot the file "
+              "leaves out.\n",
+              static_cast<std::size_t>(evaluation.recorded_matched), recorded->instants.size(),
+              1000.0 * ev::recorded_time_tolerance_s,
+              static_cast<unsigned long long>(evaluation.test_formations));
   if (scored == 0) {
     throw std::runtime_error("none of the " + std::to_string(recorded->instants.size()) +
                              " instants of " + options.predictions + " is a frame of " +
@@ -861,6 +936,8 @@ int run_score(const EvaluateOptions& options) {
   ReportFiles files(options, "score-");
   print_holdout(report, sampler, options);
   write_holdout_csv(files.accuracy, files.calibration, files.reliability, report);
+  write_report(options, "ssl-formation: predictions from " + options.predictions + " scored",
+               report.grid, report.sections.back(), report.chain_samples);
   return 0;
 }
 

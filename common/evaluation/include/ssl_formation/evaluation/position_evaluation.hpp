@@ -93,6 +93,11 @@ struct ScoredSample {
   const std::vector<const RobotPrediction*>* forecasts = nullptr;
 };
 
+// How far a recorded prediction's time may be from a frame's to be that frame's: a file written
+// with every digit matches exactly, one rounded to the millisecond still does (frames come 16 ms
+// apart at 60 Hz).
+inline constexpr double recorded_time_tolerance_s = 0.001;
+
 // The baseline of lowest mean error in `score`: of methods 1 to `baselines_end` - 1 (the first
 // is the model), if any was scored.
 std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t baselines_end);
@@ -140,6 +145,12 @@ struct PositionEvaluation {
   // Methods 1 to baselines_end - 1 are the baselines; from it on, the model's ablations (no
   // row's best baseline is one of them).
   std::size_t baselines_end = 0;
+  // Whether the first method states cells and states (a file of predictions may not): without
+  // them its cell and state figures are not scored, and reports leave them out.
+  bool model_states_cells = true;
+  bool model_states_states = true;
+  // With recorded predictions: how many of the file's instants were frames of the test stream.
+  std::uint64_t recorded_matched = 0;
   std::optional<std::size_t> best_baseline(const HorizonScore& score) const {
     return evaluation::best_baseline(score, baselines_end);
   }

@@ -49,10 +49,12 @@ struct MotionModelSettings {
   // How many held-out instances of a game phase weigh as much as keeping its rows' mean
   // displacement whole (MotionModel's mean weights).
   double mean_weight_shrinkage = 20.0;
-  // An ablation (ssl-evaluate's "pooled model"): every robot, in every state, takes the
-  // horizon's one fit of the regressors over all the table's instances instead of its keyed
-  // rows; the rules, the standing robots' places and the calibration are the model's. What the
-  // model wins over it is what its keys (robot, cell, velocity class, contexts) add.
+  // An ablation (ssl-evaluate's "pooled model"): every robot, in every state, takes what a robot
+  // with no row at all would: the horizon's one fit of the regressors over all the table's
+  // instances (in HALT the rules' prior), its mean weighed per phase as the model does. The
+  // rules, the standing robots' places and the set plays are the model's, and its calibration
+  // is fitted the same way, on its own forecasts. What the model wins over it is what its keyed
+  // rows (robot, cell, velocity class, contexts) add.
   bool pooled = false;
 };
 

@@ -53,8 +53,11 @@ struct RecordedPredictions {
   std::vector<RecordedPrediction> instants;  // in time order
   double step_s = 0.0;                       // horizon_s of step 1
   int steps = 0;                             // the most steps of any instant
-  bool has_radii = false;                    // radius_50_mm and radius_90_mm were given
-  bool has_cells = false;                    // predicted_cell_x/_y, probability were given
+  bool has_radii = false;                  // radius_50_mm and radius_90_mm were given
+  bool has_cells = false;                  // predicted_cell_x/_y
+  bool has_states = false;                 // state_index
+  bool has_probabilities = false;          // probability (of the robot's cell)
+  bool has_formation_probability = false;  // formation_probability
 };
 
 // Reads predictions from CSV text with a header naming its columns, in any order: at least

@@ -68,6 +68,10 @@ struct EvaluateOptions {
   std::string from_log;
   std::string write_log;
   std::string mess = "none";
+  // holdout, score: a page to open (html_report.hpp); none without it. `command_line` is how
+  // the program was run, for the page to say.
+  std::string report;
+  std::string command_line;
   // score: the recorded match and the predictions made for it (ssl-predictor --from-log's CSV).
   std::string log;
   std::string predictions;
