@@ -258,13 +258,7 @@ TEST(Evaluate, HoldoutOfTheMotionModelOnLogsOfMovingRobots) {
   TempDir dir;
   const auto train_log = dir / "train.log.gz";
   const auto test_log = dir / "test.log";
-  ASSERT_EQ(testing::write_vision_log(train_log,
-                                      testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
-            "");
-  ASSERT_EQ(testing::write_vision_log(test_log,
-                                      testing::moving_robots_packets(
-                                          {.seed = 2, .seconds = 20.0, .start_time_s = 1000.0})),
-            "");
+  ASSERT_EQ(testing::write_train_and_test_logs(train_log, test_log, 20.0), "");
   const std::vector<std::string> args{"holdout",    "--train-log",     train_log.string(),
                                       "--test-log", test_log.string(), "--horizons",
                                       "0.5,1"};
@@ -518,13 +512,7 @@ TEST(Evaluate, ScoresThePredictorsOwnCsvAsHoldoutScoresItsChains) {
   TempDir dir;
   const auto train_log = dir / "train.log.gz";
   const auto test_log = dir / "test.log";
-  ASSERT_EQ(testing::write_vision_log(train_log,
-                                      testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
-            "");
-  ASSERT_EQ(testing::write_vision_log(test_log,
-                                      testing::moving_robots_packets(
-                                          {.seed = 2, .seconds = 20.0, .start_time_s = 1000.0})),
-            "");
+  ASSERT_EQ(testing::write_train_and_test_logs(train_log, test_log, 20.0), "");
   // What a team does: train a table from one log, predict another with the daemon's pipeline.
   const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
   const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;

@@ -84,4 +84,16 @@ inline std::string write_vision_log(const std::filesystem::path& path,
   return {};
 }
 
+// A minute of moving robots to train on (seed 1) and `test_seconds` of others (seed 2, starting
+// at 1000 s on the data clock) to test on, written as logs at `train` and `test`: what a team's
+// two recorded matches would be. An error message, empty on success.
+inline std::string write_train_and_test_logs(const std::filesystem::path& train,
+                                             const std::filesystem::path& test,
+                                             double test_seconds) {
+  std::string error = write_vision_log(train, moving_robots_packets({.seed = 1, .seconds = 60.0}));
+  if (!error.empty()) return error;
+  return write_vision_log(
+      test, moving_robots_packets({.seed = 2, .seconds = test_seconds, .start_time_s = 1000.0}));
+}
+
 }  // namespace ssl_formation::testing

@@ -31,13 +31,7 @@ TEST(ReportBrowser, DrawsEveryFigureWithTheCsvsNumbersOffline) {
   TempDir dir;
   const auto train_log = dir / "train.log";
   const auto test_log = dir / "test.log";
-  ASSERT_EQ(testing::write_vision_log(train_log,
-                                      testing::moving_robots_packets({.seed = 1, .seconds = 60.0})),
-            "");
-  ASSERT_EQ(testing::write_vision_log(test_log,
-                                      testing::moving_robots_packets(
-                                          {.seed = 2, .seconds = 60.0, .start_time_s = 1000.0})),
-            "");
+  ASSERT_EQ(testing::write_train_and_test_logs(train_log, test_log, 60.0), "");
   const auto report = dir / "report.html";
   const auto evaluated = testing::run_to_end(
       evaluate_program,

@@ -336,22 +336,11 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   const auto phase = static_cast<std::size_t>(MotionFeatures::phase_of_game_context(game));
   const double mean_weight = horizon.mean_weight[phase];  // 0 in HALT: the same drift each time
   const std::int8_t place = place_regressor(context);
-  if (settings_.pooled) {
-    // What a robot with no row at all gets: the pooled fit (the rules' prior in HALT), as much of
-    // its mean as the phase keeps.
-    const Estimate& pooled = horizon.prior_of(context);
-    return Resolved{mean_weight * pooled.mean_x,
-                    mean_weight * pooled.mean_y,
-                    pooled.mean_square,
-                    pooled.coefficients,
-                    horizon.z50[phase],
-                    horizon.z90[phase],
-                    MotionLevel::all,
-                    place,
-                    halted};
-  }
-  for (std::size_t level = halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
-       level < keys.size(); ++level) {
+  // The pooled ablation looks up no row: every robot gets what a robot with no row at all gets,
+  // below.
+  const std::size_t first_level =
+      settings_.pooled ? keys.size() : halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
+  for (std::size_t level = first_level; level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {
       Resolved e;
       // The rows' mean displacement, as much of it as the phase keeps (Horizon::mean_weight).

@@ -409,6 +409,34 @@ std::vector<std::size_t> reported_rows(const ev::PositionEvaluation& evaluation)
   return {0, ev::state_row_of(GamePhase::running)};
 }
 
+// Every row of game state and step of every section that scored a robot, in the report's order:
+// visit(evaluation, row, step index, score).
+template <typename Visit>
+void for_each_scored_row(const GridReport& report, Visit&& visit) {
+  for (const Section& section : report.sections) {
+    const ev::PositionEvaluation& evaluation = section.evaluation;
+    for (const std::size_t row : reported_rows(evaluation)) {
+      for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
+        const ev::HorizonScore& score = evaluation.rows[row][h];
+        if (score.methods.front().cells.robots > 0) visit(evaluation, row, h, score);
+      }
+    }
+  }
+}
+
+// "6.1% [4.2, 9.0]": how far below 1 a ratio of mean errors is, in percent, with the interval
+// of the ratio (low and high swap) when there is one.
+std::string margin_text(double ratio, const ev::Interval* interval) {
+  char text[64];
+  if (interval) {
+    std::snprintf(text, sizeof text, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - ratio),
+                  100.0 * (1.0 - interval->high), 100.0 * (1.0 - interval->low));
+  } else {
+    std::snprintf(text, sizeof text, "%.1f%%", 100.0 * (1.0 - ratio));
+  }
+  return text;
+}
+
 bool has_intervals(const ev::HorizonScore& score) {
   return score.intervals.mean.size() == score.methods.size();
 }
@@ -447,41 +475,30 @@ void print_ratios(const GridReport& report, const EvaluateOptions& options) {
     std::printf(" %26s", ("model below '" + method_label(first, ablation) + "'").c_str());
   }
   std::printf("\n");
-  for (const Section& section : report.sections) {
-    const ev::PositionEvaluation& evaluation = section.evaluation;
-    for (const std::size_t row : reported_rows(evaluation)) {
-      for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
-        const ev::HorizonScore& score = evaluation.rows[row][h];
-        const std::optional<std::size_t> best = evaluation.best_baseline(score);
-        if (score.methods.front().cells.robots == 0 || !best) continue;
-        const double ratio = score.methods[0].error.mean() / score.methods[*best].error.mean();
-        char range[64] = "";
-        char below[64];
-        std::snprintf(below, sizeof below, "%.1f%%", 100.0 * (1.0 - ratio));
-        if (!score.intervals.ratio.empty()) {
-          const ev::Interval& i = score.intervals.ratio[0];
-          std::snprintf(range, sizeof range, "[%.3f, %.3f]", i.low, i.high);
-          std::snprintf(below, sizeof below, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - ratio),
-                        100.0 * (1.0 - i.high), 100.0 * (1.0 - i.low));
-        }
-        std::printf("%7.2f s %5zu %-24s %7zu %-30s %12.3f %18s %20s", score.horizon_s, h + 1,
-                    std::string(ev::state_row_name(row)).c_str(), score.intervals.blocks,
-                    method_label(evaluation, *best).c_str(), ratio, range, below);
-        if (has_ablation && ablation < score.methods.size()) {
-          const double over = score.methods[0].error.mean() / score.methods[ablation].error.mean();
-          char text[64];
-          std::snprintf(text, sizeof text, "%.1f%%", 100.0 * (1.0 - over));
-          if (score.intervals.model_ratio.size() >= ablation) {
-            const ev::Interval& i = score.intervals.model_ratio[ablation - 1];
-            std::snprintf(text, sizeof text, "%.1f%% [%.1f, %.1f]", 100.0 * (1.0 - over),
-                          100.0 * (1.0 - i.high), 100.0 * (1.0 - i.low));
-          }
-          std::printf(" %26s", text);
-        }
-        std::printf("\n");
-      }
+  for_each_scored_row(report, [&](const ev::PositionEvaluation& evaluation, std::size_t row,
+                                  std::size_t h, const ev::HorizonScore& score) {
+    const std::optional<std::size_t> best = evaluation.best_baseline(score);
+    if (!best) return;
+    const double ratio = score.methods[0].error.mean() / score.methods[*best].error.mean();
+    char range[64] = "";
+    const ev::Interval* interval = nullptr;
+    if (!score.intervals.ratio.empty()) {
+      interval = &score.intervals.ratio[0];
+      std::snprintf(range, sizeof range, "[%.3f, %.3f]", interval->low, interval->high);
     }
-  }
+    std::printf("%7.2f s %5zu %-24s %7zu %-30s %12.3f %18s %20s", score.horizon_s, h + 1,
+                std::string(ev::state_row_name(row)).c_str(), score.intervals.blocks,
+                method_label(evaluation, *best).c_str(), ratio, range,
+                margin_text(ratio, interval).c_str());
+    if (has_ablation && ablation < score.methods.size()) {
+      const double over = score.methods[0].error.mean() / score.methods[ablation].error.mean();
+      const bool drawn = score.intervals.model_ratio.size() >= ablation;
+      std::printf(" %26s",
+                  margin_text(over, drawn ? &score.intervals.model_ratio[ablation - 1] : nullptr)
+                      .c_str());
+    }
+    std::printf("\n");
+  });
 }
 
 void print_calibration(const GridReport& report);
@@ -554,25 +571,19 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
     std::printf(" %*.*s", width, width, method_label(chains, m).c_str());
   }
   std::printf("\n");
-  for (const Section& section : report.sections) {
-    const ev::PositionEvaluation& evaluation = section.evaluation;
-    for (const std::size_t row : reported_rows(evaluation)) {
-      for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
-        const ev::HorizonScore& score = evaluation.rows[row][h];
-        if (score.methods.front().cells.robots == 0) continue;
-        std::printf("%7.2f s %5zu %-24s %9llu", score.horizon_s, h + 1,
-                    std::string(ev::state_row_name(row)).c_str(),
-                    static_cast<unsigned long long>(score.methods.front().cells.robots));
-        for (std::size_t m = 0; m < score.methods.size(); ++m) {
-          char cell[96];
-          std::snprintf(cell, sizeof cell, "%.1f%s%s", score.methods[m].error.mean(),
-                        intervals ? " " : "", interval_text(score, m, intervals).c_str());
-          std::printf(" %*s", width, cell);
-        }
-        std::printf("\n");
-      }
+  for_each_scored_row(report, [&](const ev::PositionEvaluation&, std::size_t row, std::size_t h,
+                                  const ev::HorizonScore& score) {
+    std::printf("%7.2f s %5zu %-24s %9llu", score.horizon_s, h + 1,
+                std::string(ev::state_row_name(row)).c_str(),
+                static_cast<unsigned long long>(score.methods.front().cells.robots));
+    for (std::size_t m = 0; m < score.methods.size(); ++m) {
+      char cell[96];
+      std::snprintf(cell, sizeof cell, "%.1f%s%s", score.methods[m].error.mean(),
+                    intervals ? " " : "", interval_text(score, m, intervals).c_str());
+      std::printf(" %*s", width, cell);
     }
-  }
+    std::printf("\n");
+  });
   if (intervals) print_ratios(report, options);
   print_calibration(report);
   print_radii(report);
