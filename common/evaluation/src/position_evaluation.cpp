@@ -177,6 +177,13 @@ std::string_view state_row_name(std::size_t row) {
   return row == 0 ? std::string_view("all") : to_string(all_game_phases[row - 1]);
 }
 
+std::vector<std::size_t> PositionEvaluation::reported_rows() const {
+  if (!test_has_referee) return {0, state_row_of(GamePhase::running)};
+  std::vector<std::size_t> all_rows(state_rows);
+  for (std::size_t r = 0; r < all_rows.size(); ++r) all_rows[r] = r;
+  return all_rows;
+}
+
 std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t baselines_end) {
   std::optional<std::size_t> best;
   for (std::size_t m = 1; m < std::min(baselines_end, score.methods.size()); ++m) {

@@ -398,24 +398,13 @@ std::string method_label(const ev::PositionEvaluation& evaluation, std::size_t m
   return evaluation.labels.at(m);
 }
 
-// The rows a report shows: every row when the test streams had a referee, else "all" and
-// "running" (every instant is running play as far as anyone can tell).
-std::vector<std::size_t> reported_rows(const ev::PositionEvaluation& evaluation) {
-  if (evaluation.test_has_referee) {
-    std::vector<std::size_t> rows(ev::state_rows);
-    for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = r;
-    return rows;
-  }
-  return {0, ev::state_row_of(GamePhase::running)};
-}
-
 // Every row of game state and step of every section that scored a robot, in the report's order:
 // visit(evaluation, row, step index, score).
 template <typename Visit>
 void for_each_scored_row(const GridReport& report, Visit&& visit) {
   for (const Section& section : report.sections) {
     const ev::PositionEvaluation& evaluation = section.evaluation;
-    for (const std::size_t row : reported_rows(evaluation)) {
+    for (const std::size_t row : evaluation.reported_rows()) {
       for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
         const ev::HorizonScore& score = evaluation.rows[row][h];
         if (score.methods.front().cells.robots > 0) visit(evaluation, row, h, score);
@@ -636,7 +625,7 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
   const std::string grid = report.grid.to_string();
   for (const Section& section : report.sections) {
     const ev::PositionEvaluation& evaluation = section.evaluation;
-    for (const std::size_t row : reported_rows(evaluation)) {
+    for (const std::size_t row : evaluation.reported_rows()) {
       const std::string state(ev::state_row_name(row));
       for (std::size_t h = 0; h < evaluation.rows[row].size(); ++h) {
         const ev::HorizonScore& score = evaluation.rows[row][h];

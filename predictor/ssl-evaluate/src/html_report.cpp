@@ -139,13 +139,6 @@ std::size_t shown_step(const ev::PositionEvaluation& evaluation) {
   return best;
 }
 
-std::vector<std::size_t> reported_rows(const ev::PositionEvaluation& evaluation) {
-  if (!evaluation.test_has_referee) return {0, ev::state_row_of(GamePhase::running)};
-  std::vector<std::size_t> rows;
-  for (std::size_t r = 0; r < ev::state_rows; ++r) rows.push_back(r);
-  return rows;
-}
-
 std::string interval_cell(const ev::HorizonScore& score, std::size_t m) {
   if (score.intervals.mean.size() != score.methods.size()) return "";
   const ev::Interval& i = score.intervals.mean[m];
@@ -163,7 +156,7 @@ std::string state_table(const ev::PositionEvaluation& evaluation) {
   }
   html << "<th>best baseline</th><th>" << escaped(evaluation.labels.front())
        << " below it</th></tr></thead><tbody>";
-  for (const std::size_t row : reported_rows(evaluation)) {
+  for (const std::size_t row : evaluation.reported_rows()) {
     for (const ev::HorizonScore& score : evaluation.rows[row]) {
       if (score.methods.front().cells.robots == 0) continue;
       const std::string state(ev::state_row_name(row));
@@ -273,7 +266,7 @@ std::string radii_table(const ev::PositionEvaluation& evaluation) {
   std::ostringstream html;
   html << "<table id='radii'><thead><tr><th>game state</th><th>horizon</th><th>robots</th>"
           "<th>within r50 (aim 50%)</th><th>within r90 (aim 90%)</th></tr></thead><tbody>";
-  for (const std::size_t row : reported_rows(evaluation)) {
+  for (const std::size_t row : evaluation.reported_rows()) {
     for (const ev::HorizonScore& score : evaluation.rows[row]) {
       if (score.radii.robots == 0) continue;
       const double r90 = score.radii.share90();

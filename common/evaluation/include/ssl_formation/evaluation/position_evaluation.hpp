@@ -168,6 +168,9 @@ struct PositionEvaluation {
   std::optional<std::string> feed_problem;
 
   const std::vector<HorizonScore>& all() const { return rows.front(); }
+  // The rows a report shows: every row when the test streams had a referee, else "all" and
+  // "running" (every instant is running play as far as anyone can tell).
+  std::vector<std::size_t> reported_rows() const;
 };
 
 // Trains every method on the training streams (each its own stream: nothing spans two), then
