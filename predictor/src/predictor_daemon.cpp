@@ -125,6 +125,10 @@ void PredictorDaemon::stop() {
 
 bool PredictorDaemon::serving_web() const { return web_.has_value(); }
 
+void PredictorDaemon::when_viewer_joins(std::function<void()> handler) {
+  if (web_) web_->on_viewer_joined(std::move(handler));
+}
+
 std::vector<std::pair<std::string, std::string>> PredictorDaemon::ready_facts() const {
   std::vector<std::pair<std::string, std::string>> facts{
       {"vision", options_.network.tracked() ? "tracked " + options_.network.tracker_address
@@ -146,8 +150,14 @@ void PredictorDaemon::on_event(const MatchEvent& event) {
     last_packet_s_ = clock_.steady_s();
     // Ours first, so that a prediction this packet completes shows them as of this packet.
     if (event.frame->has_detection) ours_.add(event.frame->detection);
+    if (event.frame->has_geometry) stated_markings_ = event.frame->markings;
   }
   const RefereeChange change = pipeline_.handle(event);
+  if (web_ && event.kind != MatchEventKind::referee) {
+    if (const auto now = pipeline_.front_end().last_frame_time_s()) {
+      ball_.update(pipeline_.front_end().ball().state(), *now);
+    }
+  }
   switch (event.kind) {
     case MatchEventKind::vision:
       if (event.frame && event.frame->has_geometry) field_log_.update(pipeline_.sampler().field());
@@ -175,11 +185,17 @@ void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
   const std::uint64_t packets =
       counters ? counters->datagrams.load() : pipeline_.sampler().counters().packets;
   status.packets = packets;
-  if (last_rate_s_ && now > *last_rate_s_) {
-    status.packets_per_s = static_cast<double>(packets - last_rate_packets_) / (now - *last_rate_s_);
+  // The rate over at least a quarter of a second: a status sent between two periodic ones (a
+  // page joining) says the last rate rather than one of a few milliseconds' packets.
+  if (!last_rate_s_ || now - *last_rate_s_ >= 0.25) {
+    if (last_rate_s_ && now > *last_rate_s_) {
+      packets_per_s_ =
+          static_cast<double>(packets - last_rate_packets_) / (now - *last_rate_s_);
+    }
+    last_rate_s_ = now;
+    last_rate_packets_ = packets;
   }
-  last_rate_s_ = now;
-  last_rate_packets_ = packets;
+  status.packets_per_s = packets_per_s_;
   // The age of the last datagram on this process's own clocks: steady for the age, the wall
   // clock only to date it (never the feed's t_capture, which is the simulator's or camera's).
   const std::int64_t wall_now = clock_.unix_ms();
@@ -213,7 +229,21 @@ void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
   status.opponent = describe(pipeline_.match().opponent(), pipeline_.sampler().attacks());
   status.game_state = std::string(to_string(pipeline_.match().game_state()));
   status.referee = describe(pipeline_.match().referee());
-  status.live_score = pipeline_.live_score().horizons();
+  status.referee_heard = pipeline_.match().referee().heard();
+  status.referee_view = pipeline_.match().referee().view();
+  status.phase = pipeline_.front_end().phase_now();
+  status.ball = &ball_;
+  const LiveScore& live_score = pipeline_.live_score();
+  status.live_score = live_score.horizons();
+  for (const GamePhase phase : all_game_phases) {
+    // Only the phases whose predictions have been checked (not those still waiting for their
+    // instant).
+    const auto& horizons = live_score.horizons(phase);
+    if (std::any_of(horizons.begin(), horizons.end(),
+                    [](const LiveScore::Horizon& h) { return h.robots > 0.0; })) {
+      status.live_score_by_phase.push_back(web::PhaseLiveScore{phase, live_score.horizons(phase)});
+    }
+  }
   web_->broadcast(web::MessageKind::status, web::status_json(status));
 }
 
@@ -318,7 +348,7 @@ void PredictorDaemon::on_prediction(const PredictedFormation& predicted) {
     fill_prediction_message(predicted.formation(), predicted.prediction, predicted.context,
                             message_);
     web_->broadcast(web::MessageKind::prediction,
-                    web::prediction_json(message_, view_setup(), ours_.current()));
+                    web::prediction_json(message_, view_setup(), ours_.current(), ball_));
   }
 }
 
@@ -356,7 +386,8 @@ web::FieldViewSetup PredictorDaemon::view_setup() const {
   const SamplerConfig& now = pipeline_.sampler().config();
   return web::FieldViewSetup{pipeline_.sampler().field(), config_.grid,
                              pipeline_.sampler().attacks().value_or(now.opponent_attacks),
-                             now.opponent_color};
+                             now.opponent_color,
+                             web::markings_for(pipeline_.sampler().field(), stated_markings_)};
 }
 
 PredictionConfig prediction_config(const PredictorOptions& options) {
@@ -434,6 +465,9 @@ int run_daemon(const PredictorOptions& options) {
   status.emplace(io, status_period, [&] { daemon.log_status(&events); });
   if (daemon.serving_web()) {
     web_status.emplace(io, web_status_period, [&] { daemon.publish_status(&events); });
+    // A page that just connected is told at once that it is watching, not up to a period later
+    // by a status that still counts the viewers before it.
+    daemon.when_viewer_joins([&] { daemon.publish_status(&events); });
   }
   io.run();
   daemon.log_status(&events);

@@ -5,7 +5,7 @@
 
 (() => {
   const SVG_NS = 'http://www.w3.org/2000/svg';
-  const MARGIN_MM = 300;
+  const MARGIN_MM = 60;             // beyond the boundary area, so its edge shows
   const ROBOT_RADIUS_MM = 90;
   const NO_VISION_AFTER_S = 1.0;   // the banner shows when no packet arrived for longer
   const STALE_CONNECTION_MS = 3000; // no message at all for this long: reconnect
@@ -27,6 +27,7 @@
     latenciesMs: [],  // arrival to drawn, per prediction (the last 200)
     dirty: true,
     setupKey: '',
+    ball: null,
   };
   window.fieldView = view;  // for tests and the console
 
@@ -98,6 +99,10 @@
         field: message.field, grid: message.grid, opponent_color: message.opponent_color,
         our_color: message.our_color, opponent_attacks: message.opponent_attacks,
       };
+      // The ball, from the newest message that says where it is (or that it is not seen).
+      if ('ball' in message) {
+        view.ball = message.ball;
+      }
       view.dirty = true;
     };
     ws.onclose = () => {
@@ -124,27 +129,64 @@
     return setup.opponent_attacks === '-x' ? [-x, -y] : [x, y];
   }
 
+  // The field as SSL-Vision's own client draws it: the boundary area, the field lines, the centre
+  // circle and mark, both penalty areas and both goals, each goal in the colour of the team that
+  // defends it. Sizes from the feed's geometry packet, else the rules' (field.markings.source).
   function drawSetup(setup) {
     const key = JSON.stringify(setup);
     if (key === view.setupKey) return;
     view.setupKey = key;
     const L = setup.field.length, W = setup.field.width;
+    const m = setup.field.markings || {
+      goal_width: 1000, goal_depth: 180, boundary_width: 300, penalty_area_depth: 1000,
+      penalty_area_width: 2000, center_circle_radius: 500, source: 'rules',
+    };
+    const outside = Math.max(m.boundary_width, m.goal_depth + 40);
+    const margin = outside + MARGIN_MM;
     const field = $('field');
-    field.setAttribute('viewBox', `${-L / 2 - MARGIN_MM} ${-W / 2 - MARGIN_MM} ${L + 2 * MARGIN_MM} ${W + 2 * MARGIN_MM}`);
+    field.setAttribute('viewBox', `${-L / 2 - margin} ${-W / 2 - margin} ${L + 2 * margin} ${W + 2 * margin}`);
     field.dataset.fieldLength = L;
     field.dataset.fieldWidth = W;
     field.dataset.grid = `${setup.grid.length}x${setup.grid.width}`;
-    const surface = $('surface');
-    surface.setAttribute('x', -L / 2 - MARGIN_MM);
-    surface.setAttribute('y', -W / 2 - MARGIN_MM);
-    surface.setAttribute('width', L + 2 * MARGIN_MM);
-    surface.setAttribute('height', W + 2 * MARGIN_MM);
+    field.dataset.markings = m.source;
+    const rect = (element, x, y, width, height) => {
+      element.setAttribute('x', x);
+      element.setAttribute('y', y);
+      element.setAttribute('width', width);
+      element.setAttribute('height', height);
+    };
+    rect($('surface'), -L / 2 - outside, -W / 2 - outside, L + 2 * outside, W + 2 * outside);
+    rect($('playing-area'), -L / 2, -W / 2, L, W);
 
     const markings = $('markings');
     markings.replaceChildren();
-    svgElement('rect', { class: 'marking', x: -L / 2, y: -W / 2, width: L, height: W }, markings);
-    svgElement('line', { class: 'marking', x1: 0, y1: -W / 2, x2: 0, y2: W / 2 }, markings);
-    svgElement('circle', { class: 'marking', cx: 0, cy: 0, r: 500 }, markings);
+    svgElement('rect', { class: 'marking field-lines', x: -L / 2, y: -W / 2, width: L, height: W }, markings);
+    svgElement('line', { class: 'marking halfway-line', x1: 0, y1: -W / 2, x2: 0, y2: W / 2 }, markings);
+    svgElement('circle', { class: 'marking centre-circle', cx: 0, cy: 0, r: m.center_circle_radius }, markings);
+    svgElement('circle', { class: 'centre-mark', cx: 0, cy: 0, r: 40 }, markings);
+    // Which end each team defends: the opponent attacks towards +x or -x.
+    const opponentDefendsNegative = setup.opponent_attacks !== '-x';
+    const goals = $('goals');
+    goals.replaceChildren();
+    for (const side of [-1, 1]) {
+      const goalLine = side * L / 2;
+      const defender = (side < 0) === opponentDefendsNegative ? 'opponent' : 'us';
+      const colour = defender === 'opponent' ? setup.opponent_color : setup.our_color;
+      const depth = m.penalty_area_depth, half = m.penalty_area_width / 2;
+      svgElement('rect', {
+        class: 'marking penalty-area', 'data-side': side < 0 ? '-x' : '+x', 'data-defended-by': defender,
+        'data-depth': depth, 'data-width': m.penalty_area_width,
+        x: side < 0 ? -L / 2 : L / 2 - depth, y: -half, width: depth, height: 2 * half,
+      }, markings);
+      // The goal: its two side walls and back wall behind the goal line.
+      const back = goalLine + side * m.goal_depth;
+      const g = m.goal_width / 2;
+      svgElement('path', {
+        class: `goal ${colour}`, 'data-side': side < 0 ? '-x' : '+x', 'data-defended-by': defender,
+        'data-width': m.goal_width, 'data-depth': m.goal_depth,
+        d: `M${goalLine},${-g} L${back},${-g} L${back},${g} L${goalLine},${g}`,
+      }, goals);
+    }
 
     const grid = $('grid');
     grid.replaceChildren();
@@ -170,6 +212,29 @@
     attack.setAttribute('x', -L / 2);
     attack.setAttribute('y', -W / 2 - 80);
     attack.textContent = `opponent (${setup.opponent_color}) attacks ${setup.opponent_attacks === '-x' ? '←' : '→'}`;
+  }
+
+  // The ball where the follower last saw it, and its path over the last seconds.
+  function drawBall(ball) {
+    const dot = $('ball');
+    const path = $('ball-path');
+    if (!ball) {
+      dot.setAttribute('visibility', 'hidden');
+      path.setAttribute('visibility', 'hidden');
+      delete dot.dataset.x;
+      delete dot.dataset.y;
+      path.dataset.points = 0;
+      return;
+    }
+    dot.setAttribute('cx', sx(ball.x));
+    dot.setAttribute('cy', sy(ball.y));
+    dot.setAttribute('visibility', 'visible');
+    dot.dataset.x = ball.x;
+    dot.dataset.y = ball.y;
+    const points = ball.path || [];
+    path.setAttribute('points', points.map(([x, y]) => `${sx(x)},${sy(y)}`).join(' '));
+    path.setAttribute('visibility', points.length >= 2 ? 'visible' : 'hidden');
+    path.dataset.points = points.length;
   }
 
   function drawRobots(groupId, robots, kind, colour) {
@@ -320,6 +385,114 @@
     }
   }
 
+  // The game's state as a banner: what the referee's last command says, whose restart it is, the
+  // stage and the teams.
+  const STATE_WORDS = {
+    halt: 'halt', stop: 'stop', running: 'running', free_kick: 'free kick',
+    kickoff_preparation: 'kick-off', penalty_preparation: 'penalty', ball_placement: 'ball placement',
+    timeout: 'timeout',
+  };
+  const stageText = (stage) => {
+    const known = {
+      NORMAL_FIRST_HALF_PRE: 'before the first half', NORMAL_FIRST_HALF: 'first half',
+      NORMAL_HALF_TIME: 'half time', NORMAL_SECOND_HALF_PRE: 'before the second half',
+      NORMAL_SECOND_HALF: 'second half', EXTRA_TIME_BREAK: 'break before extra time',
+      EXTRA_FIRST_HALF_PRE: 'before extra time', EXTRA_FIRST_HALF: 'extra time, first half',
+      EXTRA_HALF_TIME: 'extra time, half time', EXTRA_SECOND_HALF_PRE: 'before extra time\'s second half',
+      EXTRA_SECOND_HALF: 'extra time, second half', PENALTY_SHOOTOUT_BREAK: 'break before the shoot-out',
+      PENALTY_SHOOTOUT: 'penalty shoot-out', POST_GAME: 'after the game',
+    };
+    return known[stage] || String(stage).toLowerCase().replace(/_/g, ' ');
+  };
+  function drawGameBanner(match, opponentColour) {
+    const banner = $('game-banner');
+    let state;
+    let detail;
+    if (!match.heard) {
+      state = 'no referee';
+      detail = 'every moment counts as running play';
+    } else {
+      const words = STATE_WORDS[match.game_state] || match.game_state.replace(/_/g, ' ');
+      const whose = match.for_team === 'opponent' ? `their ${words} (${opponentColour})`
+        : match.for_team === 'us' ? `our ${words}` : words;
+      state = whose;
+      const parts = [];
+      if (match.stage) parts.push(stageText(match.stage));
+      if (match.yellow || match.blue) parts.push(`yellow ${match.yellow || '?'} v blue ${match.blue || '?'}`);
+      detail = parts.join(' · ');
+    }
+    $('game-state').textContent = state;
+    $('game-detail').textContent = detail;
+    $('game-detail').title = detail;
+    banner.dataset.state = match.heard ? match.game_state : 'unknown';
+    banner.dataset.forTeam = match.for_team || '';
+    banner.dataset.opponentColor = opponentColour || '';
+    banner.dataset.phase = match.phase || '';
+    const target = $('placement-target');
+    if (match.heard && match.game_state === 'ball_placement' && Array.isArray(match.designated_position)) {
+      const [x, y] = match.designated_position;
+      target.setAttribute('cx', sx(x));
+      target.setAttribute('cy', sy(y));
+      target.setAttribute('visibility', 'visible');
+    } else {
+      target.setAttribute('visibility', 'hidden');
+    }
+  }
+
+  // How far the predictions lately were, against everyone staying where they were: all together
+  // and by the game's phase when they were made, the current phase's row marked.
+  const PHASE_WORDS = {
+    running: 'running', stop: 'stop', halt: 'halt', ball_placement_opponent: 'their placement',
+    ball_placement_us: 'our placement', kickoff_opponent: 'their kick-off', kickoff_us: 'our kick-off',
+    free_kick_opponent: 'their free kick', free_kick_us: 'our free kick', penalty: 'penalty',
+  };
+  function drawLiveScore(s) {
+    if (!Array.isArray(s.live_score)) return;
+    const table = $('live-score');
+    const rows = [{ phase: 'all', horizons: s.live_score }].concat(s.live_score_by_phase || []);
+    const horizons = [...new Set(s.live_score.map((h) => h.horizon_s))];
+    const head = document.createElement('tr');
+    head.appendChild(Object.assign(document.createElement('th'), { textContent: 'phase' }));
+    for (const h of horizons) {
+      head.appendChild(Object.assign(document.createElement('th'), { textContent: horizonText(h) }));
+    }
+    table.tHead.replaceChildren(head);
+    const body = table.tBodies[0];
+    if (!s.live_score.length) {
+      const tr = document.createElement('tr');
+      tr.appendChild(Object.assign(document.createElement('td'), { className: 'none', textContent: 'nothing checked yet' }));
+      body.replaceChildren(tr);
+      return;
+    }
+    const current = s.match ? s.match.phase : '';
+    body.replaceChildren(...rows.map((row) => {
+      const tr = document.createElement('tr');
+      tr.dataset.phase = row.phase;
+      if (row.phase === current) tr.className = 'current';
+      tr.appendChild(Object.assign(document.createElement('th'), {
+        textContent: row.phase === 'all' ? 'all' : (PHASE_WORDS[row.phase] || row.phase),
+      }));
+      for (const h of horizons) {
+        const td = document.createElement('td');
+        const figure = row.horizons.find((x) => x.horizon_s === h);
+        if (figure) {
+          td.dataset.modelMm = figure.model_mm;
+          td.dataset.persistenceMm = figure.persistence_mm;
+          // Within a millimetre is a tie (a halt's zeros), neither better nor worse.
+          const margin = figure.persistence_mm - figure.model_mm;
+          td.className = Math.abs(margin) < 1 ? 'tie' : margin > 0 ? 'better' : 'worse';
+          td.title = `${Math.round(figure.robots)} robots lately (faded)`;
+          td.append(Object.assign(document.createElement('span'), { className: 'model', textContent: Math.round(figure.model_mm) }),
+            Object.assign(document.createElement('span'), { className: 'vs', textContent: ` / ${Math.round(figure.persistence_mm)}` }));
+        } else {
+          td.textContent = '–';
+        }
+        tr.appendChild(td);
+      }
+      return tr;
+    }));
+  }
+
   // Seconds since the predictor last received a packet: the age the server measured on its own
   // clock when it wrote the status, plus how long that status has been here on this page's
   // monotonic clock. Neither the data's t_capture (the simulator's or camera's seconds) nor the
@@ -358,19 +531,9 @@
     if (!s) return;
     if (s.match) {
       $('status-opponent').textContent = s.match.opponent;
-      $('status-game').textContent = s.match.referee === 'no referee heard'
-        ? 'no referee heard' : `${s.match.game_state.replace(/_/g, ' ')} · ${s.match.referee}`;
+      drawGameBanner(s.match, s.opponent_color);
     }
-    if (Array.isArray(s.live_score)) {
-      // How far the predictions lately were, against everyone staying where they were.
-      $('status-live-score').textContent = s.live_score.length ?
-          s.live_score
-              .map(
-                  (h) => `${fmt(h.horizon_s, 1)} s ahead: ${Math.round(h.model_mm)} mm ` +
-                      `(everyone stays: ${Math.round(h.persistence_mm)} mm)`)
-              .join(' · ') :
-          'nothing checked yet';
-    }
+    drawLiveScore(s);
     $('status-packets').textContent = `${fmt(s.packets_per_s, 1)} packets/s (${s.packets} in all)`;
     $('status-last-packet').textContent = since === null ? 'never' : `${since.toFixed(1)} s ago`;
     $('status-parse-errors').textContent = `${s.parse_errors}` + (s.kernel_drops ? ` · ${s.kernel_drops} kernel drops` : '');
@@ -409,6 +572,7 @@
       ? (view.status ? view.status.ours : [])
       : prediction.ours;
     if (setup) drawRobots('our-robots', ours || [], 'ours', setup.our_color);
+    drawBall(view.ball);
     drawStatus();
   }
 

@@ -104,7 +104,14 @@ class Json {
 
 void write_setup(Json& json, const FieldViewSetup& setup) {
   json.key("field").open('{').key("length").number(setup.field.length_mm);
-  json.key("width").number(setup.field.width_mm).close('}');
+  json.key("width").number(setup.field.width_mm);
+  const ViewMarkings& m = setup.markings;
+  json.key("markings").open('{').key("goal_width").number(m.goal_width_mm);
+  json.key("goal_depth").number(m.goal_depth_mm).key("boundary_width").number(m.boundary_width_mm);
+  json.key("penalty_area_depth").number(m.penalty_area_depth_mm);
+  json.key("penalty_area_width").number(m.penalty_area_width_mm);
+  json.key("center_circle_radius").number(m.center_circle_radius_mm);
+  json.key("source").string(m.source).close('}').close('}');
   json.key("grid").open('{').key("length").integer(static_cast<std::uint64_t>(setup.grid.length()));
   json.key("width").integer(static_cast<std::uint64_t>(setup.grid.width())).close('}');
   json.key("opponent_color").string(to_string(setup.opponent_color));
@@ -127,6 +134,61 @@ void write_ours(Json& json, std::span<const TeamRobot> ours) {
   json.close(']');
 }
 
+// The ball where it is and its path, in feed coordinates; null when it is not seen lately.
+void write_ball(Json& json, const BallTrail* ball) {
+  json.key("ball");
+  const std::optional<Point> at = ball ? ball->position() : std::nullopt;
+  if (!at) {
+    json.null();
+    return;
+  }
+  json.open('{').key("x").number(at->x).key("y").number(at->y).key("path").open('[');
+  for (const Point& p : ball->path()) json.pair(p.x, p.y);
+  json.close(']').close('}');
+}
+
+void write_horizons(Json& json, const std::vector<LiveScore::Horizon>& horizons) {
+  json.open('[');
+  for (const LiveScore::Horizon& h : horizons) {
+    if (h.robots <= 0.0) continue;
+    json.open('{').key("horizon_s").number(h.horizon_s).key("model_mm").number(h.model_mm);
+    json.key("persistence_mm").number(h.persistence_mm).key("robots").number(h.robots).close('}');
+  }
+  json.close(']');
+}
+
+// Whose restart, placement or timeout the referee's command is, as the opponent followed sees
+// it; none for commands of neither team (HALT, STOP, the starts).
+void write_match(Json& json, const FieldViewStatus& status) {
+  const RefereeView& view = status.referee_view;
+  json.key("match").open('{').key("opponent").string(status.opponent);
+  json.key("game_state").string(status.game_state).key("phase").string(to_string(status.phase));
+  json.key("referee").string(status.referee);
+  json.key("heard").boolean(status.referee_heard);
+  json.key("stage");
+  if (const std::string stage = stage_name(view.stage); status.referee_heard && !stage.empty()) {
+    json.string(stage);
+  } else {
+    json.null();
+  }
+  json.key("for_team");
+  const std::optional<TeamColor> team =
+      status.referee_heard ? team_of_command(view.command) : std::nullopt;
+  if (team) {
+    json.string(*team == status.setup.opponent_color ? "opponent" : "us");
+  } else {
+    json.null();
+  }
+  json.key("yellow").string(view.yellow_name).key("blue").string(view.blue_name);
+  json.key("designated_position");
+  if (status.referee_heard && view.designated_position) {
+    json.pair(view.designated_position->x, view.designated_position->y);
+  } else {
+    json.null();
+  }
+  json.close('}');
+}
+
 // A grid cell as [x, y] and its centre in the feed's coordinates.
 void write_cell(Json& json, const proto::GridCell& cell, const FieldViewSetup& setup) {
   const Cell c{static_cast<int>(cell.x()), static_cast<int>(cell.y())};
@@ -143,7 +205,7 @@ void write_cell(Json& json, const proto::GridCell& cell, const FieldViewSetup& s
 }  // namespace
 
 std::string prediction_json(const proto::FormationPrediction& message, const FieldViewSetup& setup,
-                            std::span<const TeamRobot> ours) {
+                            std::span<const TeamRobot> ours, const BallTrail& ball) {
   Json json(1024 + 160 * static_cast<std::size_t>(message.robots_size()) *
                        (1 + static_cast<std::size_t>(message.steps_size())));
   json.open('{').key("type").string("prediction");
@@ -162,6 +224,7 @@ std::string prediction_json(const proto::FormationPrediction& message, const Fie
   }
   json.close(']');
   write_ours(json, ours);
+  write_ball(json, &ball);
   json.key("steps").open('[');
   for (const proto::PredictedStep& step : message.steps()) {
     json.open('{').key("step").integer(step.step());
@@ -243,13 +306,15 @@ std::string status_json(const FieldViewStatus& status) {
   json.key("error").string(status.table_error).close('}');
   json.key("clients").integer(status.clients).key("dropped_frames").integer(status.dropped_frames);
   write_ours(json, status.ours);
-  json.key("match").open('{').key("opponent").string(status.opponent);
-  json.key("game_state").string(status.game_state).key("referee").string(status.referee).close('}');
-  json.key("live_score").open('[');
-  for (const LiveScore::Horizon& h : status.live_score) {
-    if (h.robots <= 0.0) continue;
-    json.open('{').key("horizon_s").number(h.horizon_s).key("model_mm").number(h.model_mm);
-    json.key("persistence_mm").number(h.persistence_mm).key("robots").number(h.robots).close('}');
+  write_ball(json, status.ball);
+  write_match(json, status);
+  json.key("live_score");
+  write_horizons(json, status.live_score);
+  json.key("live_score_by_phase").open('[');
+  for (const PhaseLiveScore& phase : status.live_score_by_phase) {
+    json.open('{').key("phase").string(to_string(phase.phase)).key("horizons");
+    write_horizons(json, phase.horizons);
+    json.close('}');
   }
   json.close(']');
   json.close('}');

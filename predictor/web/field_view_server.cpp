@@ -38,8 +38,10 @@ class FieldViewHub : public std::enable_shared_from_this<FieldViewHub> {
   void start();
   void stop();
   void broadcast(MessageKind kind, std::string json);
-  void add_live(const std::shared_ptr<LiveSession>& session);
-  void greet(LiveSession& session) const;
+  // A live view's handshake is done: counts it in, runs the joined handler, and sends it what it
+  // has not been sent yet of the latest messages.
+  void join(const std::shared_ptr<LiveSession>& session);
+  void on_joined(std::function<void()> handler) { on_joined_ = std::move(handler); }
   void prepare(tcp::socket& socket) const;
 
   const FieldViewOptions& options() const { return options_; }
@@ -64,6 +66,8 @@ class FieldViewHub : public std::enable_shared_from_this<FieldViewHub> {
   std::vector<std::weak_ptr<LiveSession>> live_;
   SharedText latest_prediction_;
   SharedText latest_status_;
+  std::function<void()> on_joined_;
+  std::uint64_t status_broadcasts_ = 0;
   FieldViewCounters counters_;
   std::uint16_t port_ = 0;
   bool stopped_ = true;
@@ -121,8 +125,7 @@ class LiveSession : public std::enable_shared_from_this<LiveSession> {
     ws_.async_accept(request, [self = shared_from_this()](const beast::error_code& ec) {
       if (ec) return;  // a failed handshake: nothing was registered, the session just ends
       self->open_ = true;
-      self->slot_.hub().add_live(self);
-      self->slot_.hub().greet(*self);
+      self->slot_.hub().join(self);
       self->read();
     });
   }
@@ -446,13 +449,15 @@ void FieldViewHub::for_each_live(F&& f) {
   for (const auto& session : sessions) f(*session);
 }
 
-void FieldViewHub::add_live(const std::shared_ptr<LiveSession>& session) {
+void FieldViewHub::join(const std::shared_ptr<LiveSession>& session) {
   live_.push_back(session);
-}
-
-void FieldViewHub::greet(LiveSession& session) const {
-  if (latest_status_) session.send(latest_status_, MessageKind::status);
-  if (latest_prediction_) session.send(latest_prediction_, MessageKind::prediction);
+  const std::uint64_t statuses_before = status_broadcasts_;
+  if (on_joined_) on_joined_();
+  // A status the handler broadcast has reached this session already.
+  if (status_broadcasts_ == statuses_before && latest_status_) {
+    session->send(latest_status_, MessageKind::status);
+  }
+  if (latest_prediction_) session->send(latest_prediction_, MessageKind::prediction);
 }
 
 void FieldViewHub::broadcast(MessageKind kind, std::string json) {
@@ -460,6 +465,7 @@ void FieldViewHub::broadcast(MessageKind kind, std::string json) {
   ++counters_.broadcasts;
   auto text = std::make_shared<const std::string>(std::move(json));
   (kind == MessageKind::prediction ? latest_prediction_ : latest_status_) = text;
+  if (kind == MessageKind::status) ++status_broadcasts_;
   for (auto it = live_.begin(); it != live_.end();) {
     if (auto session = it->lock()) {
       session->send(text, kind);
@@ -492,6 +498,9 @@ void FieldViewServer::start() { hub_->start(); }
 void FieldViewServer::stop() { hub_->stop(); }
 void FieldViewServer::broadcast(MessageKind kind, std::string json) {
   hub_->broadcast(kind, std::move(json));
+}
+void FieldViewServer::on_viewer_joined(std::function<void()> handler) {
+  hub_->on_joined(std::move(handler));
 }
 std::uint16_t FieldViewServer::port() const { return hub_->port(); }
 std::string FieldViewServer::url() const {

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -61,6 +62,9 @@ class FieldViewServer {
   // Queues `json` for every live view. A new view first receives the latest message of each
   // kind, so it draws at once.
   void broadcast(MessageKind kind, std::string json);
+  // Runs `handler` each time a live view has connected, after it is counted in live_clients and
+  // before it is sent the latest messages: a status broadcast from the handler reaches it first.
+  void on_viewer_joined(std::function<void()> handler);
 
   std::uint16_t port() const;  // the port actually bound, after start()
   std::string url() const;     // "http://127.0.0.1:8080/"

@@ -34,24 +34,28 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 const std::filesystem::path web_test_dir = SSLF_WEB_TEST_DIR;
 const std::filesystem::path screenshot_dir = SSLF_WEB_SCREENSHOT_DIR;
 
+// The paper's simulated opponent with its game controller, which names our team.
 void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const std::string& group,
-                    const std::string& name) {
+                    const std::string& referee, const std::string& name) {
   out.reset();
-  out.emplace(
-      producer_program,
-      std::vector<std::string>{"--simulation", "paper", "--referee", "off", "--vision-address", group, "--seed", "5",
-                               "--period", "0.1", "--cameras", "4", "--status-interval", "100"},
-      dir.path(), name);
+  out.emplace(producer_program,
+              std::vector<std::string>{"--simulation", "paper", "--vision-address", group,
+                                       "--referee-address", referee, "--our-team",
+                                       "ssl-formation", "--seed", "5", "--period", "0.1",
+                                       "--cameras", "4", "--status-interval", "100"},
+              dir.path(), name);
 }
 
 // Starts the predictor and waits until it serves the field view at `url` with its table loaded.
 void start_predictor(std::optional<ChildProcess>& out, const TempDir& dir,
-                     const std::string& vision, const std::string& predictions,
+                     const std::string& vision, const std::string& referee,
+                     const std::string& predictions,
                      const std::filesystem::path& table, std::uint16_t port, const std::string& url,
                      const std::string& name) {
   out.reset();
   out.emplace(predictor_program,
-              std::vector<std::string>{"--vision-address", vision, "--prediction-address",
+              std::vector<std::string>{"--vision-address", vision, "--referee-address", referee,
+                                       "--our-team", "ssl-formation", "--prediction-address",
                                        predictions, "--table", table.string(), "--model", "paper",
                                        "--http-port", std::to_string(port), "--quiet"},
               dir.path(), name, testing::Readiness::ready_file);
@@ -72,15 +76,16 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   const web_testing::ReferenceTable reference = web_testing::reference_stored_table(3, 2000);
   ASSERT_TRUE(save_table(table_path, reference.table, reference.metadata));
   const std::string vision = testing::new_group();
+  const std::string referee = testing::new_group();
   const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
 
   std::optional<ChildProcess> predictor;
-  start_predictor(predictor, dir, vision, predictions, table_path, port, url, "predictor1");
+  start_predictor(predictor, dir, vision, referee, predictions, table_path, port, url, "predictor1");
   if (HasFatalFailure()) return;
   std::optional<ChildProcess> producer;
-  start_producer(producer, dir, vision, "producer1");
+  start_producer(producer, dir, vision, referee, "producer1");
 
   std::filesystem::create_directories(screenshot_dir);
   ChildProcess browser(node,
@@ -102,14 +107,14 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   ASSERT_TRUE(producer->wait(5s).has_value());
   ASSERT_TRUE(browser.wait_for_stdout("PHASE no-vision ok", 20s)) << report();
   // It comes back, its data clock from the start.
-  start_producer(producer, dir, vision, "producer2");
+  start_producer(producer, dir, vision, referee, "producer2");
   ASSERT_TRUE(browser.wait_for_stdout("PHASE vision-back ok", 25s)) << report();
   // The predictor restarts on the same port.
   predictor->signal(SIGTERM);
   ASSERT_EQ(predictor->wait(5s), 0) << predictor->stderr_text();
   // It comes back once the page has shown the loss, so the page really reconnects.
   ASSERT_TRUE(browser.wait_for_stdout("PHASE disconnected ok", 20s)) << report();
-  start_predictor(predictor, dir, vision, predictions, table_path, port, url, "predictor2");
+  start_predictor(predictor, dir, vision, referee, predictions, table_path, port, url, "predictor2");
   if (HasFatalFailure()) return;
   ASSERT_TRUE(browser.wait_for_stdout("PHASE reconnected ok", 30s)) << report();
   const auto code = browser.wait(30s);

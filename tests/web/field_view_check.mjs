@@ -51,7 +51,8 @@ try {
     headless: true,
     logger,
     timeout: 180_000,
-    viewport: { width: 1400, height: 820 },
+    // A laptop's screen: everything must fit without scrolling.
+    viewport: { width: 1366, height: 768 },
     args: [
       '--headless', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
       '--disable-background-networking', '--disable-component-update', '--disable-sync',
@@ -140,6 +141,151 @@ try {
   if (!(live.drawn >= 1)) fail(`drew none of ${live.received} predictions received`);
   await page.waitForFunction(() => document.body.dataset.lastFrame === String(window.fieldView.prediction.frame),
     null, { timeout: 10_000 });
+
+  // The field as SSL-Vision's client draws it: the producer's geometry packet states a 9 x 6 m
+  // field with 1 m goals 180 mm deep and 2 x 1 m penalty areas. The opponent (yellow, the
+  // referee says) attacks +x, so it defends the goal at -x.
+  const markings = await page.evaluate(() => {
+    const field = document.getElementById('field');
+    const box = field.getBoundingClientRect();
+    const of = (selector) => [...document.querySelectorAll(selector)].map((e) => {
+      const r = e.getBoundingClientRect();
+      return { ...e.dataset, cls: e.getAttribute('class'), left: r.left, right: r.right, top: r.top,
+        bottom: r.bottom, boxWidth: r.width, boxHeight: r.height };
+    });
+    const lines = document.querySelector('#markings .field-lines').getBoundingClientRect();
+    return { source: field.dataset.markings, goals: of('#goals .goal'), areas: of('#markings .penalty-area'),
+      circle: Number(document.querySelector('#markings .centre-circle').getAttribute('r')),
+      lines: { left: lines.left, right: lines.right, top: lines.top, bottom: lines.bottom, width: lines.width },
+      svg: { left: box.left, right: box.right, top: box.top, bottom: box.bottom } };
+  });
+  console.log('markings:', JSON.stringify(markings));
+  if (markings.source !== 'geometry') fail(`markings from ${markings.source}`);
+  if (markings.goals.length !== 2 || markings.areas.length !== 2) fail(`goals/areas ${markings.goals.length}/${markings.areas.length}`);
+  const mmPerPixel = 9000 / markings.lines.width;
+  for (const goal of markings.goals) {
+    if (goal.width !== '1000' || goal.depth !== '180') fail(`goal ${JSON.stringify(goal)}`);
+    // Drawn behind its goal line, as tall as the goal is wide, and on screen.
+    const behind = goal.side === '-x' ? goal.right <= markings.lines.left + 2 : goal.left >= markings.lines.right - 2;
+    if (!behind) fail(`goal not behind its goal line: ${JSON.stringify(goal)}`);
+    if (Math.abs(goal.boxHeight * mmPerPixel - 1000) > 60) fail(`goal ${goal.boxHeight * mmPerPixel} mm wide on screen`);
+    if (goal.left < markings.svg.left || goal.right > markings.svg.right) fail('goal off the drawing');
+  }
+  const left = markings.goals.find((g) => g.side === '-x');
+  if (left.defendedBy !== 'opponent' || !left.cls.includes('yellow')) fail(`-x goal: ${JSON.stringify(left)}`);
+  const right = markings.goals.find((g) => g.side === '+x');
+  if (right.defendedBy !== 'us' || !right.cls.includes('blue')) fail(`+x goal: ${JSON.stringify(right)}`);
+  for (const area of markings.areas) {
+    if (area.depth !== '1000' || area.width !== '2000') fail(`penalty area ${JSON.stringify(area)}`);
+    if (Math.abs(area.boxHeight * mmPerPixel - 2000) > 60 || Math.abs(area.boxWidth * mmPerPixel - 1000) > 60) {
+      fail(`penalty area ${area.boxWidth * mmPerPixel} x ${area.boxHeight * mmPerPixel} mm on screen`);
+    }
+    const against = area.side === '-x' ? Math.abs(area.left - markings.lines.left) < 3 : Math.abs(area.right - markings.lines.right) < 3;
+    if (!against) fail(`penalty area not against its goal line: ${JSON.stringify(area)}`);
+  }
+  if (markings.circle !== 500) fail(`centre circle ${markings.circle}`);
+
+  // The ball: where the newest message puts it, with its path.
+  await page.waitForFunction(() => window.fieldView.ball && document.getElementById('ball').getAttribute('visibility') === 'visible',
+    null, { timeout: 10_000 });
+  const ball = await page.evaluate(() => {
+    const dot = document.getElementById('ball');
+    const path = document.getElementById('ball-path');
+    const nearest = Math.min(...window.fieldView.prediction.opponent.map((r) =>
+      Math.hypot(r.x - Number(dot.dataset.x), r.y - Number(dot.dataset.y))));
+    return { x: Number(dot.dataset.x), y: Number(dot.dataset.y), cx: Number(dot.getAttribute('cx')),
+      cy: Number(dot.getAttribute('cy')), message: window.fieldView.ball, nearest,
+      pathPoints: Number(path.dataset.points) };
+  });
+  console.log('ball:', JSON.stringify({ ...ball, message: undefined }));
+  if (ball.x !== ball.message.x || ball.y !== ball.message.y || ball.cx !== ball.x || ball.cy !== -ball.y) {
+    fail(`ball not where the message says: ${JSON.stringify(ball)}`);
+  }
+  if (ball.pathPoints !== ball.message.path.length) fail(`ball path ${ball.pathPoints} of ${ball.message.path.length}`);
+  // The simulated ball is at the feet of the opponent's most advanced robot.
+  if (!(ball.nearest < 400)) fail(`ball ${ball.nearest} mm from the nearest opponent robot`);
+
+  // The game's state as a banner, said once: the referee's state, the stage and the teams.
+  await page.waitForFunction(() => window.fieldView.status && window.fieldView.status.match.heard &&
+    document.getElementById('game-banner').dataset.state !== 'unknown', null, { timeout: 10_000 });
+  const game = await page.evaluate(() => ({
+    state: document.getElementById('game-banner').dataset.state,
+    text: document.getElementById('game-state').textContent,
+    detail: document.getElementById('game-detail').textContent,
+    match: window.fieldView.status.match,
+    stream: document.getElementById('status').textContent,
+  }));
+  console.log('game:', JSON.stringify({ ...game, stream: undefined }));
+  if (game.state !== game.match.game_state) fail(`banner state ${game.state} for ${game.match.game_state}`);
+  if (!game.detail.includes('first half') || !game.detail.includes('ssl-formation')) fail(`banner detail: ${game.detail}`);
+  if (/_/.test(game.text) || /NORMAL_/.test(game.detail)) fail(`banner in the wire's words: ${game.text} · ${game.detail}`);
+  // Said once: the stage and the names are not repeated in the stream list below.
+  if (game.stream.includes('first half') || game.stream.includes('NORMAL_FIRST_HALF')) fail(`stage repeated: ${game.stream}`);
+
+  // The lately-off-by figures: all together and per phase, as the status says.
+  await page.waitForFunction(() => window.fieldView.status.live_score.length >= 1 &&
+    window.fieldView.status.live_score_by_phase.length >= 1 &&
+    document.querySelectorAll('#live-score tbody tr[data-phase]').length >= 2, null, { timeout: 20_000 });
+  const late = await page.evaluate(() => {
+    const s = window.fieldView.status;
+    const rows = [...document.querySelectorAll('#live-score tbody tr[data-phase]')].map((tr) => ({
+      phase: tr.dataset.phase, current: tr.classList.contains('current'),
+      cells: [...tr.querySelectorAll('td')].map((td) => ({ model: Number(td.dataset.modelMm), stays: Number(td.dataset.persistenceMm), text: td.textContent })),
+    }));
+    return { rows, all: s.live_score, byPhase: s.live_score_by_phase, phase: s.match.phase,
+      headers: [...document.querySelectorAll('#live-score thead th')].map((th) => th.textContent) };
+  });
+  console.log('lately off by:', JSON.stringify(late.rows));
+  if (late.rows[0].phase !== 'all') fail('no "all" row');
+  const expected = [{ phase: 'all', horizons: late.all }, ...late.byPhase];
+  if (late.rows.length !== expected.length) fail(`${late.rows.length} rows for ${expected.length} phases`);
+  expected.forEach((want, i) => {
+    const row = late.rows[i];
+    if (row.phase !== want.phase) fail(`row ${i}: ${row.phase} for ${want.phase}`);
+    want.horizons.forEach((h, k) => {
+      const cell = row.cells[k];
+      if (cell.model !== h.model_mm || cell.stays !== h.persistence_mm) fail(`row ${row.phase}: ${JSON.stringify(cell)} for ${JSON.stringify(h)}`);
+      if (cell.text !== `${Math.round(h.model_mm)} / ${Math.round(h.persistence_mm)}`) fail(`cell text ${cell.text}`);
+    });
+  });
+  if (JSON.stringify(late.headers) !== JSON.stringify(['phase', '+2.0 s', '+4.0 s'])) fail(`headers ${late.headers}`);
+  const current = late.rows.filter((r) => r.current).map((r) => r.phase);
+  if (current.length > 1 || (current.length === 1 && current[0] !== late.phase)) fail(`current row ${current} in ${late.phase}`);
+
+  // The page itself is a viewer.
+  const viewers = await page.textContent('#status-clients');
+  if (!/^1\b/.test(viewers)) fail(`viewers: ${viewers}`);
+
+  // It fits a laptop's screen: no scrolling, the legend and the whole field in view, the side
+  // panel whole. At 1366 x 768 and at 1280 x 720.
+  const fits = async () => page.evaluate(() => {
+    const inside = (id) => {
+      const r = document.getElementById(id).getBoundingClientRect();
+      return r.top >= 0 && r.left >= 0 && r.bottom <= innerHeight + 0.5 && r.right <= innerWidth + 0.5 && r.height > 0;
+    };
+    const aside = document.querySelector('aside');
+    const lines = document.querySelector('#markings .field-lines').getBoundingClientRect();
+    return { scroll: document.scrollingElement.scrollHeight - innerHeight,
+      scrollX: document.scrollingElement.scrollWidth - innerWidth,
+      legend: inside('legend'), banner: inside('game-banner'), field: inside('field'),
+      aside: aside.scrollHeight - aside.clientHeight, steps: inside('steps'), clients: inside('status-clients'),
+      liveScore: inside('live-score'), fieldWidth: lines.width };
+  });
+  for (const size of [{ width: 1366, height: 768 }, { width: 1280, height: 720 }]) {
+    await page.setViewportSize(size);
+    await page.waitForTimeout(300);
+    const fit = await fits();
+    console.log(`fit at ${size.width}x${size.height}:`, JSON.stringify(fit));
+    if (fit.scroll > 0 || fit.scrollX > 0) fail(`the page scrolls at ${size.width}x${size.height}`);
+    if (!fit.legend || !fit.banner || !fit.field || !fit.steps || !fit.clients || !fit.liveScore) {
+      fail(`not all in view at ${size.width}x${size.height}: ${JSON.stringify(fit)}`);
+    }
+    if (fit.aside > 1) fail(`the side panel scrolls at ${size.width}x${size.height}`);
+    if (fit.fieldWidth < 600) fail(`the field is ${fit.fieldWidth} px wide at ${size.width}x${size.height}`);
+    if (size.width === 1280) await page.screenshot({ path: `${out}/field-view-1280x720.png` });
+  }
+  await page.setViewportSize({ width: 1366, height: 768 });
+  await page.waitForTimeout(200);
   await page.screenshot({ path: `${out}/field-view.png` });
   phase('live');
 
@@ -169,8 +315,17 @@ try {
     });
     view.prediction = m;
     view.predictionArrivedAt = performance.now();
+    // A ball rolling along a curve for the last 2 s, as a live match's would.
+    const path = Array.from({ length: 30 }, (_, k) => [-2000 + 100 * k, 800 * Math.sin(k / 10)]);
+    view.ball = { x: path[29][0], y: path[29][1], path };
     view.dirty = true;
     await new Promise((resolve) => requestAnimationFrame(() => requestAnimationFrame(resolve)));
+    const drawnPath = document.getElementById('ball-path');
+    const ballPath = {
+      visible: drawnPath.getAttribute('visibility') === 'visible',
+      points: drawnPath.getAttribute('points').trim().split(/\s+/).map((p) => p.split(',').map(Number)),
+      length: drawnPath.getTotalLength(),
+    };
     const circles = [...document.querySelectorAll('#predictions .radius-90')];
     const dots = [...document.querySelectorAll('#predictions .predicted-position')];
     return {
@@ -188,9 +343,16 @@ try {
       labels: [...document.querySelectorAll('#predictions .step-label')].map((t) => t.textContent),
       items: [...document.querySelectorAll('#steps .horizon')].map((t) => t.textContent),
       now: document.getElementById('now').textContent,
+      ballPath, path,
     };
   });
-  console.log('motion:', JSON.stringify(motion));
+  console.log('motion:', JSON.stringify({ ...motion, ballPath: undefined, path: undefined }));
+  // The ball's path: every point, in mm with y turned for the screen, drawn as a line.
+  if (!motion.ballPath.visible || motion.ballPath.points.length !== 30) fail(`ball path ${JSON.stringify(motion.ballPath)}`);
+  motion.ballPath.points.forEach(([x, y], k) => {
+    if (Math.abs(x - motion.path[k][0]) > 1e-6 || Math.abs(y + motion.path[k][1]) > 1e-6) fail(`ball path point ${k}: ${x},${y}`);
+  });
+  if (!(motion.ballPath.length > 2900)) fail(`ball path ${motion.ballPath.length} mm long`);
   if (motion.circles !== motion.robots || motion.dots !== motion.robots) fail(`motion circles ${JSON.stringify(motion)}`);
   if (!motion.radii.includes(450) || !motion.radii.includes(900)) fail(`90% radii ${motion.radii}`);
   if (!motion.placed) fail('predicted positions not where the message puts them');

@@ -49,11 +49,15 @@ TEST(FieldViewJson, PredictionCarriesFieldGridRobotsAndStepsInFeedCoordinates) {
   setup.opponent_attacks = AttackDirection::negative_x;
   setup.opponent_color = TeamColor::blue;
   const std::vector<TeamRobot> ours{{0, 1000.0, 250.5, 3.0}};
-  const std::string json = prediction_json(sample_message(), setup, ours);
+  const std::string json = prediction_json(sample_message(), setup, ours, BallTrail{});
   EXPECT_TRUE(json.starts_with(R"({"type":"prediction","frame":61,"t":122,)")) << json;
-  EXPECT_NE(json.find(R"("field":{"length":9000,"width":6000},"grid":{"length":3,"width":2})"),
+  EXPECT_NE(json.find(R"("field":{"length":9000,"width":6000,"markings":{"goal_width":1000,)"
+                      R"("goal_depth":180,"boundary_width":300,"penalty_area_depth":1000,)"
+                      R"("penalty_area_width":2000,"center_circle_radius":500,"source":"rules"}},)"
+                      R"("grid":{"length":3,"width":2})"),
             std::string::npos)
       << json;
+  EXPECT_NE(json.find(R"("ball":null,"steps")"), std::string::npos) << json;
   EXPECT_NE(json.find(R"("opponent_color":"blue","our_color":"yellow","opponent_attacks":"-x")"),
             std::string::npos);
   // Cell (1,0) of an opponent attacking -x: centre (0,-1500) rotated by 180 degrees.
@@ -93,7 +97,7 @@ TEST(FieldViewJson, TheMotionModelsRobotsCarryPositionsAndRadiiAndStepsTheirHori
   second.set_step(2);
   second.set_horizon_seconds(2 * 0.1);
   second.mutable_robots(0)->set_radius_90_mm(900.0F);
-  const std::string json = prediction_json(m, FieldViewSetup{}, {});
+  const std::string json = prediction_json(m, FieldViewSetup{}, {}, BallTrail{});
   EXPECT_NE(json.find(R"("model":"motion")"), std::string::npos) << json;
   EXPECT_NE(json.find(R"({"step":1,"horizon_s":0.1,)"), std::string::npos) << json;
   EXPECT_NE(json.find(R"({"step":2,"horizon_s":0.2,)"), std::string::npos) << json;
@@ -110,7 +114,7 @@ TEST(FieldViewJson, AStepWithoutItsHorizonIsTheStepTimesTheStepSeconds) {
   m.set_step_seconds(0.25);
   *m.add_steps() = m.steps(0);
   m.mutable_steps(1)->set_step(2);
-  const std::string json = prediction_json(m, FieldViewSetup{}, {});
+  const std::string json = prediction_json(m, FieldViewSetup{}, {}, BallTrail{});
   EXPECT_NE(json.find(R"({"step":1,"horizon_s":0.25,)"), std::string::npos) << json;
   EXPECT_NE(json.find(R"({"step":2,"horizon_s":0.5,)"), std::string::npos) << json;
 }
@@ -147,18 +151,93 @@ TEST(FieldViewJson, StatusCarriesTheStreamAndTheTable) {
 TEST(FieldViewJson, StatusSaysWhoTheOpponentIsWhyAndTheGameState) {
   FieldViewStatus status;
   EXPECT_NE(status_json(status).find(
-                R"("match":{"opponent":"","game_state":"unknown","referee":"no referee heard"})"),
+                R"("match":{"opponent":"","game_state":"unknown","phase":"running",)"
+                R"("referee":"no referee heard","heard":false,"stage":null,"for_team":null,)"
+                R"("yellow":"","blue":"","designated_position":null})"),
             std::string::npos)
       << status_json(status);
   status.opponent = "'Them' blue (referee), attacks -x (referee)";
+  status.setup.opponent_color = TeamColor::blue;
   status.game_state = "ball_placement";
+  status.phase = GamePhase::ball_placement_opponent;
   status.referee = "game ball_placement, yellow 'Us', blue 'Them'";
+  status.referee_heard = true;
+  status.referee_view.state = GameState::ball_placement;
+  status.referee_view.command = 17;  // BALL_PLACEMENT_BLUE
+  status.referee_view.stage = 1;     // NORMAL_FIRST_HALF
+  status.referee_view.yellow_name = "Us";
+  status.referee_view.blue_name = "Them";
+  status.referee_view.designated_position = Point{-1500.0, 250.0};
   EXPECT_NE(status_json(status).find(
                 R"j("match":{"opponent":"'Them' blue (referee), attacks -x (referee)",)j"
-                R"j("game_state":"ball_placement","referee":"game ball_placement, yellow 'Us', )j"
-                R"j(blue 'Them'"})j"),
+                R"j("game_state":"ball_placement","phase":"ball_placement_opponent",)j"
+                R"j("referee":"game ball_placement, yellow 'Us', blue 'Them'","heard":true,)j"
+                R"j("stage":"NORMAL_FIRST_HALF","for_team":"opponent","yellow":"Us",)j"
+                R"j("blue":"Them","designated_position":[-1500,250]})j"),
             std::string::npos)
       << status_json(status);
+  // Yellow's placement is ours when the opponent is blue.
+  status.referee_view.command = 16;  // BALL_PLACEMENT_YELLOW
+  EXPECT_NE(status_json(status).find(R"("for_team":"us")"), std::string::npos);
+  // HALT is nobody's.
+  status.referee_view.command = 0;
+  EXPECT_NE(status_json(status).find(R"("for_team":null)"), std::string::npos);
+}
+
+TEST(FieldViewJson, StatusCarriesTheBallItsPathAndTheLateFiguresByPhase) {
+  FieldViewStatus status;
+  BallTrail ball;
+  ball.update(BallState{10.0, Point{100.0, 200.0}, Point{}}, 10.0);
+  ball.update(BallState{10.1, Point{150.0, 200.0}, Point{}}, 10.1);
+  status.ball = &ball;
+  status.live_score = {LiveScore::Horizon{0.5, 40.0, 90.0, 12.0}};
+  status.live_score_by_phase = {
+      PhaseLiveScore{GamePhase::stop, {LiveScore::Horizon{0.5, 30.0, 20.0, 4.0}}},
+      PhaseLiveScore{GamePhase::free_kick_us, {LiveScore::Horizon{0.5, 45.0, 125.0, 8.0}}}};
+  const std::string json = status_json(status);
+  EXPECT_NE(json.find(R"("ball":{"x":150,"y":200,"path":[[100,200],[150,200]]})"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find(R"("live_score":[{"horizon_s":0.5,"model_mm":40,"persistence_mm":90,)"
+                      R"("robots":12}],"live_score_by_phase":[{"phase":"stop","horizons":)"
+                      R"([{"horizon_s":0.5,"model_mm":30,"persistence_mm":20,"robots":4}]},)"
+                      R"({"phase":"free_kick_us","horizons":[{"horizon_s":0.5,"model_mm":45,)"
+                      R"("persistence_mm":125,"robots":8}]}]})"),
+            std::string::npos)
+      << json;
+  // A ball gone for longer than the trail keeps it: null.
+  ball.update(BallState{10.1, Point{150.0, 200.0}, Point{}}, 11.0);
+  EXPECT_NE(status_json(status).find(R"("ball":null)"), std::string::npos);
+}
+
+TEST(FieldViewJson, MarkingsComeFromTheGeometryWhereTheyFitTheField) {
+  const FieldSize division_a{12000.0, 9000.0};
+  const ViewMarkings rules_a = markings_for(division_a, std::nullopt);
+  EXPECT_EQ(rules_a.goal_width_mm, 1800.0);
+  EXPECT_EQ(rules_a.penalty_area_width_mm, 3600.0);
+  EXPECT_EQ(rules_a.penalty_area_depth_mm, 1800.0);
+  EXPECT_EQ(rules_a.source, "rules");
+  const ViewMarkings rules_b = markings_for(FieldSize{9000.0, 6000.0}, std::nullopt);
+  EXPECT_EQ(rules_b.goal_width_mm, 1000.0);
+  EXPECT_EQ(rules_b.penalty_area_depth_mm, 1000.0);
+  // A packet stating all of them, differently from the rules.
+  const ViewMarkings stated =
+      markings_for(division_a, FieldMarkings{1600, 200, 250, 1500, 3000, 600});
+  EXPECT_EQ(stated.goal_width_mm, 1600.0);
+  EXPECT_EQ(stated.goal_depth_mm, 200.0);
+  EXPECT_EQ(stated.boundary_width_mm, 250.0);
+  EXPECT_EQ(stated.penalty_area_depth_mm, 1500.0);
+  EXPECT_EQ(stated.penalty_area_width_mm, 3000.0);
+  EXPECT_EQ(stated.center_circle_radius_mm, 600.0);
+  EXPECT_EQ(stated.source, "geometry");
+  // An older sender leaves the penalty area out, and a goal wider than the field is nonsense:
+  // the rules' values stand in for both.
+  const ViewMarkings partly =
+      markings_for(division_a, FieldMarkings{20000, 180, 300, 0, 0, 500});
+  EXPECT_EQ(partly.goal_width_mm, 1800.0);
+  EXPECT_EQ(partly.penalty_area_depth_mm, 1800.0);
+  EXPECT_EQ(partly.penalty_area_width_mm, 3600.0);
+  EXPECT_EQ(partly.source, "geometry and rules");
 }
 
 TEST(FieldViewJson, TheAgeOfTheLastPacketIsTheServersOwnAndNeverNegative) {

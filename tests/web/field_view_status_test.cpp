@@ -257,3 +257,45 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
 
 }  // namespace
 }  // namespace ssl_formation
+
+namespace ssl_formation {
+namespace {
+
+// The first status a page gets counts the page itself, also when the periodic ones are far apart.
+TEST(FieldViewStatus, APageIsCountedAmongTheViewersInTheFirstStatusItGets) {
+  TempDir dir;
+  const std::uint16_t port = web_testing::free_tcp_port();
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", testing::new_group(), "--referee-address",
+                          testing::new_group(), "--prediction-address", testing::new_group(),
+                          "--table", (dir / "none.bin").string(), "--http-port",
+                          std::to_string(port), "--http-status-interval", "60", "--quiet"},
+                         dir.path(), "predictor", Readiness::ready_file);
+  ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
+  const auto first_status = [](RawClient& client) {
+    std::string bytes;
+    for (const auto deadline = std::chrono::steady_clock::now() + 5s;
+         std::chrono::steady_clock::now() < deadline;) {
+      bytes += client.read_until("\x01", 100ms);
+      const std::vector<std::string> statuses = json_messages(bytes, "status");
+      if (!statuses.empty()) return statuses.front();
+    }
+    return std::string();
+  };
+  RawClient first(port);
+  ASSERT_TRUE(first.upgrade());
+  const std::string seen_by_first = first_status(first);
+  EXPECT_EQ(number_of(seen_by_first, "clients"), 1.0) << seen_by_first;
+  RawClient second(port);
+  ASSERT_TRUE(second.upgrade());
+  const std::string seen_by_second = first_status(second);
+  EXPECT_EQ(number_of(seen_by_second, "clients"), 2.0) << seen_by_second;
+  // The first page hears of the second at once too.
+  const std::string later = first_status(first);
+  EXPECT_EQ(number_of(later, "clients"), 2.0) << later;
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(predictor.wait(5s), 0) << predictor.stderr_text();
+}
+
+}  // namespace
+}  // namespace ssl_formation

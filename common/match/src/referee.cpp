@@ -144,14 +144,19 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
   return change;
 }
 
+std::string stage_name(int stage) {
+  if (stage < 0 || !Referee::Stage_IsValid(stage)) return {};
+  return Referee::Stage_Name(static_cast<Referee::Stage>(stage));
+}
+
 std::string describe(const RefereeFollower& referee) {
   if (!referee.heard()) return "no referee heard";
   const RefereeView& view = referee.view();
   std::string out = "game ";
   out += to_string(view.state);
-  if (view.stage >= 0 && Referee::Stage_IsValid(view.stage)) {
+  if (const std::string stage = stage_name(view.stage); !stage.empty()) {
     out += ", stage ";
-    out += Referee::Stage_Name(static_cast<Referee::Stage>(view.stage));
+    out += stage;
   }
   out += ", yellow '" + view.yellow_name + "', blue '" + view.blue_name + "'";
   if (view.blue_on_positive_half) {

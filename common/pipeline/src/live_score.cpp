@@ -16,6 +16,38 @@ constexpr double kSameInstantS = 1e-6;
 
 }  // namespace
 
+void LiveScore::Means::reach(std::size_t step, double step_s) {
+  if (step >= horizons.size()) {
+    horizons.resize(step + 1);
+    model_sum.resize(step + 1, 0.0);
+    persistence_sum.resize(step + 1, 0.0);
+  }
+  horizons[step].horizon_s = static_cast<double>(step + 1) * step_s;
+}
+
+void LiveScore::Means::add(std::size_t step, double model_mm, double persistence_mm) {
+  model_sum[step] += model_mm;
+  persistence_sum[step] += persistence_mm;
+  horizons[step].robots += 1.0;
+}
+
+void LiveScore::Means::fade(double keep) {
+  for (std::size_t step = 0; step < horizons.size(); ++step) {
+    model_sum[step] *= keep;
+    persistence_sum[step] *= keep;
+    horizons[step].robots *= keep;
+  }
+}
+
+void LiveScore::Means::update_means() {
+  for (std::size_t step = 0; step < horizons.size(); ++step) {
+    Horizon& h = horizons[step];
+    if (h.robots <= 0.0) continue;
+    h.model_mm = model_sum[step] / h.robots;
+    h.persistence_mm = persistence_sum[step] / h.robots;
+  }
+}
+
 bool LiveScoreSettings::valid() const {
   return std::isfinite(half_life_s) && half_life_s > 0.0 && std::isfinite(remember_interval_s) &&
          remember_interval_s >= 0.0 && std::isfinite(tolerance_s) && tolerance_s >= 0.0;
@@ -27,9 +59,8 @@ LiveScore::LiveScore(LiveScoreSettings settings) : settings_(settings) {
 
 void LiveScore::clear() {
   pending_.clear();
-  horizons_.clear();
-  model_sum_.clear();
-  persistence_sum_.clear();
+  all_ = Means{};
+  by_phase_.fill(Means{});
   last_remembered_s_ = -1e300;
   last_seen_s_ = -1e300;
   faded_to_s_ = -1e300;
@@ -40,11 +71,8 @@ void LiveScore::fade_to(double time_s) {
   if (time_s <= faded_to_s_) return;
   const double keep = std::exp2(-(time_s - faded_to_s_) / settings_.half_life_s);
   faded_to_s_ = time_s;
-  for (std::size_t step = 0; step < horizons_.size(); ++step) {
-    model_sum_[step] *= keep;
-    persistence_sum_[step] *= keep;
-    horizons_[step].robots *= keep;
-  }
+  all_.fade(keep);
+  for (Means& means : by_phase_) means.fade(keep);
 }
 
 void LiveScore::observe(const Formation& formation) {
@@ -61,42 +89,31 @@ void LiveScore::observe(const Formation& formation) {
     if (t - p.due_s > settings_.tolerance_s) continue;  // its instant passed unseen
     const FormationRobot* robot = formation.find(p.robot_id);
     if (robot == nullptr) continue;
-    if (p.step >= horizons_.size()) {
-      horizons_.resize(p.step + 1);
-      model_sum_.resize(p.step + 1, 0.0);
-      persistence_sum_.resize(p.step + 1, 0.0);
-    }
-    model_sum_[p.step] += distance(p.predicted, robot->feed_position);
-    persistence_sum_[p.step] += distance(p.then, robot->feed_position);
-    horizons_[p.step].robots += 1.0;
+    const double model_mm = distance(p.predicted, robot->feed_position);
+    const double persistence_mm = distance(p.then, robot->feed_position);
+    all_.add(p.step, model_mm, persistence_mm);
+    by_phase_[static_cast<std::size_t>(p.phase)].add(p.step, model_mm, persistence_mm);
     ++scored_;
     scored_any = true;
   }
   if (!scored_any) return;
-  for (std::size_t step = 0; step < horizons_.size(); ++step) {
-    Horizon& h = horizons_[step];
-    if (h.robots <= 0.0) continue;
-    h.model_mm = model_sum_[step] / h.robots;
-    h.persistence_mm = persistence_sum_[step] / h.robots;
-  }
+  all_.update_means();
+  for (Means& means : by_phase_) means.update_means();
 }
 
-void LiveScore::remember(const Prediction& prediction, const Formation& formation, double step_s) {
+void LiveScore::remember(const Prediction& prediction, const Formation& formation, double step_s,
+                         GamePhase phase) {
   const double t = formation.time_s;
   if (t - last_remembered_s_ < settings_.remember_interval_s) return;
   last_remembered_s_ = t;
   for (std::size_t step = 0; step < prediction.steps.size(); ++step) {
     const double due = t + static_cast<double>(step + 1) * step_s;
-    if (step >= horizons_.size()) {
-      horizons_.resize(step + 1);
-      model_sum_.resize(step + 1, 0.0);
-      persistence_sum_.resize(step + 1, 0.0);
-    }
-    horizons_[step].horizon_s = static_cast<double>(step + 1) * step_s;
+    all_.reach(step, step_s);
+    by_phase_[static_cast<std::size_t>(phase)].reach(step, step_s);
     for (const RobotPrediction& robot : prediction.steps[step].robots) {
       const FormationRobot* now = formation.find(robot.robot_id);
       if (now == nullptr) continue;
-      Pending p{due, step, robot.robot_id, robot.feed_position, now->feed_position};
+      Pending p{due, step, robot.robot_id, phase, robot.feed_position, now->feed_position};
       // Kept in order of due time: later predictions' near steps fall before earlier ones'
       // far steps.
       const auto at =
@@ -109,7 +126,7 @@ void LiveScore::remember(const Prediction& prediction, const Formation& formatio
 
 const LiveScore::Horizon* LiveScore::nearest(double horizon_s) const {
   const Horizon* best = nullptr;
-  for (const Horizon& h : horizons_) {
+  for (const Horizon& h : all_.horizons) {
     if (h.robots <= 0.0) continue;
     if (best == nullptr ||
         std::abs(h.horizon_s - horizon_s) < std::abs(best->horizon_s - horizon_s)) {

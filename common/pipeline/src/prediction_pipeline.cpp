@@ -90,7 +90,7 @@ void PredictionPipeline::on_sample(const MatchMoment& moment) {
     ++samples_without_table_;
     return;
   }
-  live_score_.remember(prediction_, moment.formation(), config_.sampler.step_s);
+  live_score_.remember(prediction_, moment.formation(), config_.sampler.step_s, moment.phase);
   ++predictions_;
   if (on_prediction_) on_prediction_(PredictedFormation{moment.sample, prediction_, context_});
 }

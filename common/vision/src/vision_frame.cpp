@@ -359,8 +359,12 @@ void to_vision_frame(const SSL_WrapperPacket& packet, VisionFrame& frame) {
   }
   frame.has_geometry = packet.has_geometry();
   if (frame.has_geometry) {
-    frame.field_length = packet.geometry().field().field_length();
-    frame.field_width = packet.geometry().field().field_width();
+    const SSL_GeometryFieldSize& field = packet.geometry().field();
+    frame.field_length = field.field_length();
+    frame.field_width = field.field_width();
+    frame.markings = FieldMarkings{field.goal_width(),         field.goal_depth(),
+                                   field.boundary_width(),     field.penalty_area_depth(),
+                                   field.penalty_area_width(), field.center_circle_radius()};
   }
 }
 

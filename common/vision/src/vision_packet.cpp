@@ -50,6 +50,7 @@ void fill_geometry(SSL_GeometryData& geometry, const FieldSize& field) {
   size.set_boundary_width(300);
   size.set_penalty_area_depth(division_a ? 1800 : 1000);
   size.set_penalty_area_width(division_a ? 3600 : 2000);
+  size.set_center_circle_radius(500);
 }
 
 SSL_WrapperPacket make_geometry_packet(const FieldSize& field) {

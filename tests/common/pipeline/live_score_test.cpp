@@ -99,3 +99,49 @@ TEST(LiveScore, OldEvidenceFadesAndMissingRobotsAreNotScored) {
 
 }  // namespace
 }  // namespace ssl_formation
+
+namespace ssl_formation {
+namespace {
+
+TEST(LiveScore, KeepsThePredictionsOfEachPhaseApart) {
+  LiveScore score;
+  const double speed = 1200.0;
+  const double step_s = 0.5;
+  // 20 s: the first 10 predicted in STOP by a model that says "it stays", the next 10 in running
+  // play by one that is right.
+  for (int frame = 0; frame <= 60 * 20; ++frame) {
+    const double t = frame / 60.0;
+    const Formation f = formation_at(t, speed);
+    score.observe(f);
+    const bool running = t >= 10.0;
+    score.remember(predicted(f, step_s,
+                             [&](double at) {
+                               return running ? Point{speed * at, 0.0} : Point{speed * t, 0.0};
+                             }),
+                   f, step_s, running ? GamePhase::running : GamePhase::stop);
+  }
+  const auto& stop = score.horizons(GamePhase::stop);
+  const auto& running = score.horizons(GamePhase::running);
+  ASSERT_EQ(stop.size(), 2U);
+  ASSERT_EQ(running.size(), 2U);
+  EXPECT_TRUE(score.horizons(GamePhase::halt).empty());
+  for (std::size_t step = 0; step < 2; ++step) {
+    // In STOP the model was as far off as everyone staying; in running play not at all.
+    EXPECT_NEAR(stop[step].model_mm, stop[step].persistence_mm, 1e-6);
+    EXPECT_GT(stop[step].model_mm, 100.0);
+    EXPECT_NEAR(running[step].model_mm, 0.0, 1e-6);
+    EXPECT_EQ(running[step].horizon_s, stop[step].horizon_s);
+    // All together: between the two, weighted by their robots.
+    const LiveScore::Horizon& all = score.horizons()[step];
+    EXPECT_NEAR(all.robots, stop[step].robots + running[step].robots, 1e-9);
+    EXPECT_NEAR(all.model_mm * all.robots,
+                stop[step].model_mm * stop[step].robots +
+                    running[step].model_mm * running[step].robots,
+                1e-6);
+  }
+  score.clear();
+  EXPECT_TRUE(score.horizons(GamePhase::stop).empty());
+}
+
+}  // namespace
+}  // namespace ssl_formation

@@ -9,6 +9,7 @@
 #include <boost/asio/steady_timer.hpp>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -84,6 +85,8 @@ class PredictorDaemon final : public MatchEventSink {
   void publish_status(const net::LiveMatchEvents* live = nullptr);
 
   bool serving_web() const;
+  // Runs `handler` when a field view page connects (after it is counted among the viewers).
+  void when_viewer_joins(std::function<void()> handler);
   // What the ready file says once the sockets are joined and the table there at start loaded.
   std::vector<std::pair<std::string, std::string>> ready_facts() const;
 
@@ -117,10 +120,13 @@ class PredictorDaemon final : public MatchEventSink {
   std::string table_error_;
   // The field view (--http-port), and what only it needs.
   web::TeamRobots ours_;
+  web::BallTrail ball_;
+  std::optional<FieldMarkings> stated_markings_;  // the last geometry packet's
   std::optional<web::FieldViewServer> web_;
   std::optional<double> last_packet_s_;  // on the clock
   std::optional<double> last_rate_s_;
   std::uint64_t last_rate_packets_ = 0;
+  double packets_per_s_ = 0.0;
   std::optional<std::int64_t> table_loaded_unix_ms_;
   // The warm-up before each expected frame (schedule_warm_up).
   boost::asio::steady_timer warm_up_timer_;

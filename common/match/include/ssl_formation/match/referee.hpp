@@ -118,6 +118,10 @@ class RefereeFollower {
   std::string conflicting_source_;  // the last second game controller reported
 };
 
+// Referee::Stage's name for its number ("NORMAL_FIRST_HALF"), or "" for one the wire format does
+// not define (and -1, before the first message).
+std::string stage_name(int stage);
+
 // "game running, stage NORMAL_FIRST_HALF, yellow 'TIGERs Mannheim', blue 'ER-Force', blue's goal
 // on +x", or "no referee heard", for status lines.
 std::string describe(const RefereeFollower& referee);

@@ -6,8 +6,10 @@
 // and its position at the time of the prediction are both measured against where it is, and
 // the two errors go into means that fade with a half-life of data time. Only the positions the
 // prediction states are scored, so this is the model's error as the tables stand, not a test on
-// held-out data (that is ssl-evaluate's).
+// held-out data (that is ssl-evaluate's). The same means are also kept per phase of the game the
+// prediction was made in, since a team reads "off by 300 mm" differently in a halt and in play.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -16,6 +18,7 @@
 
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/prediction.hpp"
+#include "ssl_formation/match/game_phase.hpp"
 
 namespace ssl_formation {
 
@@ -34,9 +37,10 @@ class LiveScore {
   // forgets those whose instant passed. Formations in time order; a clock going back starts
   // over.
   void observe(const Formation& formation);
-  // Keeps `prediction`, made from `formation` with `step_s` between its steps, unless one was
-  // kept less than the remember interval before.
-  void remember(const Prediction& prediction, const Formation& formation, double step_s);
+  // Keeps `prediction`, made from `formation` in `phase` with `step_s` between its steps, unless
+  // one was kept less than the remember interval before.
+  void remember(const Prediction& prediction, const Formation& formation, double step_s,
+                GamePhase phase = GamePhase::running);
   void clear();
 
   struct Horizon {
@@ -46,7 +50,11 @@ class LiveScore {
     double robots = 0.0;          // the faded number of robots behind the means
   };
   // One per step predicted so far, nearest first; empty before anything was scored.
-  const std::vector<Horizon>& horizons() const { return horizons_; }
+  const std::vector<Horizon>& horizons() const { return all_.horizons; }
+  // The same for the predictions made in `phase` only; empty while none of them was scored.
+  const std::vector<Horizon>& horizons(GamePhase phase) const {
+    return by_phase_[static_cast<std::size_t>(phase)].horizons;
+  }
   // The horizon nearest `horizon_s`, if any was scored.
   const Horizon* nearest(double horizon_s) const;
   std::uint64_t scored() const { return scored_; }
@@ -56,16 +64,26 @@ class LiveScore {
     double due_s = 0.0;
     std::size_t step = 0;
     std::uint32_t robot_id = 0;
+    GamePhase phase = GamePhase::running;
     Point predicted;  // feed coordinates
     Point then;       // where it was when predicted
+  };
+  // Faded sums and their means, per step.
+  struct Means {
+    std::vector<Horizon> horizons;
+    std::vector<double> model_sum;
+    std::vector<double> persistence_sum;
+    void reach(std::size_t step, double step_s);  // has room for `step`, of that horizon
+    void add(std::size_t step, double model_mm, double persistence_mm);
+    void fade(double keep);
+    void update_means();
   };
   void fade_to(double time_s);
 
   LiveScoreSettings settings_;
   std::deque<Pending> pending_;  // in order of due time within a prediction; sorted on insert
-  std::vector<Horizon> horizons_;
-  std::vector<double> model_sum_;
-  std::vector<double> persistence_sum_;
+  Means all_;
+  std::array<Means, all_game_phases.size()> by_phase_;
   double last_remembered_s_ = -1e300;
   double last_seen_s_ = -1e300;
   double faded_to_s_ = -1e300;

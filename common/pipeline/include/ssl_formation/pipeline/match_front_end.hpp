@@ -77,6 +77,14 @@ class MatchFrontEnd final : public MatchEventSink {
   const TrackedVision& tracked_vision() const { return tracked_; }
   // The ball as followed so far, in feed coordinates (raw vision's or the tracker's).
   const BallTracker& ball() const { return ball_; }
+  // The data time of the newest detection frame (raw or tracked) of this stream; none yet.
+  std::optional<double> last_frame_time_s() const { return last_frame_time_s_; }
+  // The phase of the game at that frame for the opponent followed (running before any frame). A
+  // command heard since takes effect with the next sample, as it does for the samples.
+  GamePhase phase_now() const {
+    return last_frame_time_s_ ? phases_.phase(*last_frame_time_s_, match_.opponent().color)
+                              : GamePhase::running;
+  }
   // The side the opponent attacks now: the sampler's (inferred, or as the options and referee
   // say).
   AttackDirection attacks() const {

@@ -43,12 +43,26 @@ struct VisionDetection {
   }
 };
 
+// The markings a geometry packet states besides the field's size (geometry.field, millimetres),
+// for drawing the field as SSL-Vision's client does; 0 where the packet leaves an optional one
+// out (older senders state no penalty area or centre circle).
+struct FieldMarkings {
+  std::int32_t goal_width = 0;
+  std::int32_t goal_depth = 0;
+  std::int32_t boundary_width = 0;
+  std::int32_t penalty_area_depth = 0;
+  std::int32_t penalty_area_width = 0;
+  std::int32_t center_circle_radius = 0;
+  friend bool operator==(const FieldMarkings&, const FieldMarkings&) = default;
+};
+
 struct VisionFrame {
   bool has_detection = false;
   VisionDetection detection;  // meaningful only if has_detection
   bool has_geometry = false;
   std::int32_t field_length = 0;  // geometry.field, millimetres; only if has_geometry
   std::int32_t field_width = 0;
+  FieldMarkings markings;  // only if has_geometry
 };
 
 // Overwrites `frame` with what `packet` holds (the vectors keep their capacity).
