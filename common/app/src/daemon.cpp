@@ -10,16 +10,21 @@
 #include <fstream>
 #include <sstream>
 
+#include "ssl_formation/app/log_limit.hpp"
 #include "ssl_formation/app/options.hpp"
 
 namespace ssl_formation::app {
 
 void init_logging(const std::string& program, bool verbose) {
-  auto logger = spdlog::stderr_color_mt(program);
+  // Every line through the repeat limit (log_limit.hpp), and libprotobuf's own messages too.
+  auto limited = std::make_shared<LimitedSink>(
+      std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
+  auto logger = std::make_shared<spdlog::logger>(program, std::move(limited));
   logger->set_pattern("[%H:%M:%S.%e] %n %l: %v");
   logger->set_level(verbose ? spdlog::level::debug : spdlog::level::info);
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
+  route_protobuf_log();
 }
 
 net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text) {
