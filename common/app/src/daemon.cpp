@@ -82,6 +82,14 @@ void MatchLog::update(const MatchFrontEnd& front_end, const RefereeChange& chang
         "first ('{}'), {} messages of others ignored so far",
         referee.view().source, c.other_source);
   }
+  if (change.stale && c.stale == 1) {
+    // Said once; the status lines count them (referee_stale).
+    spdlog::warn(
+        "referee: a message from the game controller followed ('{}') is older than what it said "
+        "before (its command counter went back, or its timestamp is off by more than {} s): not "
+        "used, nor any like it (counted as referee_stale in the status lines)",
+        referee.view().source, RefereeFollower::max_timestamp_back_s);
+  }
   if (change.source) {
     spdlog::warn("referee: the game controller followed fell silent; now following '{}'",
                  referee.view().source);
@@ -120,9 +128,10 @@ std::string describe_tracked(const MatchFrontEnd& front_end) {
 std::string describe_referee_counts(const MatchFollower& match) {
   const RefereeCounters& c = match.referee().counters();
   const Opponent& opponent = match.opponent();
-  return fmt::format("opponent={} ({}) game={} referee_messages={} referee_unused={}",
-                     to_string(opponent.color), to_string(opponent.color_because),
-                     to_string(match.game_state()), c.messages, c.messages - c.used);
+  return fmt::format(
+      "opponent={} ({}) game={} referee_messages={} referee_unused={} referee_stale={}",
+      to_string(opponent.color), to_string(opponent.color_because), to_string(match.game_state()),
+      c.messages, c.messages - c.used, c.stale);
 }
 
 StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> on_stop)

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "ssl_gc_referee_message.pb.h"
+#include "ssl_formation/base/wire_text.hpp"
 
 namespace ssl_formation {
 
@@ -94,7 +95,8 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
     return {};
   }
   RefereeChange change;
-  const std::string& source = message.source_identifier();  // "" when not given
+  // Text from the wire, shortened and escaped (wire_text.hpp) before anything keeps or shows it.
+  const std::string source = printable_wire_text(message.source_identifier());  // "": not given
   if (heard_ && source != view_.source) {
     // A second game controller (a test instance, a backup) while the first still speaks: the
     // first keeps the match, the way the game controller's own clients follow one source.
@@ -107,8 +109,15 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
     ++counters_.source_switches;
     change.source = true;
   }
+  if (heard_ && !change.source && stale(message, receive_s)) {
+    // A replayed or stale message must not take the match back to an earlier state.
+    ++counters_.stale;
+    change.stale = true;
+    return change;
+  }
   ++counters_.used;
   last_used_s_ = receive_s;
+  if (message.has_packet_timestamp()) last_timestamp_us_ = message.packet_timestamp();
   if (!heard_ || change.source || message.command() != view_.command ||
       message.command_counter() != view_.command_counter) {
     change.command = true;
@@ -120,8 +129,8 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
   view_.command = message.command();
   view_.command_counter = message.command_counter();
   view_.stage = message.has_stage() ? message.stage() : view_.stage;
-  const std::string& yellow = message.yellow().name();
-  const std::string& blue = message.blue().name();
+  const std::string yellow = printable_wire_text(message.yellow().name());
+  const std::string blue = printable_wire_text(message.blue().name());
   if (yellow.empty() && blue.empty()) ++counters_.unnamed_teams;
   if (yellow != view_.yellow_name || blue != view_.blue_name) {
     change.teams = true;
@@ -142,6 +151,24 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
     }
   }
   return change;
+}
+
+bool RefereeFollower::stale(const Referee& message, double receive_s) const {
+  const bool silence = receive_s - last_used_s_ > source_timeout_s_ || receive_s < last_used_s_;
+  if (silence) return false;  // a new start of the game controller (or a new log file)
+  if (last_timestamp_us_ && message.has_packet_timestamp()) {
+    const double since_s =
+        (static_cast<double>(message.packet_timestamp()) - static_cast<double>(*last_timestamp_us_)) *
+        1e-6;
+    if (since_s < -max_timestamp_back_s) return true;
+    if (since_s > receive_s - last_used_s_ + max_timestamp_ahead_s) return true;
+  }
+  if (message.command_counter() < view_.command_counter) {
+    // The counter starts again when the game controller restarts: then the stage is new too.
+    const bool new_stage = message.has_stage() && message.stage() != view_.stage;
+    return !new_stage;
+  }
+  return false;
 }
 
 std::string stage_name(int stage) {

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "ssl_formation/base/wire_text.hpp"
+
 namespace ssl_formation {
 
 namespace {
@@ -69,15 +71,16 @@ bool TrackedVision::add(std::string_view payload, double receive_s, VisionFrame&
     ++counters_.undecodable;
     return false;
   }
-  if (packet_.uuid() != uuid_) {
+  // The tracker's id and name as the logs and the field view may show them (wire_text.hpp).
+  if (std::string uuid = printable_wire_text(packet_.uuid()); uuid != uuid_) {
     const bool silent = receive_s - last_s_ > source_timeout_s || receive_s < last_s_;
     if (!uuid_.empty() && !silent) {
       ++counters_.other_source;
       return false;
     }
     if (!uuid_.empty()) ++counters_.source_switches;
-    uuid_ = packet_.uuid();
-    name_ = packet_.source_name();
+    uuid_ = std::move(uuid);
+    name_ = printable_wire_text(packet_.source_name());
     source_changed_ = true;
   }
   last_s_ = receive_s;

@@ -367,3 +367,72 @@ TEST(RefereeFollower, TheDesignatedPositionIsTheLastUsedMessages) {
 }
 
 }  // namespace
+
+namespace {
+
+// The message as the followed game controller sends it `seconds` after the first, at stage
+// `stage`.
+Referee at(Referee m, double seconds, Referee::Stage stage = Referee::NORMAL_FIRST_HALF) {
+  m.set_packet_timestamp(1700000000000000 + static_cast<std::uint64_t>(seconds * 1e6));
+  m.set_stage(stage);
+  return m;
+}
+
+TEST(RefereeFollower, AReplayedOrStaleMessageOfTheFollowedSourceChangesNothing) {
+  sf::RefereeFollower referee;
+  const Referee kickoff = at(message(Referee::PREPARE_KICKOFF_YELLOW, 3), 0.0);
+  referee.add(bytes(kickoff), 100.0);
+  referee.add(bytes(at(message(Referee::NORMAL_START, 4), 5.0)), 105.0);
+  referee.add(bytes(at(message(Referee::STOP, 9), 60.0)), 160.0);
+  ASSERT_EQ(referee.view().state, sf::GameState::stop);
+  // The kick-off's message sent again a minute later, as it was (counter 3, its old timestamp),
+  // and with a fresh timestamp (the counter still goes back).
+  const sf::RefereeChange replay = referee.add(bytes(kickoff), 160.1);
+  EXPECT_TRUE(replay.stale);
+  EXPECT_FALSE(replay.any());
+  EXPECT_TRUE(referee.add(bytes(at(kickoff, 60.1)), 160.2).stale);
+  // A counter that is current but a timestamp 2 s back: stale too.
+  EXPECT_TRUE(referee.add(bytes(at(message(Referee::HALT, 9), 58.0)), 160.3).stale);
+  // A timestamp far ahead of the game controller's clock: forged, and it would lock the real
+  // one out if it were taken.
+  EXPECT_TRUE(referee.add(bytes(at(message(Referee::HALT, 10), 3600.0)), 160.4).stale);
+  EXPECT_EQ(referee.view().state, sf::GameState::stop);
+  EXPECT_EQ(referee.view().command_counter, 9u);
+  EXPECT_EQ(referee.counters().stale, 4u);
+  // The game controller goes on: used.
+  const sf::RefereeChange next = referee.add(bytes(at(message(Referee::NORMAL_START, 10), 61.0)), 161.0);
+  EXPECT_TRUE(next.command);
+  EXPECT_FALSE(next.stale);
+  EXPECT_EQ(referee.view().state, sf::GameState::running);
+  EXPECT_EQ(referee.counters().used, 4u);
+}
+
+TEST(RefereeFollower, ARestartedGameControllerIsFollowedAfterASilenceOrInANewStage) {
+  sf::RefereeFollower referee;
+  referee.add(bytes(at(message(Referee::STOP, 40), 0.0)), 10.0);
+  // Restarted 3 s later (longer than the source timeout): its counter starts again.
+  const sf::RefereeChange restarted = referee.add(bytes(at(message(Referee::HALT, 0), 3.0)), 13.0);
+  EXPECT_FALSE(restarted.stale);
+  EXPECT_EQ(referee.view().state, sf::GameState::halt);
+  EXPECT_EQ(referee.view().command_counter, 0u);
+  // Restarted at once, in the next stage: followed too.
+  referee.add(bytes(at(message(Referee::STOP, 12), 4.0)), 14.0);
+  const sf::RefereeChange next_stage = referee.add(
+      bytes(at(message(Referee::HALT, 1), 4.5, Referee::NORMAL_HALF_TIME)), 14.5);
+  EXPECT_FALSE(next_stage.stale);
+  EXPECT_EQ(referee.view().state, sf::GameState::halt);
+  EXPECT_EQ(referee.counters().stale, 0u);
+}
+
+TEST(RefereeFollower, NamesFromTheWireAreShortAndPrintable) {
+  sf::RefereeFollower referee;
+  referee.add(bytes(message(Referee::HALT, 1, "gc\n-a", std::string(59814, 'Y'), "Blue\x1b[2J")), 1.0);
+  EXPECT_EQ(referee.view().yellow_name, std::string(64, 'Y') + "…(59814 bytes)");
+  EXPECT_EQ(referee.view().blue_name, "Blue\\u{001B}[2J");
+  EXPECT_EQ(referee.view().source, "gc\\u{000A}-a");
+  EXPECT_LT(sf::describe(referee).size(), 250u) << sf::describe(referee);
+  // The same source still: the next message is used, not a second game controller.
+  EXPECT_TRUE(referee.add(bytes(message(Referee::STOP, 2, "gc\n-a")), 1.1).command);
+}
+
+}  // namespace

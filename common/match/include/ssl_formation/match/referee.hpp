@@ -69,6 +69,7 @@ struct RefereeChange {
   bool sides = false;    // blue_team_on_positive_half changed (the teams changed ends)
   bool source = false;   // another game controller is followed from now on
   bool conflict = false;  // this message came from a second game controller, and was not used
+  bool stale = false;     // from the followed one, but older than what it said: not used
   bool any() const { return command || teams || sides || source; }
 };
 
@@ -79,6 +80,9 @@ struct RefereeCounters {
   std::uint64_t undecodable = 0;    // not a Referee message at all: not used
   std::uint64_t unknown_command = 0;  // a command number the wire format does not define: not used
   std::uint64_t other_source = 0;   // from a second game controller while one is followed
+  // From the followed game controller but stale or replayed: a command counter that went back,
+  // a packet timestamp more than max_timestamp_back_s before its last (or far ahead of it).
+  std::uint64_t stale = 0;
   std::uint64_t source_switches = 0;  // the followed one fell silent and another took over
   std::uint64_t unnamed_teams = 0;  // messages that name neither team (used all the same)
   std::uint64_t commands = 0;       // new commands followed
@@ -88,6 +92,11 @@ class RefereeFollower {
  public:
   // A followed game controller silent for this long gives way to the next one heard.
   static constexpr double default_source_timeout_s = 2.0;
+  // A message of the followed game controller whose packet timestamp is this much before the
+  // last one used is stale (a replay), and one whose timestamp runs this much plus the time
+  // between the two messages ahead of it is forged: neither is used.
+  static constexpr double max_timestamp_back_s = 1.0;
+  static constexpr double max_timestamp_ahead_s = 10.0;
 
   explicit RefereeFollower(double source_timeout_s = default_source_timeout_s);
 
@@ -101,6 +110,7 @@ class RefereeFollower {
   void reset() {
     heard_ = false;
     view_ = RefereeView{};
+    last_timestamp_us_.reset();
     conflicting_source_.clear();
   }
 
@@ -110,9 +120,15 @@ class RefereeFollower {
   const RefereeCounters& counters() const { return counters_; }
 
  private:
+  // Whether `message`, from the followed game controller, is older than what it said last: see
+  // RefereeCounters::stale. A restarted game controller, whose counter starts again from 0, is
+  // told apart by a silence of source_timeout_s or a new stage.
+  bool stale(const Referee& message, double receive_s) const;
+
   double source_timeout_s_;
   bool heard_ = false;
   double last_used_s_ = 0.0;
+  std::optional<std::uint64_t> last_timestamp_us_;  // packet_timestamp of the last message used
   RefereeView view_;
   RefereeCounters counters_;
   std::string conflicting_source_;  // the last second game controller reported
