@@ -347,6 +347,10 @@ void PredictorDaemon::on_prediction(const PredictedFormation& predicted) {
   if (web_) {
     fill_prediction_message(predicted.formation(), predicted.prediction, predicted.context,
                             message_);
+    // The ball as of the packet that completed this formation (on_event updates it only after).
+    if (const auto now = pipeline_.front_end().last_frame_time_s()) {
+      ball_.update(pipeline_.front_end().ball().state(), *now);
+    }
     web_->broadcast(web::MessageKind::prediction,
                     web::prediction_json(message_, view_setup(), ours_.current(), ball_));
   }

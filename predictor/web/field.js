@@ -216,6 +216,7 @@
 
   // The ball where the follower last saw it, and its path over the last seconds.
   function drawBall(ball) {
+    view.drawnBall = ball;  // what the page shows, for tests and the console
     const dot = $('ball');
     const path = $('ball-path');
     if (!ball) {
@@ -448,6 +449,7 @@
   };
   function drawLiveScore(s) {
     if (!Array.isArray(s.live_score)) return;
+    view.drawnStatus = s;  // the status the table and the banner show
     const table = $('live-score');
     const rows = [{ phase: 'all', horizons: s.live_score }].concat(s.live_score_by_phase || []);
     const horizons = [...new Set(s.live_score.map((h) => h.horizon_s))];

@@ -65,6 +65,14 @@ struct InProcess {
   void referee(const std::string& payload) {
     daemon->on_event(MatchEvent::referee(payload, clock.steady_s()));
   }
+  // The game controller says `payload` ten times a second for 1.2 s: long enough for new team
+  // names to take over (RefereeFollower::name_hold_s).
+  void referee_held(const std::string& payload) {
+    for (int i = 0; i <= 12; ++i) {
+      if (i > 0) clock.advance(0.1);
+      referee(payload);
+    }
+  }
 
   PredictorOptions options;
   boost::asio::io_context io;
@@ -192,10 +200,10 @@ TEST(PredictorDaemon, ATablePerOpponentIsLoadedAsTheRefereeNamesIt) {
   predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "BETA")));
   EXPECT_EQ(predictor.daemon->watcher().path(), tables / "beta.bin");
   EXPECT_TRUE(predictor.daemon->pipeline().table());
-  predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Alpha")));
+  predictor.referee_held(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Alpha")));
   EXPECT_EQ(predictor.daemon->watcher().path(), tables / "alpha.bin");
   EXPECT_TRUE(predictor.daemon->pipeline().table());
-  predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Gamma")));
+  predictor.referee_held(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Gamma")));
   EXPECT_EQ(predictor.daemon->watcher().path(), tables / "gamma.bin");
   EXPECT_FALSE(predictor.daemon->pipeline().table());  // waits for Gamma's table
 }

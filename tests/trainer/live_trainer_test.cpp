@@ -55,6 +55,14 @@ struct InProcess {
   void referee(const std::string& payload) {
     trainer.on_event(MatchEvent::referee(payload, clock.steady_s()));
   }
+  // The game controller says `payload` ten times a second for 1.2 s: long enough for new team
+  // names to take over (RefereeFollower::name_hold_s).
+  void referee_held(const std::string& payload) {
+    for (int i = 0; i <= 12; ++i) {
+      if (i > 0) clock.advance(0.1);
+      referee(payload);
+    }
+  }
 
   TrainerOptions options;
   app::ManualClock clock;
@@ -98,7 +106,7 @@ TEST(LiveTrainer, ATablePerOpponentAsTheRefereeNamesThem) {
   live.referee(match_against("Alpha"));
   live.frames(0, 150);
   // Alpha's table is written as Beta comes, while the trainer runs on.
-  live.referee(match_against("Beta"));
+  live.referee_held(match_against("Beta"));
   EXPECT_TRUE(std::filesystem::exists(tables / "alpha.bin"));
   live.frames(1000, 1150);  // later on the data clock: a new stream
   ASSERT_TRUE(live.trainer.save_at_exit());

@@ -129,9 +129,10 @@ std::string describe_referee_counts(const MatchFollower& match) {
   const RefereeCounters& c = match.referee().counters();
   const Opponent& opponent = match.opponent();
   return fmt::format(
-      "opponent={} ({}) game={} referee_messages={} referee_unused={} referee_stale={}",
+      "opponent={} ({}) game={} referee_messages={} referee_unused={} referee_stale={} "
+      "name_switches_refused={}",
       to_string(opponent.color), to_string(opponent.color_because), to_string(match.game_state()),
-      c.messages, c.messages - c.used, c.stale);
+      c.messages, c.messages - c.used, c.stale, c.refused_name_switches);
 }
 
 StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> on_stop)

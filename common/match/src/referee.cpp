@@ -132,7 +132,7 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
   const std::string yellow = printable_wire_text(message.yellow().name());
   const std::string blue = printable_wire_text(message.blue().name());
   if (yellow.empty() && blue.empty()) ++counters_.unnamed_teams;
-  if (yellow != view_.yellow_name || blue != view_.blue_name) {
+  if (names_take_over(yellow, blue, receive_s)) {
     change.teams = true;
     view_.yellow_name = yellow;
     view_.blue_name = blue;
@@ -151,6 +151,36 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
     }
   }
   return change;
+}
+
+bool RefereeFollower::names_take_over(const std::string& yellow, const std::string& blue,
+                                      double receive_s) {
+  if (yellow == view_.yellow_name && blue == view_.blue_name) {
+    // The names followed again: a candidate in between did not hold.
+    if (candidate_) ++counters_.refused_name_switches;
+    candidate_.reset();
+    return false;
+  }
+  // The first names heard (none followed yet) take over at once.
+  if (view_.yellow_name.empty() && view_.blue_name.empty()) return true;
+  if (!candidate_ || candidate_->yellow != yellow || candidate_->blue != blue) {
+    if (candidate_) ++counters_.refused_name_switches;  // another candidate came in between
+    candidate_ = NameCandidate{yellow, blue, receive_s};
+    return false;
+  }
+  if (receive_s - candidate_->since_s < name_hold_s) return false;
+  while (!name_switches_s_.empty() && receive_s - name_switches_s_.front() >= name_switch_window_s) {
+    name_switches_s_.pop_front();
+  }
+  if (name_switches_s_.size() >= static_cast<std::size_t>(max_name_switches)) {
+    // Held, but too many switches lately: refused, and it must hold anew after the window.
+    ++counters_.refused_name_switches;
+    candidate_->since_s = receive_s;
+    return false;
+  }
+  name_switches_s_.push_back(receive_s);
+  candidate_.reset();
+  return true;
 }
 
 bool RefereeFollower::stale(const Referee& message, double receive_s) const {

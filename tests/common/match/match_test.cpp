@@ -210,8 +210,11 @@ TEST(MatchFollower, FollowsTheChangeOfEndsAndANewOpponentName) {
   EXPECT_TRUE(ends.sides);
   EXPECT_EQ(match.opponent().attacks, AttackDirection::positive_x);
   EXPECT_EQ(match.opponent().attacks_because, Because::referee);
+  // A new name takes over once it has held for a second.
+  EXPECT_FALSE(match.add_referee(payload(Referee::STOP, 2, "Us", "Them Again", false), 3.0).teams);
+  EXPECT_EQ(match.opponent().name, "Them");
   const sf::RefereeChange renamed =
-      match.add_referee(payload(Referee::STOP, 2, "Us", "Them Again", false), 3.0);
+      match.add_referee(payload(Referee::STOP, 2, "Us", "Them Again", false), 4.1);
   EXPECT_TRUE(renamed.teams);
   EXPECT_FALSE(renamed.command);
   EXPECT_EQ(match.opponent().name, "Them Again");

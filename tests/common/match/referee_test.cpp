@@ -148,8 +148,45 @@ TEST(RefereeFollower, ATeamNameChangeIsReported) {
   EXPECT_EQ(referee.view().yellow_name, "Y");
   EXPECT_EQ(referee.view().blue_name, "B");
   EXPECT_FALSE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B")), 1.2).teams);
-  EXPECT_TRUE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B2")), 1.3).teams);
+  // Other names take over once they have held for a second of messages.
+  EXPECT_FALSE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B2")), 1.3).teams);
+  EXPECT_FALSE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B2")), 2.0).teams);
+  EXPECT_EQ(referee.view().blue_name, "B");
+  EXPECT_TRUE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B2")), 2.4).teams);
   EXPECT_EQ(referee.view().blue_name, "B2");
+  EXPECT_EQ(referee.counters().refused_name_switches, 0u);
+}
+
+TEST(RefereeFollower, SpoofedNamesBetweenTheRealOnesNeverTakeOverAndSwitchesAreRateLimited) {
+  sf::RefereeFollower referee;
+  referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B")), 0.0);
+  // 10 s of the real names at 10 Hz, each followed by a spoofed one (a new name every time).
+  double t = 0.0;
+  for (int i = 0; i < 100; ++i) {
+    t += 0.05;
+    EXPECT_FALSE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B")), t).teams);
+    t += 0.05;
+    EXPECT_FALSE(
+        referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", std::string("spoof").append(std::to_string(i)))), t)
+            .teams);
+  }
+  EXPECT_EQ(referee.view().blue_name, "B");
+  EXPECT_GE(referee.counters().refused_name_switches, 99u);
+  // Names that really change, one after the other, every 2 s: three take over within the
+  // minute, the fourth waits for the window.
+  sf::RefereeFollower changing;
+  changing.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B0")), 0.0);
+  int switches = 0;
+  for (int k = 1; k <= 4; ++k) {
+    for (double s = 0.0; s < 2.0; s += 0.1) {
+      switches += changing.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", std::string("B").append(std::to_string(k)))),
+                               2.0 * k + s)
+                      .teams;
+    }
+  }
+  EXPECT_EQ(switches, 3);
+  EXPECT_EQ(changing.view().blue_name, "B3");
+  EXPECT_GE(changing.counters().refused_name_switches, 1u);
 }
 
 TEST(RefereeFollower, SidesChangeOnlyWhenTheFieldIsGivenAndDiffers) {

@@ -326,8 +326,10 @@ TEST(MatchFrontEnd, AnOpponentOfAnotherColourForgetsTheMatch) {
   EXPECT_EQ(recorder.forgets, 0);
   for (; i < 20; ++i) front.add(frame(i));
   EXPECT_EQ(recorder.seen.back().robots.at(0).robot_id, 1u);  // the yellow robot
-  // The teams swap colours: the opponent is blue now.
+  // The teams swap colours: the opponent is blue once the new names have held for a second.
   front.add_referee(referee(Referee::NORMAL_START, 1, "ER-Force", "TIGERs Mannheim"), 0.1);
+  EXPECT_EQ(recorder.forgets, 0);
+  front.add_referee(referee(Referee::NORMAL_START, 1, "ER-Force", "TIGERs Mannheim"), 1.2);
   EXPECT_EQ(recorder.forgets, 1);
   EXPECT_EQ(front.sampler().config().opponent_color, TeamColor::blue);
   EXPECT_EQ(front.match().opponent().name, "TIGERs Mannheim");
@@ -335,7 +337,7 @@ TEST(MatchFrontEnd, AnOpponentOfAnotherColourForgetsTheMatch) {
   ASSERT_EQ(recorder.seen.back().robots.size(), 1u);
   EXPECT_EQ(recorder.seen.back().robots[0].robot_id, 2u);  // the blue robot
   // The same teams again change nothing.
-  front.add_referee(referee(Referee::STOP, 2, "ER-Force", "TIGERs Mannheim"), 0.2);
+  front.add_referee(referee(Referee::STOP, 2, "ER-Force", "TIGERs Mannheim"), 1.3);
   EXPECT_EQ(recorder.forgets, 1);
 }
 

@@ -9,6 +9,7 @@
 //   if (change.command) ... referee.view().state ...
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -85,6 +86,10 @@ struct RefereeCounters {
   std::uint64_t stale = 0;
   std::uint64_t source_switches = 0;  // the followed one fell silent and another took over
   std::uint64_t unnamed_teams = 0;  // messages that name neither team (used all the same)
+  // New team names that did not take over: they did not hold for name_hold_s of the followed
+  // game controller's messages, or came when max_name_switches teams had already switched within
+  // name_switch_window_s (spoofed names on a shared network, a half-configured tool).
+  std::uint64_t refused_name_switches = 0;
   std::uint64_t commands = 0;       // new commands followed
 };
 
@@ -97,6 +102,12 @@ class RefereeFollower {
   // between the two messages ahead of it is forged: neither is used.
   static constexpr double max_timestamp_back_s = 1.0;
   static constexpr double max_timestamp_ahead_s = 10.0;
+  // Team names other than the ones followed take over only once every message of the followed
+  // game controller has said them for this long, and at most max_name_switches times within
+  // name_switch_window_s. The first names heard take over at once.
+  static constexpr double name_hold_s = 1.0;
+  static constexpr int max_name_switches = 3;
+  static constexpr double name_switch_window_s = 60.0;
 
   explicit RefereeFollower(double source_timeout_s = default_source_timeout_s);
 
@@ -112,6 +123,8 @@ class RefereeFollower {
     view_ = RefereeView{};
     last_timestamp_us_.reset();
     conflicting_source_.clear();
+    candidate_.reset();
+    name_switches_s_.clear();
   }
 
   // Whether a message has been followed yet.
@@ -124,11 +137,21 @@ class RefereeFollower {
   // RefereeCounters::stale. A restarted game controller, whose counter starts again from 0, is
   // told apart by a silence of source_timeout_s or a new stage.
   bool stale(const Referee& message, double receive_s) const;
+  // Whether the names `yellow` and `blue` of a used message take over now (see name_hold_s).
+  bool names_take_over(const std::string& yellow, const std::string& blue, double receive_s);
 
   double source_timeout_s_;
   bool heard_ = false;
   double last_used_s_ = 0.0;
   std::optional<std::uint64_t> last_timestamp_us_;  // packet_timestamp of the last message used
+  // Names other than the view's, said by every message since `since_s`.
+  struct NameCandidate {
+    std::string yellow;
+    std::string blue;
+    double since_s = 0.0;
+  };
+  std::optional<NameCandidate> candidate_;
+  std::deque<double> name_switches_s_;  // when names took over, within the window
   RefereeView view_;
   RefereeCounters counters_;
   std::string conflicting_source_;  // the last second game controller reported
