@@ -178,14 +178,8 @@ int run_offline(const TrainerOptions& options) {
                           "--opponent-color");
   }
   if (options.jobs < 0) throw app::UsageError("--jobs must be 0 (every core) or more");
-  if (to.per_team) {
-    std::error_code error;
-    std::filesystem::create_directories(options.table_dir, error);
-    if (error) {
-      throw std::runtime_error("--table-dir " + options.table_dir + ": cannot create it: " +
-                               error.message());
-    }
-  }
+  // Creates --table-dir where it is missing; no other trainer may write these tables meanwhile.
+  const TableWriterLock lock = lock_tables(options);
   // The tables the logs add to, by file: --table's opened first, so that a table that cannot be
   // resumed stops the run before any log is read; --table-dir's as their teams turn up.
   std::map<std::filesystem::path, std::unique_ptr<Training>> tables;

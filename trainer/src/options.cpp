@@ -85,6 +85,21 @@ void check_table_option(const TrainerOptions& options) {
   }
 }
 
+TableWriterLock lock_tables(const TrainerOptions& options) {
+  if (options.table_dir.empty()) {
+    return TableWriterLock(TableWriterLock::lock_path_for_table(options.table),
+                           "the table " + options.table);
+  }
+  std::error_code error;
+  std::filesystem::create_directories(options.table_dir, error);
+  if (error) {
+    throw std::runtime_error("--table-dir " + options.table_dir + ": cannot create it: " +
+                             error.message());
+  }
+  return TableWriterLock(TableWriterLock::lock_path_for_folder(options.table_dir),
+                         "the table folder " + options.table_dir);
+}
+
 MatchRules match_rules(const TrainerOptions& options) {
   return MatchRules{options.model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
 }

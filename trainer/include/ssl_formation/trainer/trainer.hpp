@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/files/table_lock.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/pipeline/training.hpp"
@@ -49,6 +50,11 @@ std::optional<MotionConfig> motion_config(const TrainerOptions& options);
 // first save has lost the match (or the logs' work) by then. Throws app::UsageError when
 // --table's folder does not exist.
 void check_table_option(const TrainerOptions& options);
+
+// The one-writer lock on --table, or on --table-dir (created if missing) for all its tables:
+// held by run_live and run_offline for their whole run. Throws TableLockError naming the other
+// writer.
+TableWriterLock lock_tables(const TrainerOptions& options);
 // How the training follows the referee, by --opponent-color, --opponent-attacks, --our-team,
 // --opponent-team and --learn-during. Throws app::UsageError.
 MatchRules match_rules(const TrainerOptions& options);
