@@ -69,6 +69,11 @@ class PredictionListener {
   PredictionListener(const PredictionListener&) = delete;
   PredictionListener& operator=(const PredictionListener&) = delete;
 
+  // How many predictions have arrived so far.
+  std::size_t count() {
+    std::lock_guard lock(mutex_);
+    return messages_.size();
+  }
   // What has arrived once there are `n` messages, or when `timeout` runs out.
   std::vector<proto::FormationPrediction> wait_for(std::size_t n,
                                                    std::chrono::milliseconds timeout) {

@@ -194,9 +194,14 @@ bool RefereeFollower::stale(const Referee& message, double receive_s) const {
     if (since_s > receive_s - last_used_s_ + max_timestamp_ahead_s) return true;
   }
   if (message.command_counter() < view_.command_counter) {
-    // The counter starts again when the game controller restarts: then the stage is new too.
+    // The counter starts again when the game controller restarts: then the stage is new too,
+    // and the timestamp is the clock's now. A message of an earlier stage sent again has an
+    // older timestamp: a replay, not a restart.
     const bool new_stage = message.has_stage() && message.stage() != view_.stage;
-    return !new_stage;
+    const bool timestamp_goes_on =
+        !last_timestamp_us_ || !message.has_packet_timestamp() ||
+        message.packet_timestamp() >= *last_timestamp_us_;
+    return !(new_stage && timestamp_goes_on);
   }
   return false;
 }

@@ -435,7 +435,13 @@ TEST(RefereeFollower, AReplayedOrStaleMessageOfTheFollowedSourceChangesNothing) 
   EXPECT_TRUE(referee.add(bytes(at(message(Referee::HALT, 10), 3600.0)), 160.4).stale);
   EXPECT_EQ(referee.view().state, sf::GameState::stop);
   EXPECT_EQ(referee.view().command_counter, 9u);
-  EXPECT_EQ(referee.counters().stale, 4u);
+  // A message of the stage before, replayed with its own timestamp less than a second old:
+  // its counter goes back, and it is no restart, since its timestamp goes back too.
+  EXPECT_TRUE(referee.add(bytes(at(message(Referee::PREPARE_KICKOFF_YELLOW, 2), 59.5,
+                                   Referee::NORMAL_FIRST_HALF_PRE)),
+                          160.5)
+                  .stale);
+  EXPECT_EQ(referee.counters().stale, 5u);
   // The game controller goes on: used.
   const sf::RefereeChange next = referee.add(bytes(at(message(Referee::NORMAL_START, 10), 61.0)), 161.0);
   EXPECT_TRUE(next.command);

@@ -135,7 +135,8 @@ class RefereeFollower {
  private:
   // Whether `message`, from the followed game controller, is older than what it said last: see
   // RefereeCounters::stale. A restarted game controller, whose counter starts again from 0, is
-  // told apart by a silence of source_timeout_s or a new stage.
+  // told apart by a silence of source_timeout_s, or by a new stage with a timestamp that does
+  // not go back.
   bool stale(const Referee& message, double receive_s) const;
   // Whether the names `yellow` and `blue` of a used message take over now (see name_hold_s).
   bool names_take_over(const std::string& yellow, const std::string& blue, double receive_s);
