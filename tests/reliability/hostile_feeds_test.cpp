@@ -277,6 +277,10 @@ TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
   producer.wait(10s);
   std::cout << "[ figures  ] referee flood: sent=" << sent.sent << " heard=" << heard
             << " replays=" << sent.replays << " spoofed_names=" << sent.spoofed_names
+            << " trainer_referee_stale=" << after.at("referee_stale")
+            << " trainer_name_switches_refused=" << after.at("name_switches_refused")
+            << " trainer_referee_unused="
+            << after.at("referee_unused") - before.at("referee_unused")
             << " predictions_during=" << predictions_during
             << " trainer_log_lines=" << log_figures(trainer.stderr_text(), trainer_log_from).lines
             << " predictor_log_lines="
@@ -392,7 +396,13 @@ TEST(HostileFeeds, ATrackerGroupFloodNeitherStallsNorFloodsTheDaemons) {
   EXPECT_EQ(trainer.wait(10s), 0) << trainer.stderr_text();
   EXPECT_EQ(predictor.wait(10s), 0) << predictor.stderr_text();
   std::cout << "[ figures  ] tracker flood: sent=" << sent << " real_frames=" << frames
-            << " predictions_during=" << predictions_during << "\n";
+            << " predictions_during=" << predictions_during << " trainer_tracker_undecodable="
+            << after.at("tracker_undecodable") - before.at("tracker_undecodable")
+            << " trainer_tracker_other_source="
+            << after.at("tracker_other_source") - before.at("tracker_other_source")
+            << " trainer_log_lines=" << log_figures(trainer.stderr_text(), trainer_log_from).lines
+            << " predictor_log_lines="
+            << log_figures(predictor.stderr_text(), predictor_log_from).lines << "\n";
 }
 
 }  // namespace
