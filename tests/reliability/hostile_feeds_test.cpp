@@ -10,6 +10,7 @@
 #include <signal.h>
 
 #include <atomic>
+#include <optional>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -113,10 +114,25 @@ std::string random_bytes(std::mt19937_64& random) {
   return bytes;
 }
 
-// A field whose varint never ends within ten bytes, and a length far beyond the datagram.
-std::string huge_varints(int k) {
-  return k % 2 == 0 ? std::string("\x08\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x01", 12)
+// A field whose varint never ends within ten bytes, or a length far beyond the datagram.
+std::string huge_varints(int which) {
+  return which == 0 ? std::string("\x08\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x01", 12)
                     : std::string("\x3a\xff\xff\xff\xff\x0f", 6);
+}
+
+// The kinds of garbage every group gets, by `kind` 0 to 2: random bytes, `valid` cut short, and
+// varints that never end. None for another kind.
+std::optional<std::string> malformed(int kind, const std::string& valid, std::mt19937_64& random) {
+  switch (kind) {
+    case 0:
+      return random_bytes(random);
+    case 1:
+      return valid.substr(0, std::uniform_int_distribution<std::size_t>(1, valid.size() - 1)(random));
+    case 2:
+      return huge_varints(static_cast<int>(random() % 2));
+    default:
+      return std::nullopt;
+  }
 }
 
 std::string spoofed_name(int k) {
@@ -141,17 +157,11 @@ HostileCounts flood_referee(const std::string& group, RefereeTap& tap,
   const auto start = std::chrono::steady_clock::now();
   for (int k = 0; std::chrono::steady_clock::now() - start < duration; ++k) {
     Referee m = tap.newest();
-    std::string bytes;
+    std::string bytes = malformed(k % 8, m.SerializeAsString(), random).value_or("");
     switch (k % 8) {
       case 0:
-        bytes = random_bytes(random);
-        break;
       case 1:
-        bytes = m.SerializeAsString();
-        bytes.resize(std::uniform_int_distribution<std::size_t>(1, bytes.size() - 1)(random));
-        break;
       case 2:
-        bytes = huge_varints(k);
         break;
       case 3:  // a command number the wire format does not define
         m.clear_command();
@@ -336,21 +346,15 @@ TEST(HostileFeeds, ATrackerGroupFloodNeitherStallsNorFloodsTheDaemons) {
     std::mt19937_64 random(32);
     const auto start = std::chrono::steady_clock::now();
     for (int k = 0; std::chrono::steady_clock::now() - start < hostile_for; ++k) {
-      std::string bytes;
       // The real tracker's newest instant, so that no datagram of the flood is a later frame
       // (a forger who also runs the tracker's clock ahead is beyond what this guards against).
       TrackerWrapperPacket packet;
       packet.ParseFromString(testing::tracked_frame_of_six(std::max(0, frames - 1), 100.0, "a", 7));
+      std::string bytes = malformed(k % 6, packet.SerializeAsString(), random).value_or("");
       switch (k % 6) {
         case 0:
-          bytes = random_bytes(random);
-          break;
         case 1:
-          bytes = packet.SerializeAsString();
-          bytes.resize(std::uniform_int_distribution<std::size_t>(1, bytes.size() - 1)(random));
-          break;
         case 2:
-          bytes = huge_varints(k);
           break;
         case 3:  // no uuid, which is required: libprotobuf complains of each
           packet.clear_uuid();
