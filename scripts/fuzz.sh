@@ -6,11 +6,12 @@
 # Exit status is non-zero if a target crashed, leaked, timed out or broke an invariant.
 #
 #   scripts/fuzz.sh SECONDS [TARGET...]    TARGET: sampler_fuzzer log_reader_fuzzer table_file_fuzzer
+#                                                  referee_fuzzer tracker_fuzzer
 #
 # The seeds are copied into build-fuzz/fuzz-work/TARGET/corpus, where the corpus grows (kept
 # between runs); crashing inputs land in build-fuzz/fuzz-work/TARGET/artifacts. A finding is
-# fixed by copying its input to tests/fuzz/regressions/{sampler,log,table}/ and adding a case
-# to tests/common/fuzz_regressions_test.cpp.
+# fixed by copying its input to tests/fuzz/regressions/{sampler,log,table,referee,tracker}/ and
+# adding a case to tests/common/files/fuzz_regressions_test.cpp.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -21,8 +22,10 @@ if ! [[ "$seconds" =~ ^[0-9]+$ ]] || [ "$seconds" -lt 1 ]; then
 fi
 shift
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(sampler_fuzzer log_reader_fuzzer table_file_fuzzer)
-declare -A corpus_of=([sampler_fuzzer]=sampler [log_reader_fuzzer]=log [table_file_fuzzer]=table)
+[ ${#targets[@]} -gt 0 ] ||
+  targets=(sampler_fuzzer log_reader_fuzzer table_file_fuzzer referee_fuzzer tracker_fuzzer)
+declare -A corpus_of=([sampler_fuzzer]=sampler [log_reader_fuzzer]=log [table_file_fuzzer]=table
+  [referee_fuzzer]=referee [tracker_fuzzer]=tracker)
 for target in "${targets[@]}"; do
   [ -n "${corpus_of[$target]:-}" ] || { echo "error: unknown fuzz target '$target'" >&2; exit 2; }
 done

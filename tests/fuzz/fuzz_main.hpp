@@ -1,5 +1,5 @@
 #pragma once
-// What the three libFuzzer targets share: a scratch folder per process under /tmp for the
+// What the libFuzzer targets share: a scratch folder per process under /tmp for the
 // files the readers need, protobuf's per-packet error log silenced, and the abort that turns
 // a broken invariant into a finding.
 

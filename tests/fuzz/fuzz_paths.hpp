@@ -1,6 +1,6 @@
 #pragma once
-// The three code paths the fuzz targets drive, with the invariants each one checks, shared by
-// the libFuzzer targets (clang, SSLF_FUZZ=ON) and tests/common/fuzz_regressions_test.cpp (the
+// The code paths the fuzz targets drive, with the invariants each one checks, shared by the
+// libFuzzer targets (clang, SSLF_FUZZ=ON) and tests/common/files/fuzz_regressions_test.cpp (the
 // normal gcc build), so a crashing input and its regression test run exactly the same code.
 //
 // Every function returns what happened and the first broken invariant (`violation`, empty if
@@ -14,6 +14,14 @@
 //    packets go through the sampler path), and again gzip-compressed.
 //  - table: bytes as a table file -> load_table, then again with its two checksums fixed so the
 //    fuzzer reaches the counts, then save/load round trips of what loaded.
+//  - referee: timed datagrams (below) -> one RefereeFollower, as the referee group feeds it.
+//  - tracker: timed datagrams -> one TrackedVision, and the frames it hands on through the
+//    sampler, as with --vision-source tracked.
+//    Timed datagrams: records of a little-endian u16 length, a little-endian u16 receive step
+//    and that many bytes (the last may be cut short). The step is the milliseconds since the
+//    previous datagram; with its top bit set the receive clock went back by the other 15 bits
+//    instead. The length 0xFFFF is a record without step or bytes that starts a new stream
+//    (reset(), as for a new log file).
 
 #include <zlib.h>
 
@@ -22,21 +30,29 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <deque>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
+#include "ssl_formation/base/wire_text.hpp"
 #include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/match/referee.hpp"
+#include "ssl_formation/match/tracked_vision.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 #include "ssl_formation/vision/sampler.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/paper_model/transition_table.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
+#include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::fuzz {
@@ -97,6 +113,58 @@ inline void put_le32(std::uint8_t* p, std::uint32_t v) {
 
 inline bool starts_with(const std::string& text, const std::string& prefix) {
   return text.compare(0, prefix.size(), prefix) == 0;
+}
+
+inline std::uint16_t le16(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
+
+// The number of characters of `text`, which must be UTF-8 without an unprintable one; none if not.
+// An escape printable_wire_text writes ("\x9B", "\u{202E}") counts as the one character it
+// stands for (a backslash that came as such and happens to be followed by the same makes the
+// count smaller, never larger).
+inline std::optional<std::size_t> printable_chars(std::string_view text) {
+  // Printable UTF-8 is what printable_wire_text gives back unchanged, however long.
+  if (printable_wire_text(text, std::numeric_limits<std::size_t>::max()) != text) {
+    return std::nullopt;
+  }
+  const auto hex = [](char c) { return (c >= '0' && c <= '9') || (c >= 'A' && c <= 'F'); };
+  std::size_t chars = 0;
+  for (std::size_t at = 0; at < text.size(); ++at) {
+    if ((static_cast<unsigned char>(text[at]) & 0xC0) == 0x80) continue;  // inside a character
+    ++chars;
+    if (text[at] != '\\') continue;
+    const std::string_view rest = text.substr(at + 1);
+    if (rest.size() >= 3 && rest[0] == 'x' && hex(rest[1]) && hex(rest[2])) {
+      at += 3;
+    } else if (rest.size() >= 3 && rest[0] == 'u' && rest[1] == '{') {
+      std::size_t end = 2;
+      while (end < rest.size() && hex(rest[end])) ++end;
+      if (end > 2 && end < rest.size() && rest[end] == '}') at += end + 1;
+    }
+  }
+  return chars;
+}
+
+// What printable_wire_text (base/wire_text.hpp) promises of every text that came from the wire:
+// printable UTF-8 of at most wire_text_max_chars characters, then "…(N bytes)" if it was cut.
+inline void check_wire_text(std::string_view text, Violations& v, const std::string& where) {
+  std::string_view kept = text;
+  constexpr std::string_view cut_end = " bytes)";
+  constexpr std::string_view cut_start = "\xE2\x80\xA6(";  // "…("
+  if (kept.ends_with(cut_end)) {
+    std::size_t digits = kept.size() - cut_end.size();
+    const std::size_t digits_end = digits;
+    while (digits > 0 && kept[digits - 1] >= '0' && kept[digits - 1] <= '9') --digits;
+    if (digits < digits_end && kept.substr(0, digits).ends_with(cut_start))
+      kept = kept.substr(0, digits - cut_start.size());
+  }
+  const std::optional<std::size_t> chars = printable_chars(kept);
+  if (!chars) {
+    v.fail(where + ": not printable UTF-8");
+  } else if (*chars > wire_text_max_chars) {
+    v.fail(where + ": " + std::to_string(*chars) + " characters, over wire_text_max_chars");
+  }
 }
 
 // The table's counts as (from, to, count) triples, in increasing order.
@@ -632,6 +700,293 @@ inline TableOutcome run_table_path(const std::uint8_t* data, std::size_t size,
       }
     }
   }
+  out.violation = v.first;
+  return out;
+}
+
+// ---- Timed datagrams, for paths 4 and 5
+
+inline constexpr std::uint16_t clock_back_bit = 0x8000;
+
+// One record of a timed datagram input (see the top of this file).
+struct TimedDatagram {
+  bool new_stream = false;  // a new-stream record: no bytes, no time
+  bool clock_back = false;  // the receive clock went back before this datagram
+  std::string_view bytes;
+  double receive_s = 0.0;
+};
+
+class TimedDatagrams {
+ public:
+  TimedDatagrams(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
+
+  // The next record; false at the end of the input (a record cut before its bytes included).
+  bool next(TimedDatagram& out) {
+    out = TimedDatagram{};
+    if (at_ + 2 > size_) return false;
+    const std::uint16_t length = le16(data_ + at_);
+    at_ += 2;
+    if (length == new_stream_record) {
+      out.new_stream = true;
+      return true;
+    }
+    if (at_ + 2 > size_) return false;
+    const std::uint16_t step = le16(data_ + at_);
+    at_ += 2;
+    const std::int64_t step_ms = step & ~clock_back_bit;
+    out.clock_back = (step & clock_back_bit) != 0;
+    clock_ms_ += out.clock_back ? -step_ms : step_ms;
+    // Whole milliseconds: the same instants the followers' own subtractions see, exactly.
+    out.receive_s = static_cast<double>(clock_ms_) / 1000.0;
+    const std::size_t n = std::min<std::size_t>(length, size_ - at_);
+    out.bytes = std::string_view(reinterpret_cast<const char*>(data_ + at_), n);
+    at_ += n;
+    return true;
+  }
+
+ private:
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t at_ = 0;
+  std::int64_t clock_ms_ = 0;
+};
+
+// ---- Path 4: referee datagrams -> RefereeFollower
+
+struct RefereeOutcome {
+  std::uint64_t datagrams = 0;
+  std::uint64_t name_changes = 0;  // RefereeChange::teams, the first naming included
+  RefereeCounters counters;
+  std::string violation;
+};
+
+inline bool same_view(const RefereeView& a, const RefereeView& b) {
+  return a.state == b.state && a.command == b.command && a.command_counter == b.command_counter &&
+         a.stage == b.stage && a.yellow_name == b.yellow_name && a.blue_name == b.blue_name &&
+         a.blue_on_positive_half == b.blue_on_positive_half &&
+         a.designated_position == b.designated_position && a.source == b.source;
+}
+
+// describe() holds the names as they are, between fixed words well under this many bytes.
+inline constexpr std::size_t describe_max_bytes_besides_names = 150;
+
+// The promises of referee.hpp, message by message. Team names are checked against what the
+// message said (read here once more, as add() reads it): the first names since the follower
+// began or was reset take over at once; every later switch needs names that every message used
+// since at least name_hold_s said, and at most max_name_switches of them fit in any
+// name_switch_window_s of receive time.
+inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t size) {
+  RefereeOutcome out;
+  Violations v;
+  RefereeFollower referee;
+  Referee message;
+  bool named = false;
+  std::optional<std::pair<std::string, std::string>> held_names;
+  double held_since_s = 0.0;
+  std::deque<double> switches_s;  // the later switches within the window
+  TimedDatagrams records(data, size);
+  TimedDatagram d;
+  while (records.next(d)) {
+    if (d.new_stream) {
+      referee.reset();
+      if (referee.heard() || !same_view(referee.view(), RefereeView{}))
+        v.fail("reset() kept something of the view");
+      named = false;
+      held_names.reset();
+      switches_s.clear();
+      continue;
+    }
+    // A window of receive time means nothing across a clock that went back: it starts anew
+    // (the follower's own window only gets stricter, holding switches "from the future").
+    if (d.clock_back) switches_s.clear();
+    ++out.datagrams;
+    const RefereeCounters before = referee.counters();
+    const RefereeView view_before = referee.view();
+    RefereeChange change;
+    try {
+      change = referee.add(d.bytes, d.receive_s);
+    } catch (const std::exception& e) {
+      v.fail(std::string("add() threw: ") + e.what());
+      break;
+    } catch (...) {
+      v.fail("add() threw");
+      break;
+    }
+    const RefereeCounters& c = referee.counters();
+    const RefereeView& view = referee.view();
+    const bool used = c.used != before.used;
+
+    if (c.messages != before.messages + 1) v.fail("counters().messages did not count a message");
+    if (c.used + c.undecodable + c.unknown_command + c.other_source + c.stale != c.messages)
+      v.fail("used + undecodable + unknown_command + other_source + stale != messages");
+    if (change.stale != (c.stale != before.stale)) v.fail("change.stale and counters().stale differ");
+    if (change.source != (c.source_switches != before.source_switches))
+      v.fail("change.source and counters().source_switches differ");
+    if (change.command != (c.commands != before.commands))
+      v.fail("change.command and counters().commands differ");
+    if (change.conflict && c.other_source == before.other_source)
+      v.fail("a conflict not counted in other_source");
+    if (!used && (change.any() || !same_view(view, view_before)))
+      v.fail("a message not used changed the view");
+    if (used && !referee.heard()) v.fail("a message used, but heard() is false");
+    const bool names_changed =
+        view.yellow_name != view_before.yellow_name || view.blue_name != view_before.blue_name;
+    if (change.teams != names_changed) v.fail("change.teams differs from a change of the names");
+    if (change.sides != (view.blue_on_positive_half != view_before.blue_on_positive_half))
+      v.fail("change.sides differs from a change of blue_on_positive_half");
+    if (referee.heard() && game_state_of_command(view.command) != view.state)
+      v.fail("the game state is not the last command's");
+    if (view.designated_position &&
+        (!std::isfinite(view.designated_position->x) || !std::isfinite(view.designated_position->y)))
+      v.fail("designated_position not finite");
+    check_wire_text(view.yellow_name, v, "yellow_name");
+    check_wire_text(view.blue_name, v, "blue_name");
+    check_wire_text(view.source, v, "source");
+    const std::string described = describe(referee);
+    if (!printable_chars(described)) v.fail("describe() not printable UTF-8");
+    if (described.size() >
+        describe_max_bytes_besides_names + view.yellow_name.size() + view.blue_name.size())
+      v.fail("describe() holds more than the names and its own words");
+
+    if (!used) continue;
+    if (!message.ParsePartialFromArray(d.bytes.data(), static_cast<int>(d.bytes.size()))) {
+      v.fail("a message used that protobuf does not parse");
+      continue;
+    }
+    if (view.source != printable_wire_text(message.source_identifier()) ||
+        view.command != message.command() || view.command_counter != message.command_counter())
+      v.fail("the view is not what the message used said");
+    std::pair<std::string, std::string> names{printable_wire_text(message.yellow().name()),
+                                              printable_wire_text(message.blue().name())};
+    if (held_names != names) {
+      held_names = names;
+      held_since_s = d.receive_s;
+    }
+    if (!change.teams) continue;
+    ++out.name_changes;
+    if (view.yellow_name != names.first || view.blue_name != names.second)
+      v.fail("names taken over other than the message's");
+    if (named) {
+      if (d.receive_s - held_since_s < RefereeFollower::name_hold_s)
+        v.fail("new team names took over before they held for name_hold_s");
+      while (!switches_s.empty() &&
+             d.receive_s - switches_s.front() >= RefereeFollower::name_switch_window_s) {
+        switches_s.pop_front();
+      }
+      if (switches_s.size() >= static_cast<std::size_t>(RefereeFollower::max_name_switches))
+        v.fail("more than max_name_switches team-name switches within name_switch_window_s");
+      switches_s.push_back(d.receive_s);
+    }
+    named = true;
+  }
+  out.counters = referee.counters();
+  out.violation = v.first;
+  return out;
+}
+
+// ---- Path 5: tracker datagrams -> TrackedVision -> sampler
+
+struct TrackerOutcome {
+  std::uint64_t datagrams = 0;
+  TrackerCounters counters;
+  SamplerOutcome sampled;  // the frames handed on, through the sampler
+  std::string violation;
+};
+
+inline bool same_ball(const std::optional<BallState>& a, const std::optional<BallState>& b) {
+  const auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  if (!a || !b) return !a && !b;
+  return bits(a->time_s) == bits(b->time_s) && bits(a->position.x) == bits(b->position.x) &&
+         bits(a->position.y) == bits(b->position.y) && bits(a->velocity.x) == bits(b->velocity.x) &&
+         bits(a->velocity.y) == bits(b->velocity.y);
+}
+
+// The promises of tracked_vision.hpp, datagram by datagram. Robot positions come as the tracker
+// sent them, finite or not (the header promises nothing there): the sampler behind, as with
+// --vision-source tracked, is what must refuse what is not finite or out of range, and its own
+// invariants (SamplerHarness) say whether it did.
+inline TrackerOutcome run_tracker_path(const std::uint8_t* data, std::size_t size) {
+  TrackerOutcome out;
+  Violations v;
+  TrackedVision tracked;
+  // One cell: the sampler path fuzzes the grids; here a table of a single state keeps each run
+  // fast (a 3 x 2 grid's dense table alone took 2 ms to set up and check).
+  SamplerConfig config;
+  config.grid = Grid(1, 1);
+  config.step_s = 0.1;
+  SamplerHarness harness(config);
+  VisionFrame frame;
+  // When the tracker followed last sent anything (a frame or not), for its source timeout.
+  double followed_heard_s = 0.0;
+  TimedDatagrams records(data, size);
+  TimedDatagram d;
+  while (records.next(d)) {
+    if (d.new_stream) {
+      tracked.reset();
+      harness.start_new_stream();
+      if (!tracked.source_uuid().empty() || !tracked.source_name().empty() || tracked.ball())
+        v.fail("reset() kept the tracker followed or its ball");
+      continue;
+    }
+    ++out.datagrams;
+    const TrackerCounters before = tracked.counters();
+    const std::string uuid_before = tracked.source_uuid();
+    const std::optional<BallState> ball_before = tracked.ball();
+    bool handed_on = false;
+    try {
+      handed_on = tracked.add(d.bytes, d.receive_s, frame);
+    } catch (const std::exception& e) {
+      v.fail(std::string("add() threw: ") + e.what());
+      break;
+    } catch (...) {
+      v.fail("add() threw");
+      break;
+    }
+    const TrackerCounters& c = tracked.counters();
+    if (c.packets != before.packets + 1) v.fail("counters().packets did not count a datagram");
+    if (c.undecodable + c.without_frame + c.other_source + c.frames != c.packets)
+      v.fail("undecodable + without_frame + other_source + frames != packets");
+    if (handed_on != (c.frames != before.frames))
+      v.fail("add() returned other than counters().frames says");
+    check_wire_text(tracked.source_uuid(), v, "source_uuid");
+    check_wire_text(tracked.source_name(), v, "source_name");
+
+    const bool switched = tracked.source_uuid() != uuid_before;
+    if (tracked.take_source_change() != switched || tracked.take_source_change())
+      v.fail("take_source_change() is not true once after the tracker followed changed");
+    if (switched && !uuid_before.empty() &&
+        !(d.receive_s - followed_heard_s > TrackedVision::source_timeout_s ||
+          d.receive_s < followed_heard_s)) {
+      v.fail("another tracker took over while the one followed still spoke");
+    }
+    if (c.undecodable == before.undecodable && c.other_source == before.other_source)
+      followed_heard_s = d.receive_s;
+
+    if (!handed_on) {
+      if (!same_ball(tracked.ball(), ball_before)) v.fail("ball() changed with no frame handed on");
+      continue;
+    }
+    if (!frame.has_detection || frame.has_geometry || frame.detection.camera_id != 0)
+      v.fail("a frame handed on other than as camera 0's detection");
+    for (const auto* team : {&frame.detection.robots_yellow, &frame.detection.robots_blue}) {
+      for (const VisionRobot& robot : *team) {
+        if (!robot.has_robot_id) v.fail("a robot without an id handed on");
+      }
+    }
+    if (const std::optional<BallState>& ball = tracked.ball()) {
+      if (!std::isfinite(ball->position.x) || !std::isfinite(ball->position.y))
+        v.fail("ball() position not finite");
+      if (!std::isfinite(ball->velocity.x) || !std::isfinite(ball->velocity.y))
+        v.fail("ball() velocity not finite");
+      if (std::bit_cast<std::uint64_t>(ball->time_s) !=
+          std::bit_cast<std::uint64_t>(frame.detection.t_capture))
+        v.fail("ball() not at the frame's timestamp");
+    }
+    harness.add(frame);
+  }
+  out.counters = tracked.counters();
+  out.sampled = harness.finish({});
+  if (!out.sampled.violation.empty()) v.fail("sampler: " + out.sampled.violation);
   out.violation = v.first;
   return out;
 }

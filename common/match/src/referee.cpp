@@ -109,14 +109,24 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
     ++counters_.source_switches;
     change.source = true;
   }
-  if (heard_ && !change.source && stale(message, receive_s)) {
-    // A replayed or stale message must not take the match back to an earlier state.
-    ++counters_.stale;
-    change.stale = true;
-    return change;
+  if (heard_ && !change.source) {
+    const Staleness why = staleness(message, receive_s);
+    if (why != Staleness::fresh) {
+      if (!resync_due(message, why, receive_s)) {
+        // A replayed or stale message must not take the match back to an earlier state.
+        ++counters_.stale;
+        change.stale = true;
+        return change;
+      }
+      ++counters_.resyncs;
+      change.resync = true;
+    }
   }
   ++counters_.used;
   last_used_s_ = receive_s;
+  counter_refusals_in_a_row_ = 0;
+  used_s_.push_back(receive_s);
+  if (used_s_.size() > resync_refusals + resync_max_used) used_s_.pop_front();
   if (message.has_packet_timestamp()) last_timestamp_us_ = message.packet_timestamp();
   if (!heard_ || change.source || message.command() != view_.command ||
       message.command_counter() != view_.command_counter) {
@@ -155,14 +165,21 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
 
 bool RefereeFollower::names_take_over(const std::string& yellow, const std::string& blue,
                                       double receive_s) {
+  // A receive clock that went back (another log): what was held or counted is of the other one.
+  if (candidate_ && receive_s < candidate_->since_s) candidate_.reset();
+  if (!name_switches_s_.empty() && receive_s < name_switches_s_.back()) name_switches_s_.clear();
   if (yellow == view_.yellow_name && blue == view_.blue_name) {
     // The names followed again: a candidate in between did not hold.
     if (candidate_) ++counters_.refused_name_switches;
     candidate_.reset();
     return false;
   }
-  // The first names heard (none followed yet) take over at once.
-  if (view_.yellow_name.empty() && view_.blue_name.empty()) return true;
+  // The first names heard since the start (or reset()) take over at once; after that, names
+  // that go empty and come back must hold like any others.
+  if (!named_) {
+    named_ = true;
+    return true;
+  }
   if (!candidate_ || candidate_->yellow != yellow || candidate_->blue != blue) {
     if (candidate_) ++counters_.refused_name_switches;  // another candidate came in between
     candidate_ = NameCandidate{yellow, blue, receive_s};
@@ -183,15 +200,16 @@ bool RefereeFollower::names_take_over(const std::string& yellow, const std::stri
   return true;
 }
 
-bool RefereeFollower::stale(const Referee& message, double receive_s) const {
+RefereeFollower::Staleness RefereeFollower::staleness(const Referee& message,
+                                                     double receive_s) const {
   const bool silence = receive_s - last_used_s_ > source_timeout_s_ || receive_s < last_used_s_;
-  if (silence) return false;  // a new start of the game controller (or a new log file)
+  if (silence) return Staleness::fresh;  // a new start of the game controller (or a new log file)
   if (last_timestamp_us_ && message.has_packet_timestamp()) {
-    const double since_s =
-        (static_cast<double>(message.packet_timestamp()) - static_cast<double>(*last_timestamp_us_)) *
-        1e-6;
-    if (since_s < -max_timestamp_back_s) return true;
-    if (since_s > receive_s - last_used_s_ + max_timestamp_ahead_s) return true;
+    const double since_s = (static_cast<double>(message.packet_timestamp()) -
+                            static_cast<double>(*last_timestamp_us_)) *
+                           1e-6;
+    if (since_s < -max_timestamp_back_s) return Staleness::behind;
+    if (since_s > receive_s - last_used_s_ + max_timestamp_ahead_s) return Staleness::ahead;
   }
   if (message.command_counter() < view_.command_counter) {
     // The counter starts again when the game controller restarts: then the stage is new too,
@@ -201,9 +219,38 @@ bool RefereeFollower::stale(const Referee& message, double receive_s) const {
     const bool timestamp_goes_on =
         !last_timestamp_us_ || !message.has_packet_timestamp() ||
         message.packet_timestamp() >= *last_timestamp_us_;
-    return !(new_stage && timestamp_goes_on);
+    if (!(new_stage && timestamp_goes_on)) return Staleness::behind;
   }
-  return false;
+  return Staleness::fresh;
+}
+
+bool RefereeFollower::resync_due(const Referee& message, Staleness why, double receive_s) {
+  const auto old = [&](double at_s) { return receive_s - at_s > resync_window_s || at_s > receive_s; };
+  while (!used_s_.empty() && old(used_s_.front())) used_s_.pop_front();
+  while (!refused_.empty() && old(refused_.front().receive_s)) refused_.pop_front();
+  const std::uint64_t timestamp = message.has_packet_timestamp() ? message.packet_timestamp() : 0;
+  const bool time_goes_on = why == Staleness::behind && last_timestamp_us_ &&
+                            message.has_packet_timestamp() && timestamp >= *last_timestamp_us_;
+  counter_refusals_in_a_row_ = time_goes_on ? counter_refusals_in_a_row_ + 1 : 0;
+  refused_.push_back(Refused{receive_s, timestamp, why == Staleness::ahead});
+  // Bounded whatever the flood: the oldest refusals go first.
+  constexpr std::size_t max_refused_kept = 4096;
+  if (refused_.size() > max_refused_kept) refused_.pop_front();
+  std::size_t ahead = 0;
+  std::uint64_t newest_us = 0;
+  for (const Refused& r : refused_) {
+    ahead += r.ahead ? 1 : 0;
+    newest_us = std::max(newest_us, r.timestamp_us);
+  }
+  const bool counter_forged = counter_refusals_in_a_row_ >= resync_counter_refusals;
+  const bool newer_clock = ahead >= resync_refusals;
+  const bool followed_gone = refused_.size() >= resync_refusals && used_s_.size() <= resync_max_used;
+  // Taken up again with the newest of them, never with a replay older than the others.
+  if (!(counter_forged || newer_clock || followed_gone) || timestamp < newest_us) return false;
+  refused_.clear();
+  used_s_.clear();
+  counter_refusals_in_a_row_ = 0;
+  return true;
 }
 
 std::string stage_name(int stage) {

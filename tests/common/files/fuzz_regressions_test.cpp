@@ -156,6 +156,38 @@ TEST_F(FuzzPaths, EveryRecordedFindingIsHandled) {
     const std::string input = contents(file);
     EXPECT_EQ(fuzz::run_table_path(bytes(input), input.size(), dir_).violation, "") << file;
   }
+  for (const fs::path& file : files_in(regressions_dir / "referee")) {
+    const std::string input = contents(file);
+    EXPECT_EQ(fuzz::run_referee_path(bytes(input), input.size()).violation, "") << file;
+  }
+  for (const fs::path& file : files_in(regressions_dir / "tracker")) {
+    const std::string input = contents(file);
+    EXPECT_EQ(fuzz::run_tracker_path(bytes(input), input.size()).violation, "") << file;
+  }
+}
+
+// The referee and tracker targets' seeds: valid input that the followers use.
+TEST_F(FuzzPaths, RefereeAndTrackerSeedsRunClean) {
+  const auto referee_files = files_in(corpus_dir / "referee");
+  ASSERT_GE(referee_files.size(), 5u);
+  std::uint64_t used = 0;
+  for (const fs::path& file : referee_files) {
+    const std::string input = contents(file);
+    const fuzz::RefereeOutcome out = fuzz::run_referee_path(bytes(input), input.size());
+    EXPECT_EQ(out.violation, "") << file;
+    used += out.counters.used;
+  }
+  EXPECT_GT(used, 10u);
+  const auto tracker_files = files_in(corpus_dir / "tracker");
+  ASSERT_GE(tracker_files.size(), 5u);
+  std::uint64_t frames = 0;
+  for (const fs::path& file : tracker_files) {
+    const std::string input = contents(file);
+    const fuzz::TrackerOutcome out = fuzz::run_tracker_path(bytes(input), input.size());
+    EXPECT_EQ(out.violation, "") << file;
+    frames += out.counters.frames;
+  }
+  EXPECT_GT(frames, 10u);
 }
 
 }  // namespace

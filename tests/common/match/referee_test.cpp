@@ -479,3 +479,54 @@ TEST(RefereeFollower, NamesFromTheWireAreShortAndPrintable) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(RefereeFollower, AForgedMessageRunningAheadLocksTheGameControllerOutForASecondAtMost) {
+  sf::RefereeFollower referee;
+  // The real game controller at 10 Hz in running play (counter 5); every 1.9 s a forged HALT in
+  // its name with a higher counter and a current timestamp.
+  int real_used = 0;
+  int real_sent = 0;
+  for (int i = 0; i < 300; ++i) {
+    const double t = 0.1 * i;
+    const sf::RefereeChange real =
+        referee.add(bytes(at(message(Referee::NORMAL_START, 5), t)), 100.0 + t);
+    ++real_sent;
+    real_used += real.stale ? 0 : 1;
+    if (i % 19 == 0 && i > 0) {
+      referee.add(bytes(at(message(Referee::HALT, 6 + static_cast<std::uint32_t>(i)), t + 0.05)),
+                  100.0 + t + 0.05);
+    }
+  }
+  // Each forgery holds for three real messages.
+  EXPECT_GE(real_used, real_sent * 8 / 10);
+  EXPECT_GE(referee.counters().resyncs, 15u);
+  EXPECT_EQ(referee.view().state, sf::GameState::running);
+}
+
+TEST(RefereeFollower, AReplayHeardFirstOrALogStartingOverGivesWayToTheNewestClock) {
+  // An hour-old replay heard first, then the real game controller beside it, both at 10 Hz.
+  sf::RefereeFollower referee;
+  int real_used_late = 0;
+  for (int i = 0; i < 100; ++i) {
+    const double t = 0.1 * i;
+    referee.add(bytes(at(message(Referee::HALT, 3), 3600.0 + t)), 10.0 + t);
+    const sf::RefereeChange real = referee.add(bytes(at(message(Referee::NORMAL_START, 40), 7200.0 + t)), 10.0 + t + 0.01);
+    if (i >= 20) real_used_late += real.stale ? 0 : 1;
+  }
+  EXPECT_EQ(real_used_late, 80);  // followed within 2 s, for good
+  EXPECT_EQ(referee.view().state, sf::GameState::running);
+  EXPECT_EQ(referee.counters().resyncs, 1u);
+  // A log that loops: its clock goes back by ten minutes, and nothing else is heard.
+  sf::RefereeFollower looping;
+  for (int i = 0; i < 50; ++i) looping.add(bytes(at(message(Referee::STOP, 100), 600.0 + 0.1 * i)), 0.1 * i);
+  int used_after_loop = 0;
+  for (int i = 0; i < 30; ++i) {
+    used_after_loop += looping.add(bytes(at(message(Referee::HALT, 1), 0.1 * i)), 5.0 + 0.1 * i).stale ? 0 : 1;
+  }
+  EXPECT_GE(used_after_loop, 10);  // once nothing was used for 2 s
+  EXPECT_EQ(looping.view().state, sf::GameState::halt);
+}
+
+}  // namespace

@@ -71,6 +71,7 @@ struct RefereeChange {
   bool source = false;   // another game controller is followed from now on
   bool conflict = false;  // this message came from a second game controller, and was not used
   bool stale = false;     // from the followed one, but older than what it said: not used
+  bool resync = false;    // used after all: what was followed before was the stale one
   bool any() const { return command || teams || sides || source; }
 };
 
@@ -84,6 +85,9 @@ struct RefereeCounters {
   // From the followed game controller but stale or replayed: a command counter that went back,
   // a packet timestamp more than max_timestamp_back_s before its last (or far ahead of it).
   std::uint64_t stale = 0;
+  // Times the follower took up the followed game controller's messages again after refusing
+  // them: a replay heard first, a log looping back, one forged message that ran ahead.
+  std::uint64_t resyncs = 0;
   std::uint64_t source_switches = 0;  // the followed one fell silent and another took over
   std::uint64_t unnamed_teams = 0;  // messages that name neither team (used all the same)
   // New team names that did not take over: they did not hold for name_hold_s of the followed
@@ -102,6 +106,18 @@ class RefereeFollower {
   // between the two messages ahead of it is forged: neither is used.
   static constexpr double max_timestamp_back_s = 1.0;
   static constexpr double max_timestamp_ahead_s = 10.0;
+  // What was followed is given up for the newest of the refused messages when
+  // - resync_counter_refusals in a row had a counter behind it but a timestamp that goes on (the
+  //   last message used was a forged one whose counter ran ahead);
+  // - within resync_window_s, resync_refusals were refused as ahead of it (a newer clock: the
+  //   first message heard was a replay);
+  // - or that many were refused while at most resync_max_used were used (what was followed fell
+  //   silent: a log started over, a forged timestamp ran ahead).
+  // Replays mixed into a live game controller's messages do none of these.
+  static constexpr std::size_t resync_counter_refusals = 3;
+  static constexpr double resync_window_s = 2.0;
+  static constexpr std::size_t resync_refusals = 10;
+  static constexpr std::size_t resync_max_used = 2;
   // Team names other than the ones followed take over only once every message of the followed
   // game controller has said them for this long, and at most max_name_switches times within
   // name_switch_window_s. The first names heard take over at once.
@@ -124,7 +140,11 @@ class RefereeFollower {
     last_timestamp_us_.reset();
     conflicting_source_.clear();
     candidate_.reset();
+    named_ = false;
     name_switches_s_.clear();
+    used_s_.clear();
+    refused_.clear();
+    counter_refusals_in_a_row_ = 0;
   }
 
   // Whether a message has been followed yet.
@@ -137,7 +157,10 @@ class RefereeFollower {
   // RefereeCounters::stale. A restarted game controller, whose counter starts again from 0, is
   // told apart by a silence of source_timeout_s, or by a new stage with a timestamp that does
   // not go back.
-  bool stale(const Referee& message, double receive_s) const;
+  enum class Staleness { fresh, behind, ahead };
+  Staleness staleness(const Referee& message, double receive_s) const;
+  // Notes a refused message and says whether it is to be used after all (resync_window_s).
+  bool resync_due(const Referee& message, Staleness why, double receive_s);
   // Whether the names `yellow` and `blue` of a used message take over now (see name_hold_s).
   bool names_take_over(const std::string& yellow, const std::string& blue, double receive_s);
 
@@ -152,7 +175,18 @@ class RefereeFollower {
     double since_s = 0.0;
   };
   std::optional<NameCandidate> candidate_;
+  bool named_ = false;  // names were taken over since the start or reset()
   std::deque<double> name_switches_s_;  // when names took over, within the window
+  // The followed game controller's messages within resync_window_s: when each used one came,
+  // and each refused one's arrival, timestamp and why.
+  struct Refused {
+    double receive_s = 0.0;
+    std::uint64_t timestamp_us = 0;
+    bool ahead = false;
+  };
+  std::deque<double> used_s_;
+  std::deque<Refused> refused_;
+  std::size_t counter_refusals_in_a_row_ = 0;
   RefereeView view_;
   RefereeCounters counters_;
   std::string conflicting_source_;  // the last second game controller reported
