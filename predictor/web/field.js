@@ -137,10 +137,7 @@
     if (key === view.setupKey) return;
     view.setupKey = key;
     const L = setup.field.length, W = setup.field.width;
-    const m = setup.field.markings || {
-      goal_width: 1000, goal_depth: 180, boundary_width: 300, penalty_area_depth: 1000,
-      penalty_area_width: 2000, center_circle_radius: 500, source: 'rules',
-    };
+    const m = setup.field.markings;  // the predictor always sends them (field_markings.hpp)
     const outside = Math.max(m.boundary_width, m.goal_depth + 40);
     const margin = outside + MARGIN_MM;
     const field = $('field');
@@ -448,7 +445,8 @@
     free_kick_opponent: 'their free kick', free_kick_us: 'our free kick', penalty: 'penalty',
   };
   function drawLiveScore(s) {
-    if (!Array.isArray(s.live_score)) return;
+    // Redrawn only for a new status, so that a row's tooltip stays while it is read.
+    if (!Array.isArray(s.live_score) || view.drawnStatus === s) return;
     view.drawnStatus = s;  // the status the table and the banner show
     const table = $('live-score');
     const rows = [{ phase: 'all', horizons: s.live_score }].concat(s.live_score_by_phase || []);

@@ -70,7 +70,8 @@ TEST(RepeatLimiter, ManyKindsShareOneWindowBeyondTheLimit) {
 TEST(LimitedSink, AFloodOfOneWarningBecomesABurstAndASummaryAndLibprotobufGoesThroughIt) {
   std::ostringstream out;
   auto target = std::make_shared<spdlog::sinks::ostream_sink_mt>(out);
-  auto sink = std::make_shared<LimitedSink>(target, LogLimitSettings{5, 0.2, 1000, 512});
+  // A period long enough for a slow (sanitised, busy) machine to write the flood within it.
+  auto sink = std::make_shared<LimitedSink>(target, LogLimitSettings{5, 1.0, 1000, 512});
   auto logger = std::make_shared<spdlog::logger>("test", sink);
   logger->set_pattern("%n %l: %v");
   const auto previous = spdlog::default_logger();
@@ -83,7 +84,7 @@ TEST(LimitedSink, AFloodOfOneWarningBecomesABurstAndASummaryAndLibprotobufGoesTh
   TrackerWrapperPacket packet;
   for (int i = 0; i < 200; ++i) EXPECT_FALSE(packet.ParseFromString(std::string()));
   spdlog::info("opponent: '{}'", std::string(59814, 'Y'));
-  std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
   spdlog::info("status: after the period");
   spdlog::set_default_logger(previous);
   google::protobuf::SetLogHandler(nullptr);
@@ -99,6 +100,23 @@ TEST(LimitedSink, AFloodOfOneWarningBecomesABurstAndASummaryAndLibprotobufGoesTh
   std::istringstream lines(text);
   for (std::string line; std::getline(lines, line);) EXPECT_LE(line.size(), 1000U) << line.substr(0, 80);
   EXPECT_NE(text.find("status: after the period"), std::string::npos);
+}
+
+TEST(LimitedSink, WhatIsLeftOutInTheLastPeriodIsSaidAtExitAndErrorsAreNeverLeftOut) {
+  std::ostringstream out;
+  {
+    auto target = std::make_shared<spdlog::sinks::ostream_sink_mt>(out);
+    auto sink = std::make_shared<LimitedSink>(target, LogLimitSettings{2, 3600.0, 1000, 512});
+    spdlog::logger logger("test", sink);
+    logger.set_pattern("%l: %v");
+    for (int i = 0; i < 10; ++i) logger.warn("tracker: {} packets of another tracker", i);
+    for (int i = 0; i < 12; ++i) logger.error("cannot open logs/2024-07-0{}_match.log.gz", i % 10);
+  }  // the sink goes with the program
+  const std::string text = out.str();
+  EXPECT_EQ(count_of(text, "packets of another tracker"), 2U + 1U) << text;
+  EXPECT_NE(text.find("8 more lines like 'tracker: # packets of another tracker"), std::string::npos)
+      << text;
+  EXPECT_EQ(count_of(text, "error: cannot open logs/"), 12U) << text;
 }
 
 }  // namespace

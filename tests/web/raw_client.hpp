@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace ssl_formation::web_testing {
 
@@ -51,7 +52,7 @@ class RawClient {
 
   // Reads until `until` appears, the peer closes, or `timeout` passes.
   std::string read_until(std::string_view until, std::chrono::milliseconds timeout) {
-    std::string text;
+    std::string text = std::exchange(unread_, {});  // what came with the handshake's answer
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     char buffer[16384];
     while (until.empty() || text.find(until) == std::string::npos) {
@@ -78,7 +79,11 @@ class RawClient {
               "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")) {
       return false;
     }
-    return read_until("\r\n\r\n", std::chrono::seconds(5)).starts_with("HTTP/1.1 101");
+    std::string answer = read_until("\r\n\r\n", std::chrono::seconds(5));
+    // The server may send its first messages right behind the answer, in the same read.
+    const std::size_t end = answer.find("\r\n\r\n");
+    if (end != std::string::npos) unread_ = answer.substr(end + 4);
+    return answer.starts_with("HTTP/1.1 101");
   }
   // Sends only the upgrade request and never reads anything.
   bool upgrade_without_reading() {
@@ -102,6 +107,7 @@ class RawClient {
   int fd_ = -1;
   bool connected_ = false;
   bool peer_closed_ = false;
+  std::string unread_;  // read past the handshake's answer, not handed out yet
 };
 
 // GET (or another method) over a fresh connection; the whole response.

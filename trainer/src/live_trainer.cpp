@@ -96,8 +96,9 @@ int run_live(const TrainerOptions& options) {
   const auto flush_period = app::seconds_option("flush-interval", options.flush_interval_s);
   const net::LiveFeeds feeds = app::live_feeds(options.network, options.receive_buffer_bytes);
   const app::SystemClock clock;
+  // Before LiveTrainer reads the table to resume it (it checks --table's folder first itself).
   check_table_option(options);
-  const TableWriterLock lock = lock_tables(options);  // before the table is read to resume it
+  const TableWriterLock lock = lock_tables(options);
   LiveTrainer trainer(options, clock);
 
   boost::asio::io_context io;

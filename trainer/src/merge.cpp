@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/files/table_lock.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
 namespace ssl_formation::trainer {
@@ -59,6 +60,9 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
     merged.metadata.samples += next->metadata.samples;
     if (merged.motion) merged.motion->merge(*next->motion);
   }
+  // No live trainer may be writing the output meanwhile: its next save would undo the merge.
+  const TableWriterLock lock(TableWriterLock::lock_path_for_table(output),
+                             "the table " + output.string());
   const auto saved = save_table(output, merged);
   if (!saved) throw std::runtime_error(saved.error().message);
   if (!saved->durable) spdlog::warn("{}", saved->warning);

@@ -86,9 +86,16 @@ void MatchLog::update(const MatchFrontEnd& front_end, const RefereeChange& chang
     // Said once; the status lines count them (referee_stale).
     spdlog::warn(
         "referee: a message from the game controller followed ('{}') is older than what it said "
-        "before (its command counter went back, or its timestamp is off by more than {} s): not "
-        "used, nor any like it (counted as referee_stale in the status lines)",
-        referee.view().source, RefereeFollower::max_timestamp_back_s);
+        "before (its command counter went back, or its timestamp is more than {} s behind or {} s "
+        "ahead): not used, nor any like it (counted as referee_stale in the status lines)",
+        referee.view().source, RefereeFollower::max_timestamp_back_s,
+        RefereeFollower::max_timestamp_ahead_s);
+  }
+  if (change.resync) {
+    spdlog::warn("referee: following the newest messages of the game controller '{}' again, "
+                 "after refusing them as stale (a replay heard first, a log starting over, or "
+                 "forged messages); {} such times so far",
+                 referee.view().source, c.resyncs);
   }
   if (change.source) {
     spdlog::warn("referee: the game controller followed fell silent; now following '{}'",

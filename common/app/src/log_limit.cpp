@@ -1,6 +1,9 @@
 #include "ssl_formation/app/log_limit.hpp"
 
+#include <google/protobuf/stubs/common.h>
+#if GOOGLE_PROTOBUF_VERSION < 4022000
 #include <google/protobuf/stubs/logging.h>
+#endif
 #include <spdlog/spdlog.h>
 
 #include <cctype>
@@ -78,6 +81,16 @@ bool RepeatLimiter::admit(const std::string& kind, double now_s) {
   return false;
 }
 
+std::vector<RepeatLimiter::Summary> RepeatLimiter::pending(double now_s) {
+  std::vector<Summary> out;
+  for (auto& [kind, w] : windows_) {
+    if (w.left_out == 0) continue;
+    out.push_back(Summary{kind, w.left_out, now_s - w.start_s});
+    w.left_out = 0;
+  }
+  return out;
+}
+
 std::vector<RepeatLimiter::Summary> RepeatLimiter::due(double now_s) {
   std::vector<Summary> out;
   for (auto it = windows_.begin(); it != windows_.end();) {
@@ -107,8 +120,19 @@ void LimitedSink::forward(const spdlog::details::log_msg& message, std::string_v
   target_->log(copy);
 }
 
-void LimitedSink::write_due(double now_s) {
-  for (const RepeatLimiter::Summary& s : limiter_.due(now_s)) {
+LimitedSink::~LimitedSink() {
+  // What was left out in the last period is said too, not lost with the program.
+  try {
+    write_summaries(limiter_.pending(steady_now_s()));
+    target_->flush();
+  } catch (...) {  // NOLINT(bugprone-empty-catch): nothing left to tell it to at exit
+  }
+}
+
+void LimitedSink::write_due(double now_s) { write_summaries(limiter_.due(now_s)); }
+
+void LimitedSink::write_summaries(const std::vector<RepeatLimiter::Summary>& summaries) {
+  for (const RepeatLimiter::Summary& s : summaries) {
     const std::string text =
         fmt::format("{} more lines like '{}…' left out in the last {:.0f} s", s.left_out,
                     s.kind, s.period_s);
@@ -123,8 +147,9 @@ void LimitedSink::sink_it_(const spdlog::details::log_msg& message) {
   logger_name_.assign(message.logger_name.data(), message.logger_name.size());
   write_due(now);
   const std::string_view payload(message.payload.data(), message.payload.size());
-  if (message.level >= spdlog::level::warn &&
-      !limiter_.admit(repeat_kind(payload), now)) {
+  // Warnings only: they are what bad input from the network produces; an error is rare and
+  // each one matters (a batch tool's unreadable log file).
+  if (message.level == spdlog::level::warn && !limiter_.admit(repeat_kind(payload), now)) {
     return;
   }
   const std::size_t max_chars = limiter_.settings().max_line_chars;
@@ -148,6 +173,7 @@ std::uint64_t LimitedSink::left_out_total() {
   return limiter_.left_out_total();
 }
 
+#if GOOGLE_PROTOBUF_VERSION < 4022000
 namespace {
 
 void protobuf_to_spdlog(google::protobuf::LogLevel level, const char* /*filename*/, int /*line*/,
@@ -171,5 +197,8 @@ void protobuf_to_spdlog(google::protobuf::LogLevel level, const char* /*filename
 }  // namespace
 
 void route_protobuf_log() { google::protobuf::SetLogHandler(&protobuf_to_spdlog); }
-
+#else
+// Protobuf 22 and later log through Abseil, whose sink this build does not install.
+void route_protobuf_log() {}
+#endif
 }  // namespace ssl_formation::app

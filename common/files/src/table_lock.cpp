@@ -40,6 +40,9 @@ std::filesystem::path TableWriterLock::lock_path_for_folder(const std::filesyste
 TableWriterLock::TableWriterLock(const std::filesystem::path& lock_path, const std::string& what)
     : path_(lock_path) {
   fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  bool writable = fd_ >= 0;
+  // A lock file left by another user (a run with sudo) can still be locked, read only.
+  if (fd_ < 0 && errno == EACCES) fd_ = ::open(lock_path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) {
     throw TableLockError("cannot open the lock file " + lock_path.string() + " for " + what +
                          ": " + std::strerror(errno));
@@ -61,7 +64,7 @@ TableWriterLock::TableWriterLock(const std::filesystem::path& lock_path, const s
   }
   // Who holds it, for the message a second writer gets. Best effort: the lock is what counts.
   const std::string pid = std::to_string(::getpid()) + "\n";
-  if (::ftruncate(fd_, 0) == 0) {
+  if (writable && ::ftruncate(fd_, 0) == 0) {
     [[maybe_unused]] const ssize_t written = ::pwrite(fd_, pid.data(), pid.size(), 0);
   }
 }

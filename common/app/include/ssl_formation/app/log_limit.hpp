@@ -1,7 +1,7 @@
 #pragma once
 // Every program's log lines pass here (init_logging installs it), so that bad input from a
-// shared tournament network cannot flood a log: a warning or error that repeats is written in
-// full the first few times in a period, then counted, and one summary line a period says how many
+// shared tournament network cannot flood a log: a warning that repeats is written in full the
+// first few times in a period, then counted, and one summary line a period says how many
 // were left out. Lines are cut at a length no real line reaches. libprotobuf's own messages
 // ("Can't parse message of type ...") are routed through the same limit.
 //
@@ -54,6 +54,8 @@ class RepeatLimiter {
   };
   // The kinds whose period ended by `now_s` with lines left out: each once, its count reset.
   std::vector<Summary> due(double now_s);
+  // Every kind with lines left out, whether its period ended or not (at exit); counts reset.
+  std::vector<Summary> pending(double now_s);
 
   std::uint64_t left_out_total() const { return left_out_total_; }
   const LogLimitSettings& settings() const { return settings_; }
@@ -69,13 +71,16 @@ class RepeatLimiter {
   std::uint64_t left_out_total_ = 0;
 };
 
-// A spdlog sink that applies a RepeatLimiter to warnings and errors (and caps every line's
-// length) before handing lines to `target`, which formats them. A summary is written as a warning
-// with the first line of any kind after its period ended: the daemons' periodic status lines
-// bring it even when the flood stopped.
+// A spdlog sink that applies a RepeatLimiter to warnings (and caps every line's length) before
+// handing lines to `target`, which formats them. A summary is written as a warning with the
+// first line of any kind after its period ended (the daemons' periodic status lines bring it even
+// when the flood stopped), and at exit for what is still left out.
 class LimitedSink : public spdlog::sinks::base_sink<std::mutex> {
  public:
   LimitedSink(spdlog::sink_ptr target, LogLimitSettings settings = {});
+  ~LimitedSink() override;
+  LimitedSink(const LimitedSink&) = delete;
+  LimitedSink& operator=(const LimitedSink&) = delete;
   std::uint64_t left_out_total();
 
  protected:
@@ -86,6 +91,7 @@ class LimitedSink : public spdlog::sinks::base_sink<std::mutex> {
 
  private:
   void write_due(double now_s);
+  void write_summaries(const std::vector<RepeatLimiter::Summary>& summaries);
   void forward(const spdlog::details::log_msg& message, std::string_view text);
 
   spdlog::sink_ptr target_;
