@@ -798,7 +798,10 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
     }
     // A window of receive time means nothing across a clock that went back: it starts anew
     // (the follower's own window only gets stricter, holding switches "from the future").
-    if (d.clock_back) switches_s.clear();
+    if (d.clock_back) {
+      switches_s.clear();
+      held_names.reset();  // names held "since" a later time hold from now, as the follower's
+    }
     ++out.datagrams;
     const RefereeCounters before = referee.counters();
     const RefereeView view_before = referee.view();
