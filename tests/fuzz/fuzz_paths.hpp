@@ -798,10 +798,7 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
     }
     // A window of receive time means nothing across a clock that went back: it starts anew
     // (the follower's own window only gets stricter, holding switches "from the future").
-    if (d.clock_back) {
-      switches_s.clear();
-      held_names.reset();  // names held "since" a later time hold from now, as the follower's
-    }
+    if (d.clock_back) switches_s.clear();
     ++out.datagrams;
     const RefereeCounters before = referee.counters();
     const RefereeView view_before = referee.view();
@@ -861,7 +858,9 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
       v.fail("the view is not what the message used said");
     std::pair<std::string, std::string> names{printable_wire_text(message.yellow().name()),
                                               printable_wire_text(message.blue().name())};
-    if (held_names != names) {
+    // Names held "since" a time the clock went back before hold from now, as the follower has
+    // them.
+    if (held_names != names || d.receive_s < held_since_s) {
       held_names = names;
       held_since_s = d.receive_s;
     }
