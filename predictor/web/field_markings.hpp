@@ -26,8 +26,8 @@ struct ViewMarkings {
 };
 
 // The markings of `field`: the stated ones that fit it (positive, a goal no wider and a penalty
-// area no wider or deeper than the field allows), the rules' for the rest. Division A's for a
-// field at least 10.5 m long (12 x 9 m), Division B's otherwise (9 x 6 m).
+// area no wider or deeper than the field allows), the rules' for the rest (rules_markings in
+// vision_packet.hpp, which ssl-producer's geometry states too).
 ViewMarkings markings_for(const FieldSize& field, const std::optional<FieldMarkings>& stated);
 
 }  // namespace ssl_formation::predictor::web

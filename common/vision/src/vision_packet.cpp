@@ -40,17 +40,23 @@ SSL_WrapperPacket make_detection_packet(const DetectionFrameSpec& spec) {
   return packet;
 }
 
+FieldMarkings rules_markings(const FieldSize& field) {
+  const bool division_a = field.length_mm >= 10500.0;
+  return FieldMarkings{division_a ? 1800 : 1000, 180, 300, division_a ? 1800 : 1000,
+                       division_a ? 3600 : 2000, 500};
+}
+
 void fill_geometry(SSL_GeometryData& geometry, const FieldSize& field) {
   SSL_GeometryFieldSize& size = *geometry.mutable_field();
-  const bool division_a = field.length_mm >= 10000.0;
+  const FieldMarkings m = rules_markings(field);
   size.set_field_length(static_cast<std::int32_t>(field.length_mm));
   size.set_field_width(static_cast<std::int32_t>(field.width_mm));
-  size.set_goal_width(division_a ? 1800 : 1000);
-  size.set_goal_depth(180);
-  size.set_boundary_width(300);
-  size.set_penalty_area_depth(division_a ? 1800 : 1000);
-  size.set_penalty_area_width(division_a ? 3600 : 2000);
-  size.set_center_circle_radius(500);
+  size.set_goal_width(m.goal_width);
+  size.set_goal_depth(m.goal_depth);
+  size.set_boundary_width(m.boundary_width);
+  size.set_penalty_area_depth(m.penalty_area_depth);
+  size.set_penalty_area_width(m.penalty_area_width);
+  size.set_center_circle_radius(m.center_circle_radius);
 }
 
 SSL_WrapperPacket make_geometry_packet(const FieldSize& field) {

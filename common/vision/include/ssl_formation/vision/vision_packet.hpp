@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation {
@@ -29,8 +30,13 @@ struct DetectionFrameSpec {
 
 SSL_WrapperPacket make_detection_packet(const DetectionFrameSpec& spec);
 
-// Field size with the markings-free minimum SSL-Vision requires (goal and boundary sizes are
-// Division A/B defaults scaled to the length).
+// The markings the rules give a field of this size ("Field Setup"): goals 1.8 m (Division A) or
+// 1 m (B) wide and 180 mm deep, penalty areas 3.6 x 1.8 m (A) or 2 x 1 m (B), a centre circle of
+// 0.5 m, 0.3 m of boundary. A field at least 10.5 m long (half way between the divisions'
+// lengths) is Division A's.
+FieldMarkings rules_markings(const FieldSize& field);
+
+// The field's size with those markings, as SSL-Vision states them.
 void fill_geometry(SSL_GeometryData& geometry, const FieldSize& field);
 SSL_WrapperPacket make_geometry_packet(const FieldSize& field);
 
