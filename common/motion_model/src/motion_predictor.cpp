@@ -12,8 +12,6 @@ namespace ssl_formation {
 
 namespace {
 
-constexpr double damping_weight_mm2 = 500.0 * 500.0;
-
 // A 2-D isotropic Gaussian holds fraction p within sqrt(-ln(1 - p)) x its rms distance.
 const double gaussian_z50 = std::sqrt(std::log(2.0));
 const double gaussian_z90 = std::sqrt(std::log(10.0));
@@ -97,84 +95,27 @@ MotionModel::MotionModel(const MotionTable& table, const Grid& grid, const Field
     }
   }
   const int horizons = config_.horizons;
-  horizon_.resize(static_cast<std::size_t>(horizons));
   settled_context_ = standing_context_after(config_.settle_window_s);
   long_settled_context_ = standing_context_after(config_.long_settle_window_s);
 
-  // The coarser levels are sums of the finest rows.
-  std::vector<MotionRow> roots(static_cast<std::size_t>(horizons));
-  std::unordered_map<MotionKey, MotionRow> coarse;
-  std::unordered_map<MotionKey, MotionRow> rows;
-  table.row_map().for_each([&](MotionKey key, const MotionRow& row) {
-    rows.emplace(key, row);
-    roots[static_cast<std::size_t>(decode_motion_key(key).horizon_index)].add(row);
-    for (MotionKey parent = coarser_motion_key(key);; parent = coarser_motion_key(parent)) {
-      coarse[parent].add(row);
-      if (decode_motion_key(parent).level == MotionLevel::all) break;
+  std::vector<Estimate> generic_roots;
+  MotionLevelEstimates::GenericEstimate generic;
+  if (prior_model) {
+    for (int h = 0; h < horizons; ++h) {
+      generic_roots.push_back(prior_model->horizon_[static_cast<std::size_t>(h)].root);
     }
-  });
-
+    generic = [prior_model](MotionKey key) { return prior_model->estimate(key); };
+  }
+  const MotionLevelEstimates estimates(table, settings_, prior_model ? &generic_roots : nullptr,
+                                       generic);
+  horizon_.resize(static_cast<std::size_t>(horizons));
   for (int h = 0; h < horizons; ++h) {
     Horizon& horizon = horizon_[static_cast<std::size_t>(h)];
-    const double horizon_s = (h + 1) * config_.step_s;
-    const double tau = settings_.prior_time_constant_s;
-    const double prior_damping = tau / horizon_s * (1.0 - std::exp(-horizon_s / tau));
-    const MotionRow& root = roots[static_cast<std::size_t>(h)];
-    // The damping is the least-squares factor, held towards the prior by `shrinkage`
-    // instances of a 500 mm extrapolation.
-    const double weight = settings_.shrinkage * 500.0 * 500.0;
-    horizon.damping = (static_cast<double>(root.dx(0)) + weight * prior_damping) /
-                      (static_cast<double>(root.xx(0, 0)) + weight);
-    const double prior_rms = settings_.prior_error_mm + settings_.prior_error_mm_per_s * horizon_s;
-    Estimate prior{0.0, 0.0, prior_rms * prior_rms, 0.0, {}};
-    prior.coefficients[0] = horizon.damping;
-    // Under a prior table (every team's), the opponent's rows are held towards what every team
-    // does rather than towards damped constant velocity.
-    horizon.root = shrink(root, prior_model ? prior_model->horizon_[static_cast<std::size_t>(h)].root
-                                            : prior);
-    horizon.root_without_team_velocity = horizon.root;
-    horizon.root_without_team_velocity.coefficients[team_velocity_regressor] = 0.0;
-    // HALT and timeouts: "no robot is allowed to move", after "a grace period of 2 seconds for
-    // the robots to brake" (SSL rules, Referee Commands: Halt). So a robot keeps its place but
-    // for what braking hard from its velocity takes, and the spread is the vision's noise.
-    const double brake_s = settings_.halt_brake_time_constant_s;
-    horizon.still = Estimate{0.0, 0.0, settings_.halt_error_mm * settings_.halt_error_mm, 0.0, {}};
-    horizon.still.coefficients[0] = brake_s / horizon_s * (1.0 - std::exp(-horizon_s / brake_s));
+    static_cast<MotionHorizonPrior&>(horizon) = estimates.horizon(h);
     horizon.z50.fill(gaussian_z50);
     horizon.z90.fill(gaussian_z90);
   }
-  // Coarse to fine, each level shrunk towards its parent.
-  std::unordered_map<MotionKey, Estimate> estimates;
-  for (int level = motion_levels - 1; level >= 0; --level) {
-    const auto shrink_level = [&](const std::unordered_map<MotionKey, MotionRow>& source) {
-      for (const auto& [key, row] : source) {
-        const MotionKeyParts parts = decode_motion_key(key);
-        if (static_cast<int>(parts.level) != level) continue;
-        const Horizon& horizon = horizon_[static_cast<std::size_t>(parts.horizon_index)];
-        // The prior table's estimate of the same row, where it has one: its rows give way to
-        // the opponent's own as they fill (each weighs `shrinkage` instances).
-        const std::optional<Estimate> generic =
-            prior_model ? prior_model->estimate(key) : std::nullopt;
-        const Estimate& parent = generic ? *generic
-                                 : parts.level == MotionLevel::all
-                                     ? horizon.prior_of(parts.context)
-                                     : estimates.at(coarser_motion_key(key));
-        estimates[key] = team_velocity_holds(MotionFeatures::phase_of_context(parts.context))
-                             ? shrink(row, parent)
-                             : shrink(row.without_regressor(team_velocity_regressor), parent);
-      }
-    };
-    shrink_level(level == 0 ? rows : coarse);
-  }
-  if (prior_model) {
-    // The rows only the prior has: a new opponent is predicted from every team's.
-    for (const Slot& slot : prior_model->index_) {
-      if (slot.key != empty_slot && !estimates.contains(slot.key)) {
-        estimates.emplace(slot.key, *prior_model->estimate(slot.key));
-      }
-    }
-  }
-  index_estimates(estimates);
+  index_estimates(estimates, prior_model);
   for (int h = 0; h < horizons; ++h) {
     Horizon& horizon = horizon_[static_cast<std::size_t>(h)];
     if (!weigh_means(table, h) && prior_model) {
@@ -204,90 +145,37 @@ std::optional<MotionModel::Estimate> MotionModel::estimate(MotionKey key) const 
   return e;
 }
 
-MotionModel::Estimate MotionModel::shrink(const MotionRow& row, const Estimate& parent) const {
-  if (row.n() == 0) return parent;
-  constexpr int r = motion_regressors;
-  const double n = static_cast<double>(row.n());
-  const double k = settings_.shrinkage;
-  const auto f = [](std::int64_t value) { return static_cast<double>(value); };
-  const double sd_x = f(row.d(0)), sd_y = f(row.d(1));
-  std::array<double, r> sx_x{}, sx_y{}, dx{};
-  std::array<std::array<double, r>, r> xx{};
-  for (int i = 0; i < r; ++i) {
-    sx_x[i] = f(row.x(i, 0));
-    sx_y[i] = f(row.x(i, 1));
-    dx[i] = f(row.dx(i));
-    for (int j = 0; j < r; ++j) xx[i][j] = f(row.xx(i, j));
-  }
-  // The row's least-squares fit d = a + sum c_i x_i on centred sums, each coefficient held
-  // towards the parent's by `shrinkage` instances of a 500 mm regressor (ridge towards the
-  // parent): r normal equations, solved by elimination.
-  const double weight = k * damping_weight_mm2;
-  std::array<std::array<double, r + 1>, r> system{};
-  for (int i = 0; i < r; ++i) {
-    for (int j = 0; j < r; ++j) {
-      system[i][j] = xx[i][j] - (sx_x[i] * sx_x[j] + sx_y[i] * sx_y[j]) / n;
-    }
-    system[i][i] = std::max(system[i][i], 0.0) + weight;
-    system[i][r] = dx[i] - (sd_x * sx_x[i] + sd_y * sx_y[i]) / n + weight * parent.coefficients[i];
-  }
-  for (int i = 0; i < r; ++i) {  // the matrix is positive definite: no pivoting needed
-    for (int row_below = i + 1; row_below < r; ++row_below) {
-      const double factor = system[row_below][i] / system[i][i];
-      for (int j = i; j <= r; ++j) system[row_below][j] -= factor * system[i][j];
+void MotionModel::index_estimates(const MotionLevelEstimates& estimates,
+                                  const MotionModel* prior_model) {
+  // The rows only the prior has: a new opponent is predicted from every team's.
+  std::vector<const Slot*> prior_only;
+  if (prior_model) {
+    for (const Slot& slot : prior_model->index_) {
+      if (slot.key != empty_slot && estimates.number(slot.key) == MotionRowMap::no_row) {
+        prior_only.push_back(&slot);
+      }
     }
   }
-  Estimate e;
-  e.n = n;
-  for (int i = r - 1; i >= 0; --i) {
-    double value = system[i][r];
-    for (int j = i + 1; j < r; ++j) value -= system[i][j] * e.coefficients[j];
-    e.coefficients[i] = value / system[i][i];
-  }
-  const std::array<double, r>& c = e.coefficients;
-  // The intercept, held towards what the parent predicts at the row's mean regressors.
-  double target_x = parent.mean_x, target_y = parent.mean_y;
-  double r_x = sd_x, r_y = sd_y;  // sums of d - sum c_i x_i
-  for (int i = 0; i < r; ++i) {
-    target_x += (parent.coefficients[i] - c[i]) * sx_x[i] / n;
-    target_y += (parent.coefficients[i] - c[i]) * sx_y[i] / n;
-    r_x -= c[i] * sx_x[i];
-    r_y -= c[i] * sx_y[i];
-  }
-  e.mean_x = (r_x + k * target_x) / (n + k);
-  e.mean_y = (r_y + k * target_y) / (n + k);
-  // Sum of |d - sum c_i x_i|^2, then about the intercept.
-  double rr = f(row.dd());
-  for (int i = 0; i < r; ++i) {
-    rr -= 2.0 * c[i] * dx[i];
-    for (int j = 0; j < r; ++j) rr += c[i] * c[j] * xx[i][j];
-  }
-  const double about_fit = std::max(0.0, (rr - 2.0 * (e.mean_x * r_x + e.mean_y * r_y) +
-                                          n * (e.mean_x * e.mean_x + e.mean_y * e.mean_y)) /
-                                             n);
-  e.mean_square = (n * about_fit + k * parent.mean_square) / (n + k);
-  return e;
-}
-
-
-void MotionModel::index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates) {
   std::size_t size = 16;
-  while (size < 2 * estimates.size()) size *= 2;
+  while (size < 2 * (estimates.size() + prior_only.size())) size *= 2;
   index_mask_ = size - 1;
   index_.assign(size, Slot{empty_slot, 0, 0, 0, {}});
-  for (const auto& [key, e] : estimates) {
+  const auto place = [this](MotionKey key) -> Slot& {
     std::size_t slot = motion_key_slot(key, index_mask_);
     while (index_[slot].key != empty_slot) slot = (slot + 1) & index_mask_;
-    index_[slot] = Slot{key,
-                        static_cast<float>(e.mean_x),
-                        static_cast<float>(e.mean_y),
-                        static_cast<float>(e.mean_square),
-                        {}};
-    for (int i = 0; i < motion_regressors; ++i) {
-      index_[slot].coefficients[static_cast<std::size_t>(i)] =
-          static_cast<float>(e.coefficients[static_cast<std::size_t>(i)]);
+    return index_[slot];
+  };
+  for (std::size_t i = 0; i < estimates.size(); ++i) {
+    const Estimate& e = estimates.estimate(i);
+    Slot& slot = place(estimates.key(i));
+    slot = Slot{estimates.key(i), static_cast<float>(e.mean_x), static_cast<float>(e.mean_y),
+                static_cast<float>(e.mean_square), {}};
+    for (int c = 0; c < motion_regressors; ++c) {
+      slot.coefficients[static_cast<std::size_t>(c)] =
+          static_cast<float>(e.coefficients[static_cast<std::size_t>(c)]);
     }
   }
+  for (const Slot* generic : prior_only) place(generic->key) = *generic;
 }
 
 const MotionModel::Slot* MotionModel::find(MotionKey key) const {
@@ -326,10 +214,8 @@ MotionForecast MotionModel::forecast(int horizon_index, const MotionRobot& robot
 MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& keys) const {
   const Horizon& horizon = horizon_[static_cast<std::size_t>(horizon_index)];
   const MotionKey horizon_bits = encode_motion_key({horizon_index, MotionLevel::robot, 0, 0, 0, 0});
-  // In HALT every robot stands, wherever it is: what a robot's or a zone's few halts say beyond
-  // that (where it went when play resumed) is that match's, not the team's. On the simulated
-  // match of `ssl-evaluate holdout` the robot and zone rows of HALT were 2-3 times persistence's
-  // error at 1-2 s; pooled by velocity they follow the braking and little else.
+  // In HALT every robot stands, wherever it is: its forecasts read the velocity level's rows
+  // (motion_finest_level_read).
   const std::uint32_t context = decode_motion_key(keys[0]).context;
   const std::uint32_t game = MotionFeatures::game_context_of(context);
   const bool halted = game == MotionFeatures::halt_game;
@@ -339,7 +225,7 @@ MotionModel::Resolved MotionModel::resolve(int horizon_index, const RobotKeys& k
   // The pooled ablation looks up no row: every robot gets what a robot with no row at all gets,
   // below.
   const std::size_t first_level =
-      settings_.pooled ? keys.size() : halted ? static_cast<std::size_t>(MotionLevel::velocity) : 0;
+      settings_.pooled ? keys.size() : static_cast<std::size_t>(motion_finest_level_read(context));
   for (std::size_t level = first_level; level < keys.size(); ++level) {
     if (const Slot* found = find(keys[level] | horizon_bits)) {
       Resolved e;
@@ -488,35 +374,6 @@ double MotionModel::gaussian_cell_mass(const MotionForecast& forecast, const Gri
          axis(forecast.position.y, cell.y, grid.width(), field.width_mm);
 }
 
-bool MotionModel::team_velocity_holds(GamePhase phase) {
-  // At the free kicks (either team's) and our placements each robot makes for a place of its
-  // own relative to the ball, wherever it went out (the kicker to it, the others to their spots
-  // about it, the defenders to their marks), not where its team is going: the team's mean
-  // velocity there only fitted the training's few restarts. Tuning seeds, 1 s, their free kicks
-  // / our placements / our free kicks, mm, with it and without: 11/12 144.3 / 91.2 / 266.9 and
-  // 141.2 / 90.7 / 266.3; 13/14 91.4 / 90.8 / 197.7 and 85.2 / 88.1 / 194.1; confirmed on 15/16
-  // (1,200 s of training) and 17/18 (3 mm of noise), no horizon worse by more than 0.5 mm. Left
-  // out at STOP too, it lost on 15/16 and 17/18; at their placements it lost 2-4 mm at 2 s; at
-  // the kick-offs it changed nothing (their kick-offs are remembered whole: set_play_memory.hpp).
-  return phase != GamePhase::free_kick_opponent && phase != GamePhase::free_kick_us &&
-         phase != GamePhase::ball_placement_us;
-}
-
-bool MotionModel::Horizon::mean_holds(GamePhase phase) {
-  // Where the robots of a state went on average is the team's habit in running play, at its
-  // kick-offs and placements, and where it lines up against our restarts. It is not in HALT
-  // (robots stand: the mean is where play resumed), at its free kicks or at our placements:
-  // those restarts are taken wherever the ball went out, and the robots make for places relative
-  // to it, so a state's mean is where the training's few happened to be. On the tuning seeds
-  // 11/12, at 1 s: its free kicks 157.9 mm with the mean, 144.3 without (damped constant
-  // acceleration 137.1); our placements 97.1 and 91.2 (damped constant velocity 89.5); held out
-  // of the same match the mean looked right (the held-out blocks are the same set plays'), so
-  // weigh_means cannot tell. Without their mean the others lost: its placements 92.2 -> 96.0,
-  // our free kicks 266.9 -> 276.1.
-  return phase != GamePhase::halt && phase != GamePhase::free_kick_opponent &&
-         phase != GamePhase::ball_placement_us;
-}
-
 bool MotionModel::weigh_means(const MotionTable& table, int horizon_index) {
   // A row's mean displacement is where the robot went on average from that state, beyond what
   // its regressors explain. In running play and at some restarts that is the team's habit; at
@@ -549,7 +406,7 @@ bool MotionModel::weigh_means(const MotionTable& table, int horizon_index) {
   const double k = settings_.mean_weight_shrinkage;
   for (std::size_t p = 0; p < sums.size(); ++p) {
     const Sums& phase = sums[p];
-    if (phase.mean_dot_mean <= 0.0 || !Horizon::mean_holds(all_game_phases[p])) continue;
+    if (phase.mean_dot_mean <= 0.0 || !motion_mean_holds(all_game_phases[p])) continue;
     const double fitted = std::clamp(phase.residual_dot_mean / phase.mean_dot_mean, 0.0, 1.0);
     horizon.mean_weight[p] = (phase.n * fitted + k) / (phase.n + k);
   }

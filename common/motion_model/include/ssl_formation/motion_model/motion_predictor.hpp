@@ -12,51 +12,13 @@
 #include <vector>
 
 #include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/motion_model/motion_estimates.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/base/probed_memory.hpp"
 #include "ssl_formation/base/state.hpp"
 
 namespace ssl_formation {
-
-struct MotionModelSettings {
-  // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
-  // are far from independent, so this is a few seconds of one robot's frames.
-  double shrinkage = 60.0;
-  // The damping of constant velocity before any data, as robots that brake with this time
-  // constant (s): k(h) = tau / h x (1 - exp(-h / tau)).
-  double prior_time_constant_s = 0.7;
-  // The spread before any data: sqrt(mean squared error) = base + per_second x horizon.
-  double prior_error_mm = 100.0;
-  double prior_error_mm_per_s = 450.0;
-  // Fewer held-out instances than this: Gaussian radii and uncalibrated probabilities.
-  std::size_t min_calibration_instances = 100;
-  // A game phase with at least this many held-out instances has radii of its own: at a
-  // kick-off the robots run where the rows of their state learned little.
-  std::size_t min_phase_calibration_instances = 50;
-  // The rules' prior in HALT and timeouts (rows of those states shrink towards it): robots
-  // brake with this time constant and then stand, give or take the vision's noise. A robot whose
-  // mean sighting is within that noise stands (MotionModel forecasts it there).
-  double halt_brake_time_constant_s = 0.15;
-  double halt_error_mm = 20.0;
-  // A standing robot is forecast where it stands, in every state (MotionModel::stands): slower
-  // than `stay_speed_mm_s` by its tracker, or slower than the standing speed (the first of
-  // MotionFeatures::speed_limits_mm_s) with its mean sighting over the settle window within
-  // `stay_spread_mm` of its last (3 mm of vision noise puts 95% of a standing robot's last
-  // sightings within 7.3 mm of that mean, and shakes its tracked velocity well past 100 mm/s).
-  double stay_speed_mm_s = 100.0;
-  double stay_spread_mm = 8.0;
-  // How many held-out instances of a game phase weigh as much as keeping its rows' mean
-  // displacement whole (MotionModel's mean weights).
-  double mean_weight_shrinkage = 20.0;
-  // An ablation (ssl-evaluate's "pooled model"): every robot, in every state, takes what a robot
-  // with no row at all would: the horizon's one fit of the regressors over all the table's
-  // instances (in HALT the rules' prior), its mean weighed per phase as the model does. The
-  // rules, the standing robots' places and the set plays are the model's, and its calibration
-  // is fitted the same way, on its own forecasts. What the model wins over it is what its keyed
-  // rows (robot, cell, velocity class, contexts) add.
-  bool pooled = false;
-};
 
 // What the rules of the game say of where the opponent's robots can go under the referee's
 // current command, normalised (the opponent attacks +x). The forecast is moved the least
@@ -194,13 +156,7 @@ class MotionModel {
     float mean_x, mean_y, mean_square;
     std::array<float, motion_regressors> coefficients;
   };
-  struct Estimate {
-    double mean_x = 0.0, mean_y = 0.0;  // residual against damped constant velocity, mm
-    double mean_square = 0.0;           // of the truth about the estimate, mm^2
-    double n = 0.0;
-    // Of the regressors (motion_regressors_of): e's is the damping of constant velocity.
-    std::array<double, motion_regressors> coefficients{1.0};
-  };
+  using Estimate = MotionEstimate;
   // A non-decreasing step function from the Gaussian mass of the predicted cell to the hit
   // rate observed at such masses: block upper bounds and their rates. Empty: identity.
   struct IsotonicMap {
@@ -211,29 +167,17 @@ class MotionModel {
     // Pool-adjacent-violators over (mass, hit) pairs, sorted here.
     static IsotonicMap fit(std::vector<std::pair<double, bool>> masses);
   };
-  struct Horizon {
-    double damping = 1.0;
-    Estimate root;   // every game context's rows pooled
-    Estimate still;  // the rules' prior in HALT and timeouts
-    // The root without the team's velocity, for the phases whose rows leave it out
-    // (team_velocity_holds).
-    Estimate root_without_team_velocity;
-    // What a row at the `all` level (or a robot with no row at all) is held towards.
-    const Estimate& prior_of(std::uint32_t context) const {
-      if (MotionFeatures::game_context_of(context) == MotionFeatures::halt_game) return still;
-      return team_velocity_holds(MotionFeatures::phase_of_context(context))
-                 ? root
-                 : root_without_team_velocity;
-    }
+  // The horizon's prior (damping, root, the rules' still prior), then what the held-out sample
+  // calibrates.
+  struct Horizon : MotionHorizonPrior {
     // Per game phase (GamePhase's order), how much of its rows' mean displacement the forecasts
     // keep: none for the phases whose mean is another match's (mean_holds), else fitted on the
     // held-out sample (weigh_means), one before.
     std::array<double, all_game_phases.size()> mean_weight = initial_mean_weights();
-    static bool mean_holds(GamePhase phase);
     static std::array<double, all_game_phases.size()> initial_mean_weights() {
       std::array<double, all_game_phases.size()> weights{};
       for (std::size_t p = 0; p < weights.size(); ++p) {
-        weights[p] = mean_holds(all_game_phases[p]) ? 1.0 : 0.0;
+        weights[p] = motion_mean_holds(all_game_phases[p]) ? 1.0 : 0.0;
       }
       return weights;
     }
@@ -247,10 +191,6 @@ class MotionModel {
     // missed by an ECE of up to 0.065 on the tuning seeds, with two by up to 0.054.
     std::array<IsotonicMap, 2> cell_calibration;
   };
-  Estimate shrink(const MotionRow& row, const Estimate& parent) const;
-  // Whether the rows of a game phase fit the team's mean velocity (regressor t); the others'
-  // are fitted without it, and so their parents, down to the root (Horizon::prior_of).
-  static bool team_velocity_holds(GamePhase phase);
   std::optional<Estimate> estimate(MotionKey key) const;  // as indexed (floats), none if absent
   const Slot* find(MotionKey key) const;
   // The finest estimate with counts among the robot's keys, else the horizon's root.
@@ -272,7 +212,8 @@ class MotionModel {
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,
                const FieldSize& field, AttackDirection attacks, Prediction& out, Cache* cache,
                const MotionRules& rules, const SetPlayAdvice* advice) const;
-  void index_estimates(const std::unordered_map<MotionKey, Estimate>& estimates);
+  // Every level's estimates into index_, and the prior table's where the table has none.
+  void index_estimates(const MotionLevelEstimates& estimates, const MotionModel* prior_model);
   // Sets the horizon's mean weights from the table's held-out sample; false (weights left as
   // they were) when it holds too few instances.
   bool weigh_means(const MotionTable& table, int horizon_index);
