@@ -91,14 +91,34 @@ MotionRow decode_motion_row(const std::uint8_t* in) {
   return row;
 }
 
-void write_held_out(FileWriter& writer, const HeldOutInstance& held) {
-  const MotionInstance& i = held.instance;
-  writer.write_u64(held.hash);
-  writer.write_u32(i.robot_id);
-  for (const auto value : motion_instance_values) {
-    writer.write_u32(static_cast<std::uint32_t>(i.*value));
+// The compact form: the hash as it is (it is random), the rest as varints.
+void encode_held_out(std::vector<std::uint8_t>& out, const HeldOutInstance& held) {
+  std::uint8_t hash[8];
+  put_u64(hash, held.hash);
+  out.insert(out.end(), hash, hash + 8);
+  append_varint(out, held.instance.robot_id);
+  for (const auto value : motion_instance_values) append_varint(out, zigzag(held.instance.*value));
+  append_varint(out, held.instance.context);
+}
+
+// Decodes a compact instance at `pos`; false if the bytes run out or a value does not fit.
+bool decode_compact_held_out(const std::uint8_t*& pos, const std::uint8_t* end,
+                             HeldOutInstance& held) {
+  if (end - pos < 8) return false;
+  held.hash = get_u64(pos);
+  pos += 8;
+  std::uint64_t value = 0;
+  if (!read_varint(pos, end, value) || value > UINT32_MAX) return false;
+  held.instance.robot_id = static_cast<std::uint32_t>(value);
+  for (const auto field : motion_instance_values) {
+    if (!read_varint(pos, end, value)) return false;
+    const std::int64_t signed_value = unzigzag(value);
+    if (signed_value < INT32_MIN || signed_value > INT32_MAX) return false;
+    held.instance.*field = static_cast<std::int32_t>(signed_value);
   }
-  writer.write_u32(i.context);
+  if (!read_varint(pos, end, value) || value > UINT32_MAX) return false;
+  held.instance.context = static_cast<std::uint32_t>(value);
+  return true;
 }
 
 HeldOutInstance decode_held_out(const std::uint8_t* in) {
@@ -117,7 +137,10 @@ HeldOutInstance decode_held_out(const std::uint8_t* in) {
 std::optional<std::string> motion_row_problem(MotionKey key, const MotionRow& row,
                                               const MotionConfig& config) {
   const MotionKeyParts parts = decode_motion_key(key);
-  if (parts.level != MotionLevel::robot) return std::string("not a robot-level key");
+  // A row of any level: a pruned table keeps at a coarser key what it folded into it.
+  if (static_cast<int>(parts.level) >= motion_levels || encode_motion_key(parts) != key) {
+    return std::string("not a motion key");
+  }
   if (parts.horizon_index >= config.horizons) return std::string("horizon out of range");
   if (parts.robot_slot >= MotionFeatures::robot_slots || parts.cell >= MotionFeatures::cell_count ||
       parts.velocity_class >= MotionFeatures::velocity_classes ||
@@ -134,44 +157,58 @@ std::optional<std::string> motion_row_problem(MotionKey key, const MotionRow& ro
 
 }  // namespace
 
-Result<MotionRows> motion_rows_to_save(const MotionTable& motion, double step_s) {
+Result<EncodedMotion> encode_motion_section(const MotionTable& motion, double step_s) {
   const MotionConfig& config = motion.config();
   if (!valid_motion_config(config)) return fail("invalid motion model configuration");
   if (config.step_s != step_s) return fail("the motion model's step differs from the table's");
-  MotionRows rows = motion.sorted_rows();
+  EncodedMotion encoded;
   std::uint64_t sum = 0;
-  for (const auto& [key, row] : rows) {
+  MotionKey previous = 0;
+  for (const auto& [key, row] : motion.sorted_rows()) {
     if (const auto problem = motion_row_problem(key, row, config)) {
       return fail("invalid motion row: " + *problem);
     }
     sum += static_cast<std::uint64_t>(row.n());
+    // Sorted keys, each as its distance from the one before: neighbours share their high bits.
+    append_varint(encoded.row_bytes, key - previous);
+    previous = key;
+    for (const std::int64_t value : row.sums) append_varint(encoded.row_bytes, zigzag(value));
+    ++encoded.rows;
   }
   if (sum != motion.instances()) {
     return fail("the motion rows do not add up to the motion table's instances");
   }
-  return rows;
-}
-
-void write_motion_section(FileWriter& writer, const MotionTable& motion, const MotionRows& rows) {
-  const MotionConfig& config = motion.config();
-  write_motion_config(writer, config);
-  writer.write_u64(motion.instances());
-  writer.write_u64(motion.held_out());
-  writer.write_u64(rows.size());
-  for (const auto& [key, row] : rows) {
-    writer.write_u64(key);
-    for (const std::int64_t sum : row.sums) writer.write_u64(static_cast<std::uint64_t>(sum));
-  }
   for (int h = 0; h < config.horizons; ++h) {
     const std::vector<HeldOutInstance> sample = motion.calibration(h);
-    writer.write_u32(static_cast<std::uint32_t>(sample.size()));
-    for (const HeldOutInstance& held : sample) write_held_out(writer, held);
+    append_varint(encoded.calibration_bytes, sample.size());
+    for (const HeldOutInstance& held : sample) encode_held_out(encoded.calibration_bytes, held);
   }
-  if (!motion.set_plays().empty()) write_set_plays(writer, motion.set_plays());
+  return encoded;
 }
 
-MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit,
-                           bool with_set_plays) {
+std::uint64_t motion_section_size(const MotionTable& motion, const EncodedMotion& encoded) {
+  std::uint64_t set_plays = 4;
+  for (const SetPlayEpisode& episode : motion.set_plays().episodes()) {
+    set_plays += 4 + episode.snapshots.size() * set_play_snapshot_size;
+  }
+  return motion_fixed_size + 8 + encoded.row_bytes.size() + 8 + encoded.calibration_bytes.size() +
+         set_plays;
+}
+
+void write_motion_section(FileWriter& writer, const MotionTable& motion,
+                          const EncodedMotion& encoded) {
+  write_motion_config(writer, motion.config());
+  writer.write_u64(motion.instances());
+  writer.write_u64(motion.held_out());
+  writer.write_u64(encoded.rows);
+  writer.write_u64(encoded.row_bytes.size());
+  writer.write(encoded.row_bytes.data(), encoded.row_bytes.size());
+  writer.write_u64(encoded.calibration_bytes.size());
+  writer.write(encoded.calibration_bytes.data(), encoded.calibration_bytes.size());
+  write_set_plays(writer, motion.set_plays());
+}
+
+MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit, MotionLayout layout) {
   MotionExtent extent;
   std::array<std::uint8_t, motion_fixed_size> fixed{};
   {
@@ -188,43 +225,50 @@ MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit,
     extent.at_least = pos + needed;
     return extent;
   };
-  const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
-  if (rows > (limit - pos) / motion_row_size) {
-    // at_least saturates rather than overflows for an absurd row count.
-    return past(rows > (UINT64_MAX / 2) / motion_row_size ? UINT64_MAX / 2
-                                                          : rows * motion_row_size);
-  }
-  pos += rows * motion_row_size;
-  for (std::uint32_t h = 0; h < horizons; ++h) {
-    if (limit - pos < 4) return past(4);
-    std::uint8_t bytes[4];
-    {
-      ChunkReader reader(fd, pos, pos + 4);
-      if ((extent.read_error = reader.read(bytes, 4)) != 0) return extent;
+  // A u32 or u64 size at `pos`, which must lie before `limit`.
+  const auto read_size = [&](std::size_t width, std::uint64_t& value) {
+    std::uint8_t bytes[8];
+    ChunkReader reader(fd, pos, pos + width);
+    extent.read_error = reader.read(bytes, width);
+    value = width == 4 ? get_u32(bytes) : get_u64(bytes);
+    pos += width;
+    return extent.read_error == 0;
+  };
+  if (layout == MotionLayout::compact) {
+    // The rows' block and the calibration's, each after its length in bytes.
+    for (int block = 0; block < 2; ++block) {
+      if (limit - pos < 8) return past(8);
+      std::uint64_t bytes = 0;
+      if (!read_size(8, bytes)) return extent;
+      if (bytes > limit - pos) return past(std::min(bytes, UINT64_MAX / 2));
+      pos += bytes;
     }
-    pos += 4;
-    const std::uint64_t count = get_u32(bytes);
-    if (count > (limit - pos) / held_out_size) return past(count * held_out_size);
-    pos += count * held_out_size;
+  } else {
+    const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
+    if (rows > (limit - pos) / motion_row_size) {
+      // at_least saturates rather than overflows for an absurd row count.
+      return past(rows > (UINT64_MAX / 2) / motion_row_size ? UINT64_MAX / 2
+                                                            : rows * motion_row_size);
+    }
+    pos += rows * motion_row_size;
+    for (std::uint32_t h = 0; h < horizons; ++h) {
+      if (limit - pos < 4) return past(4);
+      std::uint64_t count = 0;
+      if (!read_size(4, count)) return extent;
+      if (count > (limit - pos) / held_out_size) return past(count * held_out_size);
+      pos += count * held_out_size;
+    }
   }
-  if (with_set_plays) {
-    const auto read_count = [&](std::uint32_t& count) {
-      std::uint8_t bytes[4];
-      ChunkReader reader(fd, pos, pos + 4);
-      extent.read_error = reader.read(bytes, 4);
-      count = get_u32(bytes);
-      pos += 4;
-      return extent.read_error == 0;
-    };
+  if (layout != MotionLayout::fixed) {
     if (limit - pos < 4) return past(4);
-    std::uint32_t episodes = 0;
-    if (!read_count(episodes)) return extent;
+    std::uint64_t episodes = 0;
+    if (!read_size(4, episodes)) return extent;
     // More than a memory keeps: the sizes cannot be followed; the content check says why.
     if (episodes > SetPlayMemory::max_episodes) return extent;
-    for (std::uint32_t e = 0; e < episodes; ++e) {
+    for (std::uint64_t e = 0; e < episodes; ++e) {
       if (limit - pos < 4) return past(4);
-      std::uint32_t count = 0;
-      if (!read_count(count)) return extent;
+      std::uint64_t count = 0;
+      if (!read_size(4, count)) return extent;
       if (count > (limit - pos) / set_play_snapshot_size) {
         return past(count * set_play_snapshot_size);
       }
@@ -236,7 +280,193 @@ MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit,
   return extent;
 }
 
-ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, bool with_set_plays,
+namespace {
+
+// The checks of every row, whichever its layout, as the rows are read in file order.
+class RowChecker {
+ public:
+  RowChecker(MotionTable& table, std::uint64_t instances)
+      : table_(table), instances_(instances) {}
+
+  std::optional<std::string> add(std::uint64_t i, MotionKey key, const MotionRow& row) {
+    const std::string where = "motion row " + std::to_string(i);
+    if (previous_key_ && key <= *previous_key_) return where + ": rows out of order";
+    previous_key_ = key;
+    if (const auto problem = motion_row_problem(key, row, table_.config())) {
+      return where + ": " + *problem;
+    }
+    if (static_cast<std::uint64_t>(row.n()) > instances_ - sum_) {
+      return "the motion rows hold more than the " + std::to_string(instances_) +
+             " instances the section says";
+    }
+    sum_ += static_cast<std::uint64_t>(row.n());
+    table_.add_row(key, row);
+    return std::nullopt;
+  }
+  std::optional<std::string> finish() const {
+    if (sum_ == instances_) return std::nullopt;
+    return "the motion rows hold " + std::to_string(sum_) + " instances, the section says " +
+           std::to_string(instances_);
+  }
+
+ private:
+  MotionTable& table_;
+  std::uint64_t instances_;
+  std::uint64_t sum_ = 0;
+  std::optional<MotionKey> previous_key_;
+};
+
+// The checks of one horizon's calibration sample, whichever its layout.
+std::optional<std::string> check_sample_size(const MotionConfig& config, int h,
+                                             std::uint64_t count) {
+  if (count <= config.calibration_capacity) return std::nullopt;
+  return "calibration sample of horizon " + std::to_string(h + 1) + ": " + std::to_string(count) +
+         " instances, more than its capacity " + std::to_string(config.calibration_capacity);
+}
+std::optional<std::string> add_sample(MotionTable& table, int h,
+                                      const std::vector<HeldOutInstance>& sample) {
+  const std::string where = "calibration sample of horizon " + std::to_string(h + 1);
+  for (std::size_t i = 0; i < sample.size(); ++i) {
+    if (sample[i].instance.context >= MotionFeatures::context_count) {
+      return where + ": instance " + std::to_string(i) + ": context " +
+             std::to_string(sample[i].instance.context) + " out of range";
+    }
+    table.add_held_out(h, sample[i]);
+  }
+  // Within its capacity every instance is kept, so the file's order must be the table's
+  // (equal neighbours are allowed: merging tables trained on the same stream keeps both).
+  if (table.calibration(h) != sample) return where + ": instances out of order";
+  return std::nullopt;
+}
+
+ReadProblem read_fixed_rows_and_samples(ChunkReader& reader, std::uint64_t rows,
+                                        RowChecker& checker, MotionTable& table) {
+  std::array<std::uint8_t, motion_row_size> row_bytes{};
+  for (std::uint64_t i = 0; i < rows; ++i) {
+    if (const int error = reader.read(row_bytes.data(), row_bytes.size()); error != 0) {
+      return {std::nullopt, error};
+    }
+    if (auto problem = checker.add(i, get_u64(&row_bytes[0]), decode_motion_row(&row_bytes[8]))) {
+      return {std::move(problem), 0};
+    }
+  }
+  if (auto problem = checker.finish()) return {std::move(problem), 0};
+  std::array<std::uint8_t, held_out_size> held_bytes{};
+  for (int h = 0; h < table.config().horizons; ++h) {
+    std::uint32_t count = 0;
+    if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+    if (auto problem = check_sample_size(table.config(), h, count)) {
+      return {std::move(problem), 0};
+    }
+    std::vector<HeldOutInstance> sample;
+    sample.reserve(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (const int error = reader.read(held_bytes.data(), held_bytes.size()); error != 0) {
+        return {std::nullopt, error};
+      }
+      sample.push_back(decode_held_out(held_bytes.data()));
+    }
+    if (auto problem = add_sample(table, h, sample)) return {std::move(problem), 0};
+  }
+  return {};
+}
+
+// A compact block: its u64 length, then its bytes.
+ReadProblem read_block(ChunkReader& reader, std::vector<std::uint8_t>& bytes) {
+  std::uint64_t size = 0;
+  if (const int error = reader.read_u64(size); error != 0) return {std::nullopt, error};
+  // motion_extent checked the length against the file's before anything was read.
+  bytes.resize(size);
+  if (const int error = reader.read(bytes.data(), bytes.size()); error != 0) {
+    return {std::nullopt, error};
+  }
+  return {};
+}
+
+ReadProblem read_compact_rows_and_samples(ChunkReader& reader, std::uint64_t rows,
+                                          RowChecker& checker, MotionTable& table) {
+  std::vector<std::uint8_t> bytes;
+  if (ReadProblem problem = read_block(reader, bytes); problem.failed()) return problem;
+  const std::uint8_t* pos = bytes.data();
+  const std::uint8_t* const end = pos + bytes.size();
+  MotionKey key = 0;
+  for (std::uint64_t i = 0; i < rows; ++i) {
+    const std::string where = "motion row " + std::to_string(i);
+    std::uint64_t value = 0;
+    if (!read_varint(pos, end, value)) return {where + ": cut off", 0};
+    if (i > 0 && value == 0) return {where + ": rows out of order", 0};
+    // A distance past the largest key: a key below the one before, wrapped.
+    if (value > ~MotionKey{0} - key) return {where + ": rows out of order", 0};
+    key += value;
+    MotionRow row;
+    for (std::int64_t& sum : row.sums) {
+      if (!read_varint(pos, end, value)) return {where + ": cut off", 0};
+      sum = unzigzag(value);
+    }
+    if (auto problem = checker.add(i, key, row)) return {std::move(problem), 0};
+  }
+  if (pos != end) return {std::string("bytes after the last motion row"), 0};
+  if (auto problem = checker.finish()) return {std::move(problem), 0};
+
+  if (ReadProblem problem = read_block(reader, bytes); problem.failed()) return problem;
+  pos = bytes.data();
+  const std::uint8_t* const samples_end = pos + bytes.size();
+  for (int h = 0; h < table.config().horizons; ++h) {
+    const std::string where = "calibration sample of horizon " + std::to_string(h + 1);
+    std::uint64_t count = 0;
+    if (!read_varint(pos, samples_end, count)) return {where + ": cut off", 0};
+    if (auto problem = check_sample_size(table.config(), h, count)) {
+      return {std::move(problem), 0};
+    }
+    std::vector<HeldOutInstance> sample(count);
+    for (HeldOutInstance& held : sample) {
+      if (!decode_compact_held_out(pos, samples_end, held)) return {where + ": cut off", 0};
+    }
+    if (auto problem = add_sample(table, h, sample)) return {std::move(problem), 0};
+  }
+  if (pos != samples_end) return {std::string("bytes after the last calibration sample"), 0};
+  return {};
+}
+
+ReadProblem read_set_plays(ChunkReader& reader, MotionTable& table) {
+  std::uint32_t episodes = 0;
+  if (const int error = reader.read_u32(episodes); error != 0) return {std::nullopt, error};
+  if (episodes > SetPlayMemory::max_episodes) {
+    return {std::to_string(episodes) + " kick-offs, more than a memory keeps (" +
+                std::to_string(SetPlayMemory::max_episodes) + ")",
+            0};
+  }
+  std::array<std::uint8_t, set_play_snapshot_size> bytes{};
+  std::optional<SetPlayEpisode> previous;
+  for (std::uint32_t e = 0; e < episodes; ++e) {
+    const std::string where = "kick-off " + std::to_string(e);
+    std::uint32_t count = 0;
+    if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
+    if (count > SetPlayMemory::max_snapshots_per_episode) {
+      return {where + ": " + std::to_string(count) + " snapshots, more than an episode keeps", 0};
+    }
+    SetPlayEpisode episode;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (const int error = reader.read(bytes.data(), bytes.size()); error != 0) {
+        return {std::nullopt, error};
+      }
+      episode.snapshots.push_back(decode_set_play_snapshot(bytes.data()));
+    }
+    if (!SetPlayMemory::valid_episode(episode)) return {where + ": invalid snapshots", 0};
+    if (previous && episode < *previous) return {where + ": kick-offs out of order", 0};
+    previous = episode;
+    const std::size_t kept = table.set_plays().episodes().size();
+    table.set_plays().add(std::move(episode));
+    if (table.set_plays().episodes().size() != kept + 1) {
+      return {where + ": no snapshot before the kick-off was over", 0};
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, MotionLayout layout,
                                 std::optional<MotionTable>& out) {
   std::array<std::uint8_t, motion_fixed_size> fixed{};
   if (const int error = reader.read(fixed.data(), fixed.size()); error != 0) {
@@ -258,104 +488,19 @@ ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, bool 
   const std::uint64_t rows = get_u64(&fixed[motion_rows_offset]);
 
   MotionTable table(config);
-  std::uint64_t sum = 0;
-  std::optional<MotionKey> previous_key;
-  std::array<std::uint8_t, motion_row_size> row_bytes{};
-  for (std::uint64_t i = 0; i < rows; ++i) {
-    if (const int error = reader.read(row_bytes.data(), row_bytes.size()); error != 0) {
-      return {std::nullopt, error};
-    }
-    const MotionKey key = get_u64(&row_bytes[0]);
-    const MotionRow row = decode_motion_row(&row_bytes[8]);
-    const std::string where = "motion row " + std::to_string(i);
-    if (previous_key && key <= *previous_key) return {where + ": rows out of order", 0};
-    previous_key = key;
-    if (const auto problem = motion_row_problem(key, row, config)) {
-      return {where + ": " + *problem, 0};
-    }
-    if (static_cast<std::uint64_t>(row.n()) > instances - sum) {
-      return {"the motion rows hold more than the " + std::to_string(instances) +
-                  " instances the section says",
-              0};
-    }
-    sum += static_cast<std::uint64_t>(row.n());
-    table.add_row(key, row);
-  }
-  if (sum != instances) {
-    return {"the motion rows hold " + std::to_string(sum) + " instances, the section says " +
-                std::to_string(instances),
-            0};
-  }
-
-  std::uint64_t held_out = 0;
-  std::array<std::uint8_t, held_out_size> held_bytes{};
-  for (int h = 0; h < config.horizons; ++h) {
-    std::uint32_t count = 0;
-    if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
-    const std::string where = "calibration sample of horizon " + std::to_string(h + 1);
-    if (count > config.calibration_capacity) {
-      return {where + ": " + std::to_string(count) + " instances, more than its capacity " +
-                  std::to_string(config.calibration_capacity),
-              0};
-    }
-    std::vector<HeldOutInstance> sample;
-    sample.reserve(count);
-    for (std::uint32_t i = 0; i < count; ++i) {
-      if (const int error = reader.read(held_bytes.data(), held_bytes.size()); error != 0) {
-        return {std::nullopt, error};
-      }
-      sample.push_back(decode_held_out(held_bytes.data()));
-      if (sample.back().instance.context >= MotionFeatures::context_count) {
-        return {where + ": instance " + std::to_string(i) + ": context " +
-                    std::to_string(sample.back().instance.context) + " out of range",
-                0};
-      }
-      table.add_held_out(h, sample.back());
-    }
-    // Within its capacity every instance is kept, so the file's order must be the table's
-    // (equal neighbours are allowed: merging tables trained on the same stream keeps both).
-    if (table.calibration(h) != sample) return {where + ": instances out of order", 0};
-    held_out += count;
-  }
-  if (held_out > seen) {
-    return {"the calibration samples hold " + std::to_string(held_out) +
+  RowChecker checker(table, instances);
+  ReadProblem problem = layout == MotionLayout::compact
+                            ? read_compact_rows_and_samples(reader, rows, checker, table)
+                            : read_fixed_rows_and_samples(reader, rows, checker, table);
+  if (problem.failed()) return problem;
+  if (table.held_out() > seen) {
+    return {"the calibration samples hold " + std::to_string(table.held_out()) +
                 " instances, more than the " + std::to_string(seen) + " held out",
             0};
   }
   table.restore_held_out_seen(seen);
-  if (with_set_plays) {
-    std::uint32_t episodes = 0;
-    if (const int error = reader.read_u32(episodes); error != 0) return {std::nullopt, error};
-    if (episodes > SetPlayMemory::max_episodes) {
-      return {std::to_string(episodes) + " kick-offs, more than a memory keeps (" +
-                  std::to_string(SetPlayMemory::max_episodes) + ")",
-              0};
-    }
-    std::array<std::uint8_t, set_play_snapshot_size> bytes{};
-    std::optional<SetPlayEpisode> previous;
-    for (std::uint32_t e = 0; e < episodes; ++e) {
-      const std::string where = "kick-off " + std::to_string(e);
-      std::uint32_t count = 0;
-      if (const int error = reader.read_u32(count); error != 0) return {std::nullopt, error};
-      if (count > SetPlayMemory::max_snapshots_per_episode) {
-        return {where + ": " + std::to_string(count) + " snapshots, more than an episode keeps", 0};
-      }
-      SetPlayEpisode episode;
-      for (std::uint32_t i = 0; i < count; ++i) {
-        if (const int error = reader.read(bytes.data(), bytes.size()); error != 0) {
-          return {std::nullopt, error};
-        }
-        episode.snapshots.push_back(decode_set_play_snapshot(bytes.data()));
-      }
-      if (!SetPlayMemory::valid_episode(episode)) return {where + ": invalid snapshots", 0};
-      if (previous && episode < *previous) return {where + ": kick-offs out of order", 0};
-      previous = episode;
-      const std::size_t kept = table.set_plays().episodes().size();
-      table.set_plays().add(std::move(episode));
-      if (table.set_plays().episodes().size() != kept + 1) {
-        return {where + ": no snapshot before the kick-off was over", 0};
-      }
-    }
+  if (layout != MotionLayout::fixed) {
+    if (problem = read_set_plays(reader, table); problem.failed()) return problem;
   }
   out.emplace(std::move(table));
   return {};

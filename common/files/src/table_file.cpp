@@ -62,6 +62,20 @@ Unexpected<TableLoadError> content_failure(const std::filesystem::path& path,
   return load_failure(TableFileError::corrupt, path, "corrupt: " + *problem.content);
 }
 
+// How a version lays out its motion section; none for version 1 (or a version not read).
+std::optional<MotionLayout> motion_layout_of(std::uint32_t version) {
+  switch (version) {
+    case table_file_motion_version:
+      return MotionLayout::fixed;
+    case table_file_set_play_version:
+      return MotionLayout::fixed_with_set_plays;
+    case table_file_compact_motion_version:
+      return MotionLayout::compact;
+    default:
+      return std::nullopt;
+  }
+}
+
 // The magic and the version, from the first bytes of the file (`available` of them): the
 // version, or why the file is not one this program reads.
 Result<std::uint32_t, TableLoadError> check_magic_and_version(
@@ -94,16 +108,16 @@ Result<std::uint32_t, TableLoadError> check_magic_and_version(
                             ": a motion table keyed by the features before 2026-12-03 (0.5 m "
                             "cells for every robot, no team phase), which this program would "
                             "misread; train it again from its logs (version " +
-                            std::to_string(table_file_motion_version) + ")");
+                            std::to_string(table_file_compact_motion_version) + ")");
   }
-  if (version != table_file_version && version != table_file_motion_version &&
-      version != table_file_set_play_version) {
+  if (version != table_file_version && !motion_layout_of(version)) {
     return load_failure(TableFileError::wrong_version, path,
                         "format version " + std::to_string(version) +
                             ", but this program reads version " +
                             std::to_string(table_file_version) + ", " +
-                            std::to_string(table_file_motion_version) + " or " +
-                            std::to_string(table_file_set_play_version));
+                            std::to_string(table_file_motion_version) + ", " +
+                            std::to_string(table_file_set_play_version) + " or " +
+                            std::to_string(table_file_compact_motion_version));
   }
   return version;
 }
@@ -113,8 +127,8 @@ Result<std::uint32_t, TableLoadError> check_magic_and_version(
 Result<std::uint64_t, TableLoadError> expected_file_size(const std::filesystem::path& path, int fd,
                                                          const TableHeader& header,
                                                          std::uint64_t file_size) {
-  const bool has_motion = header.version == table_file_motion_version ||
-                          header.version == table_file_set_play_version;
+  const std::optional<MotionLayout> layout = motion_layout_of(header.version);
+  const bool has_motion = layout.has_value();
   const std::uint64_t counts_end = header_size + counts_size(header);
   const std::uint64_t least = counts_end + (has_motion ? motion_fixed_size : 0) + checksum_size;
   if (file_size < least) {
@@ -125,8 +139,7 @@ Result<std::uint64_t, TableLoadError> expected_file_size(const std::filesystem::
   if (!has_motion) return least;
 
   // The motion section's sizes are not covered by the header checksum: see table_file.hpp.
-  const MotionExtent extent = motion_extent(fd, counts_end, file_size - checksum_size,
-                                            header.version == table_file_set_play_version);
+  const MotionExtent extent = motion_extent(fd, counts_end, file_size - checksum_size, *layout);
   if (extent.read_error != 0) return read_failure(path, extent.read_error);
   if (extent.past_end) {
     // A file whose checksum matches is whole: its sizes themselves are wrong.
@@ -251,14 +264,14 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                         "corrupt: the counts sum to " + std::to_string(sum) +
                             " transitions, the header says " + std::to_string(header.transitions));
   }
-  if (header.version != table_file_version) {
+  if (const std::optional<MotionLayout> layout = motion_layout_of(header.version)) {
     if (const ReadProblem problem =
-            read_motion_section(reader, header.metadata.step_s,
-                                header.version == table_file_set_play_version, stored.motion);
+            read_motion_section(reader, header.metadata.step_s, *layout, stored.motion);
         problem.failed()) {
       return content_failure(path, problem);
     }
   }
+  stored.format_version = header.version;
   return stored;
 }
 
@@ -274,23 +287,20 @@ Result<TableSaved> save_any_table(const std::filesystem::path& path, const Trans
   // Never write a file that load_table would reject.
   if (!metadata.field.valid()) return save_failure(path, "invalid field size");
   if (!valid_step(metadata.step_s)) return save_failure(path, "invalid step");
-  MotionRows motion_rows;
+  EncodedMotion encoded;
   if (motion) {
-    auto rows = motion_rows_to_save(*motion, metadata.step_s);
-    if (!rows) return save_failure(path, rows.error().message);
-    motion_rows = std::move(*rows);
+    auto section = encode_motion_section(*motion, metadata.step_s);
+    if (!section) return save_failure(path, section.error().message);
+    encoded = std::move(*section);
   }
 
   const TableHeader header =
-      header_for(table, metadata,
-                 !motion                           ? table_file_version
-                 : motion->set_plays().empty() ? table_file_motion_version
-                                                   : table_file_set_play_version);
+      header_for(table, metadata, motion ? table_file_compact_motion_version : table_file_version);
   const auto write_content = [&](FileWriter& writer) -> std::optional<std::string> {
     const auto header_bytes = encode_header(header);
     writer.write(header_bytes.data(), header_bytes.size());
     if (auto problem = write_counts(writer, table)) return problem;
-    if (motion) write_motion_section(writer, *motion, motion_rows);
+    if (motion) write_motion_section(writer, *motion, encoded);
     writer.write_u32(writer.crc());
     return std::nullopt;
   };

@@ -1,5 +1,6 @@
-// The table file's version 3: the motion model's table after the paper's counts (the layout in
-// table_file.hpp). Version 1 stays as it was; table_file_bytes_test.cpp holds both to their bytes.
+// The table file's motion versions: the motion model's table after the paper's counts (the
+// layouts in table_file.hpp), saved as version 5 (compact), versions 3 and 4 still read. Version
+// 1 stays as it was; table_file_bytes_test.cpp holds the versions to their bytes.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -23,6 +24,7 @@
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "circling_robots.hpp"
+#include "motion_section_bytes.hpp"
 #include "table_bytes.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
@@ -37,7 +39,9 @@ constexpr std::size_t config_size = 68;
 constexpr std::size_t instances_offset = config_size;  // within the motion section
 constexpr std::size_t seen_offset = config_size + 8;
 constexpr std::size_t row_count_offset = config_size + 16;
-constexpr std::size_t rows_offset = config_size + 24;
+constexpr std::size_t rows_length_offset = config_size + 24;  // version 5: the rows' bytes
+constexpr std::size_t rows_offset = config_size + 32;
+// Versions 3 and 4: fixed-width rows and calibration instances.
 constexpr std::size_t row_size = 8 + 8 * MotionRow::size;
 constexpr std::size_t held_out_size = 8 + 4 + 4 * motion_instance_values.size() + 4;
 
@@ -139,7 +143,7 @@ class MotionTableFile : public ::testing::Test {
     return result;
   }
 
-  // A saved version-3 file of a small trained table and where its motion section starts.
+  // A saved file of a small trained table and where its motion section starts.
   struct Saved {
     Bytes bytes;
     std::size_t motion_begin = 0;
@@ -193,7 +197,7 @@ TEST_F(MotionTableFile, TrainedTableRoundTrips) {
   metadata.samples = training->samples();
   const fs::path path = dir_ / "table.bin";
   ASSERT_TRUE(save_table(path, training->table(), metadata, motion));
-  EXPECT_EQ(get_u32(read_bytes(path), version_offset), table_file_motion_version);
+  EXPECT_EQ(get_u32(read_bytes(path), version_offset), table_file_compact_motion_version);
 
   const LoadResult loaded = load_table(path, Grid(3, 2));
   ASSERT_TRUE(loaded) << message_of(loaded);
@@ -258,35 +262,80 @@ TEST_F(MotionTableFile, EmptyMotionTableRoundTrips) {
   EXPECT_EQ(loaded->motion->instances(), 0u);
 }
 
-TEST_F(MotionTableFile, VersionThreeIsVersionOneWithTheMotionSectionAppended) {
+// A kick-off made up directly: robot 2 runs along y after NORMAL_START, the others stand.
+SetPlayEpisode made_up_kickoff(std::int32_t shift_mm) {
+  SetPlayEpisode episode;
+  for (int i = 0; i < 40; ++i) {
+    SetPlaySnapshot s;
+    s.offset_ms = 100 * i;
+    s.stage = i < 10 ? SetPlayStage::preparation : i < 30 ? SetPlayStage::taken : SetPlayStage::over;
+    s.since_command_ms = i < 10 ? 100 * i : 100 * (i - 10);
+    for (std::uint32_t id = 0; id < 6; ++id) {
+      s.seen |= 1U << id;
+      s.position[id] = {-600 * static_cast<std::int32_t>(id) + shift_mm, id == 2 ? 50 * i : -300};
+    }
+    episode.snapshots.push_back(s);
+  }
+  return episode;
+}
+
+TEST_F(MotionTableFile, VersionFiveIsVersionOneWithTheMotionSectionAppended) {
   const Saved saved = save_trained();
   const Bytes v1 = read_bytes(dir_ / "v1.bin");
   EXPECT_EQ(get_u32(v1, version_offset), table_file_version);
-  EXPECT_EQ(get_u32(saved.bytes, version_offset), table_file_motion_version);
+  EXPECT_EQ(get_u32(saved.bytes, version_offset), table_file_compact_motion_version);
   // Everything but the version, the header checksum and the file checksum is v1's, in place.
   ASSERT_GT(saved.bytes.size(), v1.size());
   EXPECT_TRUE(std::equal(v1.begin() + 12, v1.begin() + header_checksum_offset,
                          saved.bytes.begin() + 12));
   EXPECT_TRUE(std::equal(v1.begin() + header_size, v1.end() - 4,
                          saved.bytes.begin() + header_size));
-  // The motion section's sizes match the table.
+  // The motion section is the layout table_file.hpp documents, field by field.
   const std::size_t m = saved.motion_begin;
   const MotionTable& motion = *saved.stored.motion;
   EXPECT_EQ(get_u64(saved.bytes, m + instances_offset), motion.instances());
   EXPECT_EQ(get_u64(saved.bytes, m + seen_offset), motion.held_out());
   EXPECT_EQ(get_u64(saved.bytes, m + row_count_offset), motion.rows());
-  std::size_t size = m + rows_offset + motion.rows() * row_size;
-  for (int h = 0; h < motion.config().horizons; ++h) {
-    EXPECT_EQ(get_u32(saved.bytes, size), motion.calibration(h).size()) << h;
-    size += 4 + motion.calibration(h).size() * held_out_size;
-  }
-  EXPECT_EQ(saved.bytes.size(), size + 4);
+  const Bytes section(saved.bytes.begin() + static_cast<std::ptrdiff_t>(m), saved.bytes.end() - 4);
+  EXPECT_EQ(section, compact_motion_section(MotionSectionContent::of(motion)));
+  // Compact: the rows take a fraction of their fixed width.
+  EXPECT_LT(get_u64(saved.bytes, m + rows_length_offset), motion.rows() * row_size / 2);
 
   // save_table of a StoredTable without motion is the version-1 save.
   StoredTable paper = saved.stored;
   paper.motion.reset();
   ASSERT_TRUE(save_table(dir_ / "paper.bin", paper));
   EXPECT_EQ(read_bytes(dir_ / "paper.bin"), v1);
+}
+
+// Tables saved before version 5 load as they were; saved again, they are version 5.
+TEST_F(MotionTableFile, OlderVersionsLoadAndAreSavedAsVersionFive) {
+  const Saved saved = save_trained();
+  MotionTable motion = *saved.stored.motion;
+  const Bytes v1 = read_bytes(dir_ / "v1.bin");
+  for (const bool kickoffs : {false, true}) {
+    if (kickoffs) motion.set_plays().add(made_up_kickoff(0));
+    const std::uint32_t version =
+        kickoffs ? table_file_set_play_version : table_file_motion_version;
+    const Bytes old_bytes = with_motion_section(
+        v1, version, fixed_motion_section(MotionSectionContent::of(motion), kickoffs));
+    const LoadResult loaded = load_bytes(old_bytes);
+    ASSERT_TRUE(loaded) << version << ": " << message_of(loaded);
+    EXPECT_EQ(loaded->format_version, version);
+    ASSERT_TRUE(loaded->motion.has_value());
+    EXPECT_TRUE(*loaded->motion == motion) << version;
+    EXPECT_EQ(entries_of(loaded->table), entries_of(saved.stored.table));
+
+    const fs::path again = dir_ / "again.bin";
+    ASSERT_TRUE(save_table(again, *loaded));
+    const Bytes new_bytes = read_bytes(again);
+    EXPECT_EQ(get_u32(new_bytes, version_offset), table_file_compact_motion_version);
+    EXPECT_LT(new_bytes.size(), old_bytes.size());
+    const LoadResult reloaded = load_table(again);
+    ASSERT_TRUE(reloaded) << message_of(reloaded);
+    EXPECT_EQ(reloaded->format_version, table_file_compact_motion_version);
+    EXPECT_TRUE(*reloaded->motion == motion) << version;
+  }
 }
 
 TEST_F(MotionTableFile, VersionOneFilesLoadWithoutMotion) {
@@ -327,24 +376,7 @@ TEST_F(MotionTableFile, TruncatedMotionSectionIsTruncated) {
   EXPECT_NE(message_of(result).find("at least"), std::string::npos) << message_of(result);
 }
 
-// A kick-off made up directly: robot 2 runs along y after NORMAL_START, the others stand.
-SetPlayEpisode made_up_kickoff(std::int32_t shift_mm) {
-  SetPlayEpisode episode;
-  for (int i = 0; i < 40; ++i) {
-    SetPlaySnapshot s;
-    s.offset_ms = 100 * i;
-    s.stage = i < 10 ? SetPlayStage::preparation : i < 30 ? SetPlayStage::taken : SetPlayStage::over;
-    s.since_command_ms = i < 10 ? 100 * i : 100 * (i - 10);
-    for (std::uint32_t id = 0; id < 6; ++id) {
-      s.seen |= 1U << id;
-      s.position[id] = {-600 * static_cast<std::int32_t>(id) + shift_mm, id == 2 ? 50 * i : -300};
-    }
-    episode.snapshots.push_back(s);
-  }
-  return episode;
-}
-
-TEST_F(MotionTableFile, KickOffsMakeVersionFourAndRoundTripExactly) {
+TEST_F(MotionTableFile, KickOffsRoundTripExactly) {
   Saved saved = save_trained();
   MotionTable motion = *saved.stored.motion;
   motion.set_plays().add(made_up_kickoff(0));
@@ -353,9 +385,9 @@ TEST_F(MotionTableFile, KickOffsMakeVersionFourAndRoundTripExactly) {
   const fs::path path = dir_ / "kickoffs.bin";
   ASSERT_TRUE(save_table(path, saved.stored.table, saved.stored.metadata, motion));
   const Bytes bytes = read_bytes(path);
-  EXPECT_EQ(get_u32(bytes, version_offset), table_file_set_play_version);
-  // The version-3 file's bytes, then the kick-offs: 4 + 2 x (4 + 40 x 144) bytes.
-  EXPECT_EQ(bytes.size(), saved.bytes.size() + 4 + 2 * (4 + 40 * 144));
+  EXPECT_EQ(get_u32(bytes, version_offset), table_file_compact_motion_version);
+  // The file without kick-offs held their count (0); now 2 x (4 + 40 x 144) bytes more.
+  EXPECT_EQ(bytes.size(), saved.bytes.size() + 2 * (4 + 40 * 144));
   const LoadResult loaded = load_table(path);
   ASSERT_TRUE(loaded) << message_of(loaded);
   ASSERT_TRUE(loaded->motion.has_value());
@@ -379,7 +411,8 @@ TEST_F(MotionTableFile, KickOffsMakeVersionFourAndRoundTripExactly) {
   }
   // Resealed content that breaks the rules: snapshots out of order.
   Bytes unordered = bytes;
-  const std::size_t first_snapshot = saved.bytes.size() - 4 + 4 + 4;
+  // The count at the old file's last 8 bytes, then the first kick-off's snapshot count.
+  const std::size_t first_snapshot = saved.bytes.size() - 8 + 4 + 4;
   put_u32(unordered, first_snapshot + 144, 5000);  // the second snapshot's offset_ms
   reseal(unordered);
   const LoadResult result = load_bytes(unordered);
@@ -395,12 +428,10 @@ TEST_F(MotionTableFile, FlippedByteInTheMotionSectionIsDetected) {
   // table_file.hpp); anywhere else it is corrupt.
   std::vector<std::size_t> sizes;
   for (std::size_t i = 0; i < 4; ++i) sizes.push_back(m + 8 + i);  // horizons
-  for (std::size_t i = 0; i < 8; ++i) sizes.push_back(m + row_count_offset + i);
-  std::size_t at = m + rows_offset + saved.stored.motion->rows() * row_size;
-  for (int h = 0; h < saved.stored.motion->config().horizons; ++h) {
-    for (std::size_t i = 0; i < 4; ++i) sizes.push_back(at + i);
-    at += 4 + saved.stored.motion->calibration(h).size() * held_out_size;
-  }
+  for (std::size_t i = 0; i < 8; ++i) sizes.push_back(m + rows_length_offset + i);
+  const std::size_t calibration_length_at = m + rows_offset + get_u64(saved.bytes, m + rows_length_offset);
+  for (std::size_t i = 0; i < 8; ++i) sizes.push_back(calibration_length_at + i);
+  for (std::size_t i = 0; i < 4; ++i) sizes.push_back(size - 8 + i);  // the kick-off count
   // Every byte of the section's start, then about 300 flips spread over the rest (an odd
   // stride, so they fall on every byte of a field somewhere).
   const std::size_t stride = std::max<std::size_t>(41, (size - m) / 300 | 1);
@@ -436,10 +467,10 @@ TEST_F(MotionTableFile, TrailingBytesAreCorrupt) {
 TEST_F(MotionTableFile, WrongVersionWithAMotionSection) {
   Saved saved = save_trained();
   Bytes bytes = saved.bytes;
-  put_u32(bytes, version_offset, 5);
+  put_u32(bytes, version_offset, 6);
   const LoadResult result = load_bytes(bytes);
   EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 5"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 6"), std::string::npos) << message_of(result);
 }
 
 // Version 2 had version 3's layout, but its rows were keyed by the earlier features: read as
@@ -471,7 +502,6 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
   const std::size_t m = saved.motion_begin;
   const MotionTable& motion = *saved.stored.motion;
   ASSERT_GE(motion.rows(), 2u);
-  const std::size_t calibration_begin = m + rows_offset + motion.rows() * row_size;
   ASSERT_GE(motion.calibration(0).size(), 2u);
 
   const auto expect_corrupt = [&](Bytes bytes, const std::string& words) {
@@ -515,38 +545,54 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
     put_u64(bytes, m + seen_offset, 1);
     expect_corrupt(bytes, "held out");
   }
+  // The rows and the calibration sample planted as a writer with a bug would encode them.
+  const Bytes v1 = read_bytes(dir_ / "v1.bin");
+  const MotionSectionContent content = MotionSectionContent::of(motion);
+  const auto planted = [&](const MotionSectionContent& c) {
+    return with_motion_section(v1, table_file_compact_motion_version, compact_motion_section(c));
+  };
+  ASSERT_EQ(planted(content), saved.bytes) << "the test's encoder differs from the writer's";
   {
-    Bytes bytes = saved.bytes;  // the first two rows swapped
-    std::swap_ranges(bytes.begin() + static_cast<std::ptrdiff_t>(m + rows_offset),
-                     bytes.begin() + static_cast<std::ptrdiff_t>(m + rows_offset + row_size),
-                     bytes.begin() + static_cast<std::ptrdiff_t>(m + rows_offset + row_size));
-    expect_corrupt(bytes, "rows out of order");
+    MotionSectionContent c = content;  // the first two rows swapped
+    std::swap(c.rows[0], c.rows[1]);
+    expect_corrupt(planted(c), "rows out of order");
   }
   {
-    Bytes bytes = saved.bytes;  // the first row's key at the zone level
-    const MotionKey key = get_u64(bytes, m + rows_offset);
-    MotionKeyParts parts = decode_motion_key(key);
+    MotionSectionContent c = content;  // two rows of the same key
+    c.rows[1].first = c.rows[0].first;
+    expect_corrupt(planted(c), "motion row 1: rows out of order");
+  }
+  {
+    MotionSectionContent c = content;  // the first row's key at no level there is
+    c.rows[0].first |= MotionKey{0xf} << 52;
+    c.rows.resize(1);
+    c.row_count = 1;
+    c.instances = static_cast<std::uint64_t>(c.rows[0].second.n());
+    expect_corrupt(planted(c), "motion row 0: not a motion key");
+  }
+  {
+    MotionSectionContent c = content;  // a zone's key with a robot's slot left in it
+    MotionKeyParts parts = decode_motion_key(c.rows.back().first);
     parts.level = MotionLevel::zone;
-    put_u64(bytes, m + rows_offset, encode_motion_key(parts));
-    expect_corrupt(bytes, "motion row 0");
+    parts.robot_slot = 0;
+    c.rows.back().first = encode_motion_key(parts) | (MotionKey{1} << 44);
+    if (c.rows.back().first <= c.rows[c.rows.size() - 2].first) GTEST_SKIP() << "key order";
+    expect_corrupt(planted(c), "not a motion key");
   }
   {
-    Bytes bytes = saved.bytes;  // the last row's context beyond every context there is (the
-                                // key grows, so the rows stay in order)
-    const std::size_t last = motion.rows() - 1;
-    const std::size_t at = m + rows_offset + last * row_size;
-    MotionKeyParts parts = decode_motion_key(get_u64(bytes, at));
+    MotionSectionContent c = content;  // the last row's context beyond every context there is
+                                       // (the key grows, so the rows stay in order)
+    MotionKeyParts parts = decode_motion_key(c.rows.back().first);
     parts.context = MotionFeatures::context_count;
-    put_u64(bytes, at, encode_motion_key(parts));
-    expect_corrupt(bytes, "motion row " + std::to_string(last) + ": feature out of range");
+    c.rows.back().first = encode_motion_key(parts);
+    expect_corrupt(planted(c), "motion row " + std::to_string(c.rows.size() - 1) +
+                                   ": feature out of range");
   }
   {
-    Bytes bytes = saved.bytes;  // a row with a count of 0
-    const std::size_t n_at = m + rows_offset + 8;
-    const std::uint64_t n = get_u64(bytes, n_at);
-    put_u64(bytes, n_at, 0);
-    put_u64(bytes, m + instances_offset, motion.instances() - n);
-    expect_corrupt(bytes, "count 0");
+    MotionSectionContent c = content;  // a row with a count of 0
+    c.instances -= static_cast<std::uint64_t>(c.rows[0].second.n());
+    c.rows[0].second.sums[0] = 0;
+    expect_corrupt(planted(c), "count 0");
   }
   {
     Bytes bytes = saved.bytes;  // more calibration instances than its capacity
@@ -554,27 +600,35 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
     expect_corrupt(bytes, "capacity");
   }
   {
-    Bytes bytes = saved.bytes;  // the first calibration instance's context beyond every context
-    const std::size_t context_at = calibration_begin + 4 + held_out_size - 4;
-    put_u32(bytes, context_at, MotionFeatures::context_count);
-    expect_corrupt(bytes, "instance 0: context " +
-                              std::to_string(MotionFeatures::context_count) + " out of range");
+    MotionSectionContent c = content;  // the first calibration instance's context beyond any
+    c.samples[0][0].instance.context = MotionFeatures::context_count;
+    expect_corrupt(planted(c), "instance 0: context " +
+                                   std::to_string(MotionFeatures::context_count) + " out of range");
   }
   {
-    Bytes bytes = saved.bytes;  // the first two calibration instances swapped
-    const auto first = bytes.begin() + static_cast<std::ptrdiff_t>(calibration_begin + 4);
-    std::swap_ranges(first, first + held_out_size, first + held_out_size);
+    MotionSectionContent c = content;  // the first two calibration instances swapped
+    std::swap(c.samples[0][0], c.samples[0][1]);
     if (motion.calibration(0)[0] == motion.calibration(0)[1]) GTEST_SKIP() << "equal instances";
-    expect_corrupt(bytes, "out of order");
+    expect_corrupt(planted(c), "out of order");
   }
   {
-    Bytes bytes = saved.bytes;  // a row count that runs past the end of the file
-    put_u64(bytes, m + row_count_offset, motion.rows() + 1000);
+    MotionSectionContent c = content;  // more rows stated than there are: the bytes run out
+    c.row_count += 1000;
+    expect_corrupt(planted(c), "motion row " + std::to_string(motion.rows()) + ": cut off");
+  }
+  {
+    MotionSectionContent c = content;  // fewer rows stated than there are
+    c.row_count -= 1;
+    expect_corrupt(planted(c), "bytes after the last motion row");
+  }
+  {
+    Bytes bytes = saved.bytes;  // a rows' length that runs past the end of the file
+    put_u64(bytes, m + rows_length_offset, get_u64(bytes, m + rows_length_offset) + 100000);
     expect_corrupt(bytes, "past the end");
   }
   {
-    Bytes bytes = saved.bytes;  // a row count short of the rows: the rest reads as trailing
-    put_u64(bytes, m + row_count_offset, motion.rows() - 1);
+    Bytes bytes = saved.bytes;  // a rows' length short of the rows
+    put_u64(bytes, m + rows_length_offset, get_u64(bytes, m + rows_length_offset) - 1);
     reseal(bytes);
     const LoadResult result = load_bytes(bytes);
     EXPECT_EQ(kind_of(result), TableFileError::corrupt) << message_of(result);

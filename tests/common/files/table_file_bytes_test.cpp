@@ -1,7 +1,8 @@
-// The bytes save_table writes, held to what the code wrote before table_file.cpp was split by
-// concern (byte_codec, durable_file, table_format, motion_table_format, table_file): the expected
-// bytes below were produced once by that code. A table file written today must load in every
-// build after it, so any change here is a change of format and needs a new version.
+// The bytes save_table writes, held to what the code wrote when each format version was made
+// (version 1 before table_file.cpp was split by concern, version 5 when it was introduced), and
+// the bytes of version 3, which is no longer written but must still load. A table file written
+// today must load in every build after it, so any change here is a change of format and needs a
+// new version.
 //
 // The tables are made from explicit counts, rows and held-out instances, never by training, so
 // that only the file format decides the bytes.
@@ -24,6 +25,14 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace ssl_formation::testing;
+
+Bytes bytes_of_hex(const std::string& hex) {
+  Bytes out;
+  for (std::size_t i = 0; i + 1 < hex.size(); i += 2) {
+    out.push_back(static_cast<std::uint8_t>(std::stoi(hex.substr(i, 2), nullptr, 16)));
+  }
+  return out;
+}
 
 std::string hex_of(const Bytes& bytes) {
   std::string out;
@@ -202,34 +211,67 @@ TEST_F(TableFileBytes, SparseCountsAreTheBytesTheyWere) {
             "02000000020000002c010000070000000100000007000000ffffffff5923cf76");
 }
 
+// Version 5, written since 2026-12-07: the compact rows and calibration instances.
 TEST_F(TableFileBytes, MotionRowsAreTheBytesTheyWere) {
   const Bytes bytes = saved_bytes(
       StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5), motion_table(0.5, 2, 2, 1)});
   EXPECT_EQ(hex_of(bytes),
-            "53534c465441424c03000000020000000100000001000000000000000070c740000000000094c140"
+            "53534c465441424c05000000020000000100000001000000000000000070c740000000000094c140"
             "000000000000e03f9210000000000000350100000100000003000000000000000500000000000000"
-            "34680c22000000000200000000000000010000000500000007000000030000000200000001000000"
+            "ce8dd570000000000200000000000000010000000500000007000000030000000200000001000000"
             "02000000020000002c010000070000000100000007000000ffffffff000000000000e03f02000000"
             "9a9999999999b93f9a9999999999a93f000000000000f03f0300000040000000000000000000e03f"
             "00000000000000409a9999999999b93f1d0000000000000007000000000000000200000000000000"
-            "0a00000fd43000001100000000000000cde1c22bffffffff9c964cd8feffffff47af9821ffffffff"
-            "5dc6db3effffffff8d205e28ffffffff73d92ad8feffffff3e946048ffffffff1e71b2ecfeffffff"
-            "8b203441ffffffffa6686c35ffffffff4c00b5f8feffffff68b31f23ffffffff750d000000000000"
-            "7b80bf1fffffffffa7ede809ffffffffd6ef2807fffffffff2a70141ffffffff43fe2749ffffffff"
-            "c1fd000000000000f7958431ffffffff7e51a939ffffffffda7c9cf9feffffff769de003ffffffff"
-            "f04c010000000000a252f148ffffffff71afa52afffffffff95e35edfeffffffa5e8000000000000"
-            "f038f9fafeffffff7ac55ceffefffffff6130100000000002c4e6b2fffffffff292d010000000000"
-            "1700000924e200010c00000000000000b16745f8feffffff01ed7919ffffffff2a609316ffffffff"
-            "46cc0c18ffffffffd08c7611ffffffff6150bdebfeffffff7fdce437ffffffff7b7210dffeffffff"
-            "f9e67850ffffffff493c1f47ffffffff238fe925ffffffff51d00be8feffffffbe24000000000000"
-            "5afa200bffffffff65c74febfeffffff1d3648f1feffffffd3a883f5feffffff9d210909ffffffff"
-            "8266010000000000ce4cd1d6feffffff45d384d8feffffff38a07f31ffffffffff180f34ffffffff"
-            "69310000000000006b4002f1feffffff387b0006ffffffffad301c3affffffff3c34000000000000"
-            "7110bd2fffffffffd853150effffffff4d1500000000000071571336ffffffff1234000000000000"
-            "01000000b49d437d5fb797380c0000003df7ffff35e9ffff0d200000e3010000e107000093f5ffff"
-            "ea15000057e5ffffcf110000e21b0000b2f4ffff302200006df4ffffda2000001400000001000000"
-            "bca4d2331c507740030000000b0f000053e5ffffb8e9ffff5420000072f0ffff23eeffff80ecffff"
-            "b9e9ffff99e4fffff7e5ffff7ee7ffff3d14000095ddffff02e7ffff09000000f736c75f");
+            "42010000000000008a8080f8c09a0c22e5f8e8c31ac7a59bfb24f1c2bae61bc5e6a19218e5fd8efa"
+            "1a999aa9fd2483affbf916c3bbecb422e9fddeec17b3dd9ca919e7fed7f420afb282ce1bea3589fe"
+            "83841cb1c9b8e11ed3c0b88d1f9be0f2ef17f986c0ed1682f70791a8dbe71983bab5e518cb8c9ce6"
+            "20938afbc11fe0b30abbb5f5f0169dc2d2d51a8d84d5ac22caa2079f9cb6d0208bea998a22eccf08"
+            "a7c7a5891ad2b4098d8080d0ffa9ac8001189de1d4fb20fdcbb0e81cabffe4961df3ce99ff1cdfcc"
+            "cbe81dbdbe95c422818ed9811989b6fc8e248de4b8f815ed8e868e17b9c3b3a11bddbea1ff22fc92"
+            "01cb96f8cd1eb5e281cb22c5a7beeb21d9dce2a721c5f9b6ef1e849a0be3ccf59225f5b2d9f7248f"
+            "ff82e819819c87bf19d2c501a9feedef218f93fc9f1fa5bd9ede18f8d0019dbe97841acfb0d59e1e"
+            "9a559da2e59e19a4d001530000000000000001b49d437d5fb797380c8523955b9a8001c607c21fd9"
+            "29d457d16a9e47c46f9b2de08801a52eb483011401bca4d2331c50774003963cd96a8f59a881019b"
+            "3eb947ff4d8d59cd6d91688362fa50d58901fb6309000000009c762049");
+}
+
+// Version 3, written until 2026-12-07 and still read: the same table as fixed-width rows.
+TEST_F(TableFileBytes, VersionThreeBytesStillLoad) {
+  const Bytes version_three = bytes_of_hex(
+      "53534c465441424c03000000020000000100000001000000000000000070c740000000000094c140"
+      "000000000000e03f9210000000000000350100000100000003000000000000000500000000000000"
+      "34680c22000000000200000000000000010000000500000007000000030000000200000001000000"
+      "02000000020000002c010000070000000100000007000000ffffffff000000000000e03f02000000"
+      "9a9999999999b93f9a9999999999a93f000000000000f03f0300000040000000000000000000e03f"
+      "00000000000000409a9999999999b93f1d0000000000000007000000000000000200000000000000"
+      "0a00000fd43000001100000000000000cde1c22bffffffff9c964cd8feffffff47af9821ffffffff"
+      "5dc6db3effffffff8d205e28ffffffff73d92ad8feffffff3e946048ffffffff1e71b2ecfeffffff"
+      "8b203441ffffffffa6686c35ffffffff4c00b5f8feffffff68b31f23ffffffff750d000000000000"
+      "7b80bf1fffffffffa7ede809ffffffffd6ef2807fffffffff2a70141ffffffff43fe2749ffffffff"
+      "c1fd000000000000f7958431ffffffff7e51a939ffffffffda7c9cf9feffffff769de003ffffffff"
+      "f04c010000000000a252f148ffffffff71afa52afffffffff95e35edfeffffffa5e8000000000000"
+      "f038f9fafeffffff7ac55ceffefffffff6130100000000002c4e6b2fffffffff292d010000000000"
+      "1700000924e200010c00000000000000b16745f8feffffff01ed7919ffffffff2a609316ffffffff"
+      "46cc0c18ffffffffd08c7611ffffffff6150bdebfeffffff7fdce437ffffffff7b7210dffeffffff"
+      "f9e67850ffffffff493c1f47ffffffff238fe925ffffffff51d00be8feffffffbe24000000000000"
+      "5afa200bffffffff65c74febfeffffff1d3648f1feffffffd3a883f5feffffff9d210909ffffffff"
+      "8266010000000000ce4cd1d6feffffff45d384d8feffffff38a07f31ffffffffff180f34ffffffff"
+      "69310000000000006b4002f1feffffff387b0006ffffffffad301c3affffffff3c34000000000000"
+      "7110bd2fffffffffd853150effffffff4d1500000000000071571336ffffffff1234000000000000"
+      "01000000b49d437d5fb797380c0000003df7ffff35e9ffff0d200000e3010000e107000093f5ffff"
+      "ea15000057e5ffffcf110000e21b0000b2f4ffff302200006df4ffffda2000001400000001000000"
+      "bca4d2331c507740030000000b0f000053e5ffffb8e9ffff5420000072f0ffff23eeffff80ecffff"
+      "b9e9ffff99e4fffff7e5ffff7ee7ffff3d14000095ddffff02e7ffff09000000f736c75f");
+  const fs::path path = dir_ / "version3.bin";
+  write_bytes(path, version_three);
+  const LoadResult loaded = load_table(path, std::nullopt, TableStorage::sparse);
+  ASSERT_TRUE(loaded) << message_of(loaded);
+  EXPECT_EQ(loaded->format_version, table_file_motion_version);
+  ASSERT_TRUE(loaded->motion.has_value());
+  EXPECT_TRUE(*loaded->motion == motion_table(0.5, 2, 2, 1));
+  EXPECT_EQ(saved_bytes(*loaded), saved_bytes(StoredTable{tiny_table(TableStorage::sparse),
+                                                          metadata_of(0.5),
+                                                          motion_table(0.5, 2, 2, 1)}));
 }
 
 TEST_F(TableFileBytes, LargerTablesAreTheBytesTheyWere) {
@@ -246,14 +288,14 @@ TEST_F(TableFileBytes, LargerTablesAreTheBytesTheyWere) {
                                   metadata_of(1.0), motion_table(1.0, 3, 300, 40)};
   ASSERT_FALSE(sparse_motion.table.is_dense());
   EXPECT_EQ(fingerprint_of(saved_bytes(sparse_motion)),
-            (Fingerprint{109328, 0xc0dfec19, 0xc0dfec19}));
+            (Fingerprint{69046, 0x3e48a2be, 0x3e48a2be}));
 
   // Every horizon a file can hold.
   const StoredTable dense_motion{larger_table(Grid(3, 2), TableStorage::dense, 500),
                                  metadata_of(1.0),
                                  motion_table(1.0, MotionConfig::max_horizons, 100, 3)};
   EXPECT_EQ(fingerprint_of(saved_bytes(dense_motion)),
-            (Fingerprint{218324, 0xaa22b6d6, 0xaa22b6d6}));
+            (Fingerprint{204692, 0x2f0dd7f0, 0x2f0dd7f0}));
 }
 
 }  // namespace

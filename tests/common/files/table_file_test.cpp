@@ -302,13 +302,13 @@ TEST_F(TableFile, WrongVersionNamesBothVersions) {
   ASSERT_EQ(get_u32(bytes, version_offset), table_file_version);
   // The checksums are left stale on purpose: load_table checks the version before any checksum,
   // since another version may lay out or checksum its header differently.
-  // Versions 3 and 4 are the motion model's and 2 its retired one
-  // (motion_table_file_test.cpp); 5 is from a newer program.
-  put_u32(bytes, version_offset, 5);
+  // Versions 3 to 5 are the motion model's and 2 its retired one
+  // (motion_table_file_test.cpp); 6 is from a newer program.
+  put_u32(bytes, version_offset, 6);
   const LoadResult result = load_bytes(bytes);
   EXPECT_EQ(kind_of(result), TableFileError::wrong_version) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 5"), std::string::npos) << message_of(result);
-  EXPECT_NE(message_of(result).find("version 1, 3 or 4"), std::string::npos)
+  EXPECT_NE(message_of(result).find("version 6"), std::string::npos) << message_of(result);
+  EXPECT_NE(message_of(result).find("version 1, 3, 4 or 5"), std::string::npos)
       << message_of(result);
 }
 

@@ -4,11 +4,14 @@
 // every field checked. In src/: table_format (the header and the counts), motion_table_format
 // (the motion section), byte_codec (the encodings and the CRC), durable_file (the atomic write).
 //
-// Two format versions are read. Version 1 holds the paper's counts only; a table without a
+// Four format versions are read. Version 1 holds the paper's counts only; a table without a
 // motion table is still saved as version 1, byte for byte as before motion tables existed.
 // Version 3 is version 1 with 3 in its version field and the motion section between the counts
 // and the file checksum; version 4 is version 3 with the opponent's kick-offs at the end of the
-// motion section. Version 2 had the same layout, but its motion rows are keyed by the
+// motion section. Version 5, the one a motion table is saved as, is version 4 with the rows and
+// the calibration instances in a compact form (varints), and rows at any level of the back-off
+// (a pruned table: motion_table_pruning.hpp); versions 3 and 4 load as they are and are saved
+// as version 5. Version 2 had the same layout, but its motion rows are keyed by the
 // features before the zones and the team's phase (a context of the standing time alone): read
 // as version 3 they would mean something else, so a version-2 file is refused and must be
 // trained again (table_file_retired_motion_version).
@@ -18,7 +21,7 @@
 //   offset size  field
 //        0    8  magic "SSLFTABL"
 //        8    4  u32 format version: 1 (table_file_version), 3 (table_file_motion_version) or
-//                4 (table_file_set_play_version)
+//                4 (table_file_set_play_version) or 5 (table_file_compact_motion_version)
 //       12    4  u32 grid length L (cells along x)
 //       16    4  u32 grid width W (cells along y)
 //       20    4  u32 encoding: 0 dense, 1 sparse
@@ -35,7 +38,7 @@
 //                  sparse: `rows` records in increasing FROM order, each
 //                          u32 from, u32 n (>= 1), then n pairs u32 to, u32 count (> 0)
 //                          in increasing TO order
-//        M       version 3 only, the motion section (M = 84 + the counts' size):
+//        M       versions 3 and 4, the motion section (M = 84 + the counts' size):
 //                  MotionConfig: f64 step_s (equal to the header's step), u32 horizons,
 //                                f64 velocity_window_s, f64 tolerance_s,
 //                                f64 calibration_block_s, u32 calibration_one_in,
@@ -59,6 +62,18 @@
 //                    the first, then increasing), i32 since_command_ms (>= 0), u32 stage
 //                    (SetPlayStage), u32 robots seen (a bit per id 0-15), then 16 x (i32 x,
 //                    i32 y) normalised mm                                      (144 bytes)
+//        M       version 5, the compact motion section: the same configuration, instances,
+//                held-out instances seen and row count, then
+//                  u64 length in bytes of the rows, then the rows in increasing key order,
+//                    each the key's distance from the previous row's key (the first row's from
+//                    0; at least 1 after it) as a varint, then the 34 sums as zigzag varints;
+//                    a key of any level (MotionKey, canonical: encode(decode(key)) == key)
+//                  u64 length in bytes of the calibration samples, then per horizon: varint
+//                    count, then the instances, each u64 hash, varint robot_id, the 14 values
+//                    as zigzag varints, varint context
+//                  the kick-offs as in version 4 (a count of 0 when there are none)
+//                A varint is LEB128: 7 bits a byte, least significant first, the high bit set
+//                on all but the last byte; zigzag maps 0, -1, 1, -2... to 0, 1, 2, 3...
 //      end-4   4  u32 CRC-32 of every byte before it (the file checksum)
 //
 // The header has its own checksum so that the size fields can be trusted before the file
@@ -85,11 +100,14 @@ namespace ssl_formation {
 
 // The version of a file without a motion table (the paper's counts only).
 inline constexpr std::uint32_t table_file_version = 1;
-// The version of a file with a motion table.
+// The version of a file with a motion table, fixed-width (read, no longer written).
 inline constexpr std::uint32_t table_file_motion_version = 3;
 // The version of a file whose motion table remembers the opponent's kick-offs (SetPlayMemory);
-// a motion table that remembers none is still saved as version 3, byte for byte as before.
+// read, no longer written (a motion table is saved as version 5).
 inline constexpr std::uint32_t table_file_set_play_version = 4;
+// The version of a motion table saved compactly, with rows at any level: what a motion table is
+// saved as.
+inline constexpr std::uint32_t table_file_compact_motion_version = 5;
 // The version of motion tables keyed by the earlier features, refused with a reason.
 inline constexpr std::uint32_t table_file_retired_motion_version = 2;
 
@@ -104,9 +122,12 @@ struct TableMetadata {
 struct StoredTable {
   TransitionTable table;
   TableMetadata metadata;
-  // The motion model's counts (format version 3); none in a version-1 file, which serves only
+  // The motion model's counts (format version 3 to 5); none in a version-1 file, which serves only
   // the paper's model.
   std::optional<MotionTable> motion = std::nullopt;
+  // The format version it was read from (0 when it was not read from a file): a caller says
+  // once that an older version is saved as the current one.
+  std::uint32_t format_version = 0;
 };
 
 enum class TableFileError {
@@ -128,13 +149,13 @@ struct TableLoadError {
   std::string message;
 };
 
-// Reads a table file (version 1 or 3; a retired version 2 is refused) without ever writing to
+// Reads a table file (version 1, 3, 4 or 5; a retired version 2 is refused) without ever writing to
 // it. The checks run in this order, and the first that fails decides the error: open; magic
 // (not_a_table, or truncated for a file that is a strict prefix of the magic, including an
 // empty file); version (wrong_version, checked before any checksum because another version may
 // lay out or checksum its header differently); header length and header checksum (truncated,
 // corrupt); header fields (corrupt); expected_grid (wrong_grid, naming both grids); file length
-// against the header and, for version 3, the motion section's sizes (truncated if shorter,
+// against the header and, for versions 3 to 5, the motion section's sizes (truncated if shorter,
 // corrupt if longer); file checksum (corrupt); then every count and the motion section
 // (corrupt). A version-1 file loads with `motion` empty.
 // `storage` chooses the in-memory layout of the loaded table; `automatic` keeps large grids
@@ -171,12 +192,12 @@ struct SaveHooks {
 // Without a motion table the file is version 1.
 Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
                               const TableMetadata& metadata, const SaveHooks& hooks = {});
-// The same with the motion model's table: a version-3 file. Fails (writing nothing) if the
+// The same with the motion model's table: a version-5 file. Fails (writing nothing) if the
 // motion table's step differs from metadata.step_s.
 Result<TableSaved> save_table(const std::filesystem::path& path, const TransitionTable& table,
                               const TableMetadata& metadata, const MotionTable& motion,
                               const SaveHooks& hooks = {});
-// `stored` as it is: version 3 if it has a motion table, else version 1.
+// `stored` as it is: version 5 if it has a motion table, else version 1.
 Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
                               const SaveHooks& hooks = {});
 
