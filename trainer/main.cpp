@@ -15,10 +15,12 @@ namespace {
 int merge_main(int argc, const char* const argv[]) {
   std::vector<std::string> inputs;
   std::string output;
+  double max_table_mb = sf::default_max_table_mb;
   po::options_description options("Options");
   options.add_options()("output,o", po::value(&output)->required(),
                         "the merged table file to write (atomically)")(
       "input", po::value(&inputs)->multitoken(), "table files to add up");
+  sf::app::add_max_table_option(options, max_table_mb);
   po::positional_options_description positional;
   positional.add("input", -1);
   if (!sf::app::parse_command_line(argc, argv, options, "ssl-trainer merge TABLE... -o OUT",
@@ -26,7 +28,8 @@ int merge_main(int argc, const char* const argv[]) {
                                    &positional)) {
     return 0;
   }
-  sf::trainer::merge_tables(inputs, output);
+  (void)sf::app::table_budget_option(max_table_mb);  // refuses a bad one before any work
+  sf::trainer::merge_tables(inputs, output, max_table_mb);
   return 0;
 }
 

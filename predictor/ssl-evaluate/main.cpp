@@ -43,11 +43,11 @@ int main(int argc, char** argv) {
         "chain-steps", po::value(&o.chain_steps)->default_value(o.chain_steps),
         "holdout: also chains of 1 to this many steps of --step")(
         "velocity-window", po::value(&o.velocity_window_s)->default_value(o.velocity_window_s),
-        "seconds: a robot's velocity (from its tracker) counts once its track has run half this long")(
-        "jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm),
-        "noise of the simulated vision, mm")("cameras",
-                                             po::value(&o.cameras)->default_value(o.cameras),
-                                             "cameras of the simulated vision")(
+        "seconds: a robot's velocity (from its tracker) counts once its track has run half this "
+        "long")("jitter-mm", po::value(&o.jitter_mm)->default_value(o.jitter_mm),
+                "noise of the simulated vision, mm")(
+        "cameras", po::value(&o.cameras)->default_value(o.cameras),
+        "cameras of the simulated vision")(
         "grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
         "grid-sweep: the grids to compare")(
         "output-dir", po::value(&o.output_dir)->value_name("DIR"),
@@ -57,12 +57,14 @@ int main(int argc, char** argv) {
         "instant and horizon (where it was, where it went, every method's forecast; about 170 "
         "bytes a line, 1.4 million lines for the default simulated match)")(
         "bootstrap", po::value(&o.bootstrap)->default_value(o.bootstrap)->value_name("N"),
-        "holdout, grid-sweep, score: a 95% interval for every mean error and every ratio to the best "
+        "holdout, grid-sweep, score: a 95% interval for every mean error and every ratio to the "
+        "best "
         "baseline, from N resamples of a block bootstrap over blocks of data time (a fixed seed; "
-        "0: no intervals)")(
-        "bootstrap-block", po::value(&o.bootstrap_block_s)->default_value(o.bootstrap_block_s),
-        "holdout, grid-sweep, score: the bootstrap's blocks, seconds of data time (neighbouring frames "
-        "are nearly the same: a block holds what is independent of the next)")(
+        "0: no intervals)")("bootstrap-block",
+                            po::value(&o.bootstrap_block_s)->default_value(o.bootstrap_block_s),
+                            "holdout, grid-sweep, score: the bootstrap's blocks, seconds of data "
+                            "time (neighbouring frames "
+                            "are nearly the same: a block holds what is independent of the next)")(
         "simulation", po::value(&o.simulation)->default_value(o.simulation),
         "holdout without logs: match (a simulated match with its referee, --train-seconds of "
         "--seed against --test-seconds of --test-seed), paper (the paper's simulated opponent, "
@@ -94,15 +96,17 @@ int main(int argc, char** argv) {
     sf::app::add_vision_source_option(general, o.network);
     sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
     sf::app::add_prior_table_option(general, o.prior_table);
+    sf::app::add_max_table_option(general, o.max_table_mb);
     po::positional_options_description positional;
     positional.add("mode", 1);
-    if (!sf::app::parse_command_line(argc, argv, general,
-                                     "ssl-evaluate paper|holdout|grid-sweep|as-real-log|score [options]",
-                                     "Evaluates the predictions: the paper's protocol, held-out "
-                                     "accuracy against baselines, and a grid sweep; scores "
-                                     "predictions made elsewhere; writes a recording the way "
-                                     "real match logs come, to evaluate on.",
-                                     &positional)) {
+    if (!sf::app::parse_command_line(
+            argc, argv, general,
+            "ssl-evaluate paper|holdout|grid-sweep|as-real-log|score [options]",
+            "Evaluates the predictions: the paper's protocol, held-out "
+            "accuracy against baselines, and a grid sweep; scores "
+            "predictions made elsewhere; writes a recording the way "
+            "real match logs come, to evaluate on.",
+            &positional)) {
       return 0;
     }
     if (o.tests < 1 || o.train_formations < 1 || o.test_formations < 1) {
@@ -111,8 +115,9 @@ int main(int argc, char** argv) {
     }
     if (o.split < 0.0 || o.split >= 1.0) throw sf::app::UsageError("--split must be in [0, 1)");
     if (o.model.opponent_team == "all") {
-      throw sf::app::UsageError("--opponent-team all is for ssl-trainer --from-log: name the "
-                                "opponent");
+      throw sf::app::UsageError(
+          "--opponent-team all is for ssl-trainer --from-log: name the "
+          "opponent");
     }
     (void)o.network.tracked();  // checked before any work
     o.horizons = sf::evaluate::parse_horizons(horizons);

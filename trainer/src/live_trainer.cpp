@@ -13,7 +13,8 @@ LiveTrainer::LiveTrainer(const TrainerOptions& options, const app::Clock& clock)
     : options_(options),
       clock_(clock),
       tables_((check_table_option(options), options)),
-      field_log_(options.model.sampler_config().field, options.model.sampler_config().use_geometry) {
+      field_log_(options.model.sampler_config().field,
+                 options.model.sampler_config().use_geometry) {
   if (options.model.opponent_team == "all") {
     throw app::UsageError("--opponent-team all is for --from-log: live, name the opponent");
   }
@@ -113,8 +114,7 @@ int run_live(const TrainerOptions& options) {
   app::RepeatingTimer status(io, status_period, [&] { trainer.log_status(&events); });
   bool saved_on_exit = true;
   app::StopSignals signals(io, [&](int signal) {
-    spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)",
-                 signal);
+    spdlog::info("signal {}: saving and stopping (a second signal stops at once, unsaved)", signal);
     events.stop();
     ticks.cancel();
     status.cancel();

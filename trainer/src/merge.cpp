@@ -1,10 +1,12 @@
 // ssl-trainer merge: tables of the same grid, step and model added up, saved atomically. The
-// paper's counts add up entry by entry; version-3 files also add up their motion tables.
+// paper's counts add up entry by entry; the motion tables add up key by key (pruned tables too:
+// a folded row is already at its parent's key) and are pruned again to the budget.
 
 #include <spdlog/spdlog.h>
 
 #include <stdexcept>
 
+#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/files/table_lock.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
@@ -13,12 +15,14 @@ namespace ssl_formation::trainer {
 
 namespace {
 std::string describe_version(const StoredTable& table) {
-  return table.motion ? "a version-3 table (the paper's counts and the motion model's)"
+  return table.motion ? "a version-" + std::to_string(table.format_version) +
+                            " table (the paper's counts and the motion model's)"
                       : "a version-1 table (the paper's counts only)";
 }
 }  // namespace
 
-void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output) {
+void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output,
+                  double max_table_mb) {
   if (inputs.empty()) throw app::UsageError("merge needs at least one input table");
   auto first = load_table(inputs.front());
   if (!first) throw std::runtime_error(first.error().message);
@@ -63,6 +67,16 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
   // No live trainer may be writing the output meanwhile: its next save would undo the merge.
   const TableWriterLock lock(TableWriterLock::lock_path_for_table(output),
                              "the table " + output.string());
+  std::size_t rows_saved = 0;
+  if (merged.motion) {
+    // The sum of pruned tables: its rows are judged again on all their evidence.
+    auto fit = fit_table_to_budget(merged.table, merged.metadata, *merged.motion,
+                                   table_budget_mb(max_table_mb));
+    if (!fit)
+      throw std::runtime_error("cannot save " + output.string() + ": " + fit.error().message);
+    rows_saved = fit->pruned.rows_after;
+    merged.motion = std::move(fit->pruned.table);
+  }
   const auto saved = save_table(output, merged);
   if (!saved) throw std::runtime_error(saved.error().message);
   if (!saved->durable) spdlog::warn("{}", saved->warning);
@@ -70,10 +84,11 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
                inputs.size(), output.string(), merged.table.grid().to_string(),
                merged.table.transitions(), merged.metadata.samples);
   if (merged.motion) {
-    spdlog::info("merged motion model: {} horizons, motion_instances={} motion_held_out={} "
-                 "motion_rows={}",
-                 merged.motion->config().horizons, merged.motion->instances(),
-                 merged.motion->held_out(), merged.motion->rows());
+    spdlog::info(
+        "merged motion model: {} horizons, motion_instances={} motion_held_out={} "
+        "motion_rows={}",
+        merged.motion->config().horizons, merged.motion->instances(), merged.motion->held_out(),
+        rows_saved);
   }
 }
 

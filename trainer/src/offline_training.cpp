@@ -21,9 +21,9 @@
 #include <thread>
 
 #include "ssl_formation/app/progress.hpp"
+#include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
@@ -72,9 +72,9 @@ std::unique_ptr<Training> new_training(const Destination& to, const OpponentChoi
   config.sampler = to.config;
   config.rules = MatchRules{opponent, to.rules.learn_during};
   config.tracked_vision = to.tracked;
-  ResumedLearner empty = resume_learner(
-      TransitionTable(to.config.grid),
-      to.motion ? std::optional<MotionTable>(*to.motion) : std::nullopt);
+  ResumedLearner empty =
+      resume_learner(TransitionTable(to.config.grid),
+                     to.motion ? std::optional<MotionTable>(*to.motion) : std::nullopt);
   return std::make_unique<Training>(config, empty.kind, std::move(empty.learner));
 }
 
@@ -88,7 +88,7 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
   }
   // --opponent-team all: a training per team, made as the referee first names it.
   if (!to.all_teams) outcome.teams.push_back({new_training(to, to.rules.opponent)});
-  VisionFrame geometry;  // the last geometry, for the trainings made part-way (all teams)
+  VisionFrame geometry;   // the last geometry, for the trainings made part-way (all teams)
   RefereeFollower names;  // --opponent-team all: who the referee names, to make their trainings
   LogEvents events(*reader);
   MatchEvent event;
@@ -103,11 +103,11 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
       // The names as the log's one followed game controller gives them.
       names.add(event.payload, event.receive_s);
       const RefereeView* view = names.heard() ? &names.view() : nullptr;
-      for (const std::string* name : {view ? &view->yellow_name : nullptr,
-                                      view ? &view->blue_name : nullptr}) {
+      for (const std::string* name :
+           {view ? &view->yellow_name : nullptr, view ? &view->blue_name : nullptr}) {
         if (!name || name->empty()) continue;  // an unnamed team could be anyone
-        const bool known = std::any_of(
-            outcome.teams.begin(), outcome.teams.end(), [&](const TeamOfLog& team) {
+        const bool known =
+            std::any_of(outcome.teams.begin(), outcome.teams.end(), [&](const TeamOfLog& team) {
               return same_team_name(team.training->match().choice().opponent_team, *name);
             });
         if (known) continue;
@@ -133,7 +133,8 @@ LogOutcome train_log(const std::string& file, const Destination& to, Progress& p
       reported_offset = offset;
     }
   }
-  progress.bytes += reader->compressed_size() - std::min(reader->compressed_size(), reported_offset);
+  progress.bytes +=
+      reader->compressed_size() - std::min(reader->compressed_size(), reported_offset);
   progress.frames += outcome.frames & 4095;
   outcome.ending = reader->ending();
   outcome.read_error = reader->error();
@@ -151,10 +152,11 @@ std::string describe_team(const TeamOfLog& team) {
   const Training& t = *team.training;
   const SamplerCounters& c = t.sampler().counters();
   std::string out = describe(t.match().opponent(), t.sampler().attacks());
-  out += fmt::format("; {} changes of colour, {} changes of ends; {} formations ({} outside "
-                     "running play), {} transitions",
-                     c.opponent_switches, c.attack_switches, t.samples(),
-                     t.samples_outside_play(), t.table().transitions());
+  out += fmt::format(
+      "; {} changes of colour, {} changes of ends; {} formations ({} outside "
+      "running play), {} transitions",
+      c.opponent_switches, c.attack_switches, t.samples(), t.samples_outside_play(),
+      t.table().transitions());
   if (t.motion()) out += fmt::format(", {} motion instances", t.motion()->instances());
   return out;
 }
@@ -174,8 +176,9 @@ int run_offline(const TrainerOptions& options) {
     throw app::UsageError("--opponent-team all trains a table per team: give --table-dir");
   }
   if (to.all_teams && options.model.opponent_color != "referee") {
-    throw app::UsageError("--opponent-team all finds each team's colour by its name: leave out "
-                          "--opponent-color");
+    throw app::UsageError(
+        "--opponent-team all finds each team's colour by its name: leave out "
+        "--opponent-color");
   }
   if (options.jobs < 0) throw app::UsageError("--jobs must be 0 (every core) or more");
   // Creates --table-dir where it is missing; no other trainer may write these tables meanwhile.
@@ -184,8 +187,8 @@ int run_offline(const TrainerOptions& options) {
   // resumed stops the run before any log is read; --table-dir's as their teams turn up.
   std::map<std::filesystem::path, std::unique_ptr<Training>> tables;
   if (!to.per_team) {
-    tables[options.table] = open_training(options.table, to.config, options.reset, to.motion,
-                                          to.rules, to.tracked);
+    tables[options.table] =
+        open_training(options.table, to.config, options.reset, to.motion, to.rules, to.tracked);
   }
 
   std::vector<LogOutcome> outcomes(options.from_logs.size());
@@ -255,9 +258,10 @@ int run_offline(const TrainerOptions& options) {
         continue;
       }
       if (!training.match().opponent_known()) {
-        spdlog::info("{}: the opponent was found, then no longer named ({}): what was learned "
-                     "while it was is kept",
-                     log.file, training.match().opponent().unresolved);
+        spdlog::info(
+            "{}: the opponent was found, then no longer named ({}): what was learned "
+            "while it was is kept",
+            log.file, training.match().opponent().unresolved);
       }
       spdlog::info("{}: opponent {}", log.file, describe_team(team));
       // The team's table: the one named (the file names ignore case as names do), else the
@@ -317,15 +321,18 @@ int run_offline(const TrainerOptions& options) {
   for (auto& [path, training] : tables) {
     if (!taught.contains(path)) continue;
     if (const auto problem = training->feed_problem()) spdlog::warn("{}", *problem);
-    if (!save_training(path, *training)) return 1;
-    spdlog::info("saved {}: {} transitions from {} formations, {} states seen", path.string(),
-                 training->table().transitions(), training->samples(),
-                 training->table().rows_seen());
+    const auto saved =
+        save_training(path, *training, app::table_budget_option(options.max_table_mb));
+    if (!saved) return 1;
+    spdlog::info("saved {}: {} transitions from {} formations, {} states seen ({:.2f} MB)",
+                 path.string(), training->table().transitions(), training->samples(),
+                 training->table().rows_seen(), static_cast<double>(saved->bytes) / 1e6);
     if (const auto& motion = training->motion()) {
-      spdlog::info("saved {}: motion model, {} horizons: motion_instances={} motion_held_out={} "
-                   "motion_rows={}",
-                   path.string(), motion->config().horizons, motion->instances(),
-                   motion->held_out(), motion->rows());
+      spdlog::info(
+          "saved {}: motion model, {} horizons: motion_instances={} motion_held_out={} "
+          "motion_rows={} (of {} learned; the others add nothing over coarser rows)",
+          path.string(), motion->config().horizons, motion->instances(), motion->held_out(),
+          saved->motion_rows, motion->rows());
     }
   }
   return every_file_whole ? 0 : 1;

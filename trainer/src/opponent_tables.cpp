@@ -24,10 +24,11 @@ OpponentTables::OpponentTables(const TrainerOptions& options)
     std::error_code error;
     std::filesystem::create_directories(options_.table_dir, error);
     if (error) {
-      throw std::runtime_error("--table-dir " + options_.table_dir + ": cannot create it: " +
-                               error.message());
+      throw std::runtime_error("--table-dir " + options_.table_dir +
+                               ": cannot create it: " + error.message());
     }
-    path_ = std::filesystem::path(options_.table_dir) / team_table_file_name(named_opponent(rules_));
+    path_ =
+        std::filesystem::path(options_.table_dir) / team_table_file_name(named_opponent(rules_));
   } else {
     path_ = options_.table;
   }
@@ -59,8 +60,9 @@ RefereeChange OpponentTables::handle(const MatchEvent& event) {
     config.sampler = config_;
     config.rules = rules_;
     config.tracked_vision = tracked_vision_;
-    ResumedLearner empty = resume_learner(
-        TransitionTable(config_.grid), motion_ ? std::optional<MotionTable>(*motion_) : std::nullopt);
+    ResumedLearner empty =
+        resume_learner(TransitionTable(config_.grid),
+                       motion_ ? std::optional<MotionTable>(*motion_) : std::nullopt);
     next = std::make_unique<Training>(config, empty.kind, std::move(empty.learner));
     saving_ = false;
   }
@@ -81,12 +83,14 @@ RefereeChange OpponentTables::handle(const MatchEvent& event) {
 
 bool OpponentTables::save_if_changed() {
   if (!saving_ || !training_->changed_since_save()) return true;
-  return save_training(path_, *training_);
+  return save_training(path_, *training_, app::table_budget_option(options_.max_table_mb))
+      .has_value();
 }
 
 bool OpponentTables::save_at_exit() {
   if (per_opponent() || !saving_) return save_if_changed();
-  return save_training(path_, *training_);
+  return save_training(path_, *training_, app::table_budget_option(options_.max_table_mb))
+      .has_value();
 }
 
 }  // namespace ssl_formation::trainer

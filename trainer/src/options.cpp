@@ -46,6 +46,7 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
   app::add_vision_options(general, o.network);
   app::add_model_options(general, o.model);
   app::add_learn_during_option(general, o.learn_during);
+  app::add_max_table_option(general, o.max_table_mb);
   app::add_daemon_options(general, o.daemon);
   return app::parse_command_line(
       argc, argv, general,
@@ -93,15 +94,16 @@ TableWriterLock lock_tables(const TrainerOptions& options) {
   std::error_code error;
   std::filesystem::create_directories(options.table_dir, error);
   if (error) {
-    throw std::runtime_error("--table-dir " + options.table_dir + ": cannot create it: " +
-                             error.message());
+    throw std::runtime_error("--table-dir " + options.table_dir +
+                             ": cannot create it: " + error.message());
   }
   return TableWriterLock(TableWriterLock::lock_path_for_folder(options.table_dir),
                          "the table folder " + options.table_dir);
 }
 
 MatchRules match_rules(const TrainerOptions& options) {
-  return MatchRules{options.model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
+  return MatchRules{options.model.opponent_choice(),
+                    app::parsed_learn_during(options.learn_during)};
 }
 
 }  // namespace ssl_formation::trainer

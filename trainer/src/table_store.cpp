@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <stdexcept>
@@ -108,6 +109,13 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                           "program's ({}): give another --table, or --reset",
                           table_path.string(), describe_motion(saved), describe_motion(*motion)));
   }
+  if (stored.format_version != table_file_version &&
+      stored.format_version != table_file_compact_motion_version) {
+    spdlog::info(
+        "{} is a version-{} table: it is read as it is and will be saved as version {} "
+        "(compact, its rows that add nothing folded into coarser ones)",
+        table_path.string(), stored.format_version, table_file_compact_motion_version);
+  }
   if (stored.motion) {
     spdlog::info(
         "resumed {}: grid {}, {} transitions, {} formations, {} states seen; motion model: {} "
@@ -125,24 +133,47 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                     stored.metadata.samples);
 }
 
-bool save_training(const std::filesystem::path& table_path, Training& training) {
+std::optional<TableSaveReport> save_training(const std::filesystem::path& table_path,
+                                             Training& training, const TableBudget& budget) {
   TableMetadata metadata;
   metadata.field = training.sampler().field();
   metadata.step_s = training.sampler().config().step_s;
   metadata.samples = training.samples();
-  const auto saved = training.motion()
-                         ? save_table(table_path, training.table(), metadata, *training.motion())
-                         : save_table(table_path, training.table(), metadata);
+  TableSaveReport report;
+  Result<TableSaved> saved = fail("nothing saved");
+  if (training.motion()) {
+    auto fit = fit_table_to_budget(training.table(), metadata, *training.motion(), budget);
+    if (!fit) {
+      spdlog::error("cannot save table {}: {}", table_path.string(), fit.error().message);
+      return std::nullopt;
+    }
+    if (!fit->within_budget) {
+      // Said once: every later save would say it again.
+      static std::atomic<bool> said{false};
+      if (!said.exchange(true)) {
+        spdlog::warn(
+            "{} takes {:.2f} MB, over --max-table-mb {:.2f}, with every robot's and "
+            "zone's row folded: its calibration sample and the paper's counts alone "
+            "take that",
+            table_path.string(), static_cast<double>(fit->file_bytes) / 1e6,
+            static_cast<double>(budget.max_bytes) / 1e6);
+      }
+    }
+    report = {fit->file_bytes, fit->pruned.rows_after, fit->pruned.folded};
+    saved = save_table(table_path, training.table(), metadata, fit->pruned.table);
+  } else {
+    saved = save_table(table_path, training.table(), metadata);
+  }
   if (!saved) {
     spdlog::error("{}", saved.error().message);
-    return false;
+    return std::nullopt;
   }
   // The new file is in place; only its survival of a machine crash is in doubt.
   if (!saved->durable) spdlog::warn("{}", saved->warning);
   training.mark_saved();
   spdlog::debug("saved {} ({} transitions, {} formations)", table_path.string(),
                 training.table().transitions(), training.samples());
-  return true;
+  return report;
 }
 
 }  // namespace ssl_formation::trainer

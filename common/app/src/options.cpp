@@ -16,7 +16,8 @@ Grid ModelOptions::parsed_grid() const {
 
 ModelKind ModelOptions::parsed_model() const {
   const auto parsed = parse_model(model);
-  if (!parsed) throw UsageError("--model must be one of " + model_names() + ", not '" + model + "'");
+  if (!parsed)
+    throw UsageError("--model must be one of " + model_names() + ", not '" + model + "'");
   return *parsed;
 }
 
@@ -92,6 +93,22 @@ void add_prior_table_option(po::options_description& options, std::string& prior
       "an opponent without a table yet is predicted from it alone");
 }
 
+void add_max_table_option(po::options_description& options, double& max_table_mb) {
+  options.add_options()(
+      "max-table-mb", po::value(&max_table_mb)->default_value(max_table_mb),
+      "the largest table file to save, MB: the motion model's rows that say least over their "
+      "coarser rows are folded into them until it fits (rows that say nothing always are); 0: no "
+      "bound");
+}
+
+TableBudget table_budget_option(double max_table_mb) {
+  if (!std::isfinite(max_table_mb) || max_table_mb < 0.0) {
+    throw UsageError("--max-table-mb must be 0 (no bound) or more, not " +
+                     std::to_string(max_table_mb));
+  }
+  return table_budget_mb(max_table_mb);
+}
+
 std::shared_ptr<const MotionTable> loaded_prior_table(const std::string& path, double step_s) {
   if (path.empty()) return nullptr;
   auto loaded = load_table(path);
@@ -142,9 +159,9 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "side, else from where its goalkeeper stands)")(
       "our-team", po::value(&model.our_team)->default_value(model.our_team, "none"),
       "our team's name as the game controller spells it (case aside): the opponent is the other "
-      "team")(
-      "opponent-team", po::value(&model.opponent_team)->default_value(model.opponent_team, "none"),
-      "the opponent's name as the game controller spells it (case aside)")(
+      "team")("opponent-team",
+              po::value(&model.opponent_team)->default_value(model.opponent_team, "none"),
+              "the opponent's name as the game controller spells it (case aside)")(
       "model", po::value(&model.model)->default_value(model.model),
       "motion: positions in mm with calibrated radii, learned from every frame (needs a "
       "version-3 table); paper: the paper's Markov model on cells; the baselines, which need no "
@@ -153,9 +170,9 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
       "sampling", po::value(&model.sampling)->default_value(model.sampling),
       "step: a formation every --step (the paper's protocol); frame: a formation at every frame, "
       "each robot's previous cell from --step earlier; auto: frame for --model motion, step for "
-      "--model paper")(
-      "field-length", po::value(&model.field_length_mm)->default_value(model.field_length_mm),
-      "field length in mm until a geometry packet says otherwise")(
+      "--model paper")("field-length",
+                       po::value(&model.field_length_mm)->default_value(model.field_length_mm),
+                       "field length in mm until a geometry packet says otherwise")(
       "field-width", po::value(&model.field_width_mm)->default_value(model.field_width_mm),
       "field width in mm until a geometry packet says otherwise")(
       "ignore-geometry", po::bool_switch(&model.ignore_geometry),

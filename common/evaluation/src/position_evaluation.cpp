@@ -4,6 +4,7 @@
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <stdexcept>
 
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 
@@ -18,9 +19,9 @@ template <typename Items, typename TimeOf>
 std::optional<std::size_t> nearest_index(const Items& items, double time_s, double tolerance_s,
                                          TimeOf time_of) {
   if (items.empty()) return std::nullopt;
-  const auto after = std::lower_bound(
-      items.begin(), items.end(), time_s,
-      [&](const auto& item, double t) { return time_of(item) < t; });
+  const auto after =
+      std::lower_bound(items.begin(), items.end(), time_s,
+                       [&](const auto& item, double t) { return time_of(item) < t; });
   std::optional<std::size_t> best;
   double best_gap = tolerance_s;
   const auto consider = [&](auto it) {
@@ -90,8 +91,8 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
   const double step_s = config.sampler.step_s;
   for (int k = 0; k < config.steps; ++k) {
     const auto h = static_cast<std::size_t>(k);
-    const Formation* truth = formation_near(model.formations, instant.time_s + (k + 1) * step_s,
-                                            config.tolerance_s);
+    const Formation* truth =
+        formation_near(model.formations, instant.time_s + (k + 1) * step_s, config.tolerance_s);
     if (!truth) continue;
     // The robots every method predicted and the truth holds.
     struct Scored {
@@ -140,9 +141,9 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
           const bool right = guess.position == s.actual->cell;
           if ((m != 0 || scores_cells) && right) ++method.cells.exact_cells;
           if (m != 0 || scores_cells) {
-            method.cells.cell_distance += static_cast<std::uint64_t>(
-                std::abs(guess.position.x - s.actual->cell.x) +
-                std::abs(guess.position.y - s.actual->cell.y));
+            method.cells.cell_distance +=
+                static_cast<std::uint64_t>(std::abs(guess.position.x - s.actual->cell.x) +
+                                           std::abs(guess.position.y - s.actual->cell.y));
           }
           if (m != 0) continue;
           if (guess.radius90_mm > 0.0) {
@@ -195,8 +196,7 @@ std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t 
 
 double ErrorStats::mean() const {
   if (errors_.empty()) return 0.0;
-  return std::accumulate(errors_.begin(), errors_.end(), 0.0) /
-         static_cast<double>(errors_.size());
+  return std::accumulate(errors_.begin(), errors_.end(), 0.0) / static_cast<double>(errors_.size());
 }
 
 double ErrorStats::percentile(double p) const {
@@ -211,8 +211,8 @@ double ErrorStats::percentile(double p) const {
 
 const Formation* formation_near(const std::vector<Formation>& formations, double time_s,
                                 double tolerance_s) {
-  const auto index = nearest_index(formations, time_s, tolerance_s,
-                                   [](const Formation& f) { return f.time_s; });
+  const auto index =
+      nearest_index(formations, time_s, tolerance_s, [](const Formation& f) { return f.time_s; });
   return index ? &formations[*index] : nullptr;
 }
 
@@ -257,8 +257,8 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     prediction.horizon = config.steps;
     prediction.model = kind;
     prediction.recalibration = config.recalibration;
-    prediction.opponent = config.rules ? std::optional<OpponentChoice>(config.rules->opponent)
-                                       : std::nullopt;
+    prediction.opponent =
+        config.rules ? std::optional<OpponentChoice>(config.rules->opponent) : std::nullopt;
     prediction.tracked_vision = config.tracked_vision;
     TrainingConfig training;
     training.sampler = prediction.sampler;
@@ -281,10 +281,24 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
   metadata.samples = model.samples();
   result.train_formations = model.samples();
   result.feed_problem = model.feed_problem();
+  // Each table-keeping method's table as the programs save it, pruned to the budget: what a
+  // team's predictor would read.
+  const auto as_saved = [&config](const Training& trained,
+                                  const TableMetadata& own) -> std::shared_ptr<const StoredTable> {
+    const TransitionTable* transitions = trained.learner().transitions();
+    if (!transitions) return nullptr;
+    const MotionTable* motion = trained.learner().motion();
+    std::optional<MotionTable> saved;
+    if (motion) {
+      auto fit = fit_table_to_budget(*transitions, own, *motion, config.table_budget);
+      if (!fit) throw std::invalid_argument(fit.error().message);
+      saved = std::move(fit->pruned.table);
+    }
+    return std::make_shared<const StoredTable>(StoredTable{*transitions, own, std::move(saved)});
+  };
   if (const TransitionTable* transitions = model.learner().transitions()) {
     const MotionTable* motion = model.learner().motion();
-    result.table = std::make_shared<const StoredTable>(StoredTable{
-        *transitions, metadata, motion ? std::optional<MotionTable>(*motion) : std::nullopt});
+    result.table = as_saved(model, metadata);
     result.transitions = transitions->transitions();
     result.table_memory_bytes = transitions->memory_bytes() + (motion ? motion->memory_bytes() : 0);
   }
@@ -304,10 +318,13 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     Method& method = methods[m];
     TableMetadata own = metadata;
     own.field = method.training->sampler().field();
+    std::unique_ptr<Forecaster> forecaster = method.training->learner().forecaster(
+        own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr);
+    if (method.training->learner().motion()) {
+      forecaster->set_table(m == 0 ? result.table : as_saved(*method.training, own));
+    }
     pipelines.push_back(std::make_unique<PredictionPipeline>(
-        method.prediction,
-        method.training->learner().forecaster(
-            own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr),
+        method.prediction, std::move(forecaster),
         [&by_method, &config, &result, m, recorded](const PredictedFormation& p) {
           if (m == 0 && config.on_model_prediction) config.on_model_prediction(p);
           StreamPredictions& out = by_method[m];
@@ -318,9 +335,9 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
             const auto at = nearest_index(recorded->instants, time_s, recorded_time_tolerance_s,
                                           [](const RecordedPrediction& r) { return r.time_s; });
             if (at) ++result.recorded_matched;
-            out.instants.push_back({time_s, p.context.phase,
-                                    at ? recorded->instants[*at].prediction.steps
-                                       : std::vector<PredictedStep>{}});
+            out.instants.push_back(
+                {time_s, p.context.phase,
+                 at ? recorded->instants[*at].prediction.steps : std::vector<PredictedStep>{}});
           } else {
             out.instants.push_back({time_s, p.context.phase, p.prediction.steps});
           }
@@ -352,8 +369,7 @@ PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
     for (std::size_t m = 1; m < result.methods.size(); ++m) others.push_back(m);
     for (auto& row : result.rows) {
       for (HorizonScore& score : row) {
-        score.intervals =
-            bootstrap_row(score.blocks, draws, result.best_baseline(score), others);
+        score.intervals = bootstrap_row(score.blocks, draws, result.best_baseline(score), others);
       }
     }
   }
@@ -366,7 +382,8 @@ double expected_calibration_error(const Calibration& calibration) {
   for (std::size_t b = 0; b < calibration.bin_count.size(); ++b) {
     const std::uint64_t count = calibration.bin_count[b];
     if (count == 0) continue;
-    const double observed = static_cast<double>(calibration.bin_hits[b]) / static_cast<double>(count);
+    const double observed =
+        static_cast<double>(calibration.bin_hits[b]) / static_cast<double>(count);
     const double confidence = calibration.bin_confidence[b] / static_cast<double>(count);
     sum += static_cast<double>(count) * std::abs(observed - confidence);
   }

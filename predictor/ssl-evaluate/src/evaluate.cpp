@@ -371,6 +371,7 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
     config.tracked_vision = options.network.tracked();
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
+    config.table_budget = app::table_budget_option(options.max_table_mb);
     config.bootstrap.resamples = options.bootstrap;
     config.bootstrap.block_s = options.bootstrap_block_s;
     const bool report_this = chain && !options.report.empty();

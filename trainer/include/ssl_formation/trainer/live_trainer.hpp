@@ -27,9 +27,9 @@ class LiveTrainer final : public MatchEventSink {
   void on_event(const MatchEvent& event) override;
   void start_new_stream() override;
 
-  // What the timers do, every 0.2 s (or --flush-interval, if shorter): saves the table when it changed, the
-  // first time as soon as it has something, then at most every --flush-interval; says once, in
-  // plain words, when the model cannot learn from this feed.
+  // What the timers do, every 0.2 s (or --flush-interval, if shorter): saves the table when it
+  // changed, the first time as soon as it has something, then at most every --flush-interval; says
+  // once, in plain words, when the model cannot learn from this feed.
   void tick();
   // At exit (SIGINT, SIGTERM): saves (--table's file in any case). False if the save failed.
   bool save_at_exit();

@@ -10,8 +10,8 @@
 #include <set>
 #include <string_view>
 
-#include "ssl_formation/trainer/trainer.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/trainer/trainer.hpp"
 
 namespace ssl_formation::trainer {
 

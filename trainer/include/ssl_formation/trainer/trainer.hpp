@@ -1,7 +1,8 @@
 #pragma once
 // ssl-trainer's three modes: live training from the vision feed, offline training from log
 // files, and merging tables. main.cpp wires them up; everything else (options included) is
-// here, linkable by the tests. All three count through the core's Training and save through table_store.
+// here, linkable by the tests. All three count through the core's Training and save through
+// table_store.
 
 #include <filesystem>
 #include <optional>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/files/table_lock.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/net/multicast.hpp"
@@ -37,6 +39,8 @@ struct TrainerOptions {
   // --from-log: a log whose last record is cut off (a recorder killed mid-write) is used up to
   // it with a warning; with strict, that also makes the exit status 1.
   bool strict = false;
+  // The largest table file to save, MB (0: no bound); see table_budget.hpp.
+  double max_table_mb = default_max_table_mb;
 };
 
 // Parses ssl-trainer's command line (not merge's) into `options`. Returns false when --help was
@@ -64,10 +68,11 @@ MatchRules match_rules(const TrainerOptions& options);
 int run_live(const TrainerOptions& options);     // live_trainer.cpp
 int run_offline(const TrainerOptions& options);  // offline_training.cpp
 
-// Adds up tables of the same grid and step into `output` (atomically): the paper's counts and,
-// when every input is a version-3 file, the motion tables (saved as version 3). Throws
+// Adds up tables of the same grid and step into `output` (atomically), within `max_table_mb`:
+// the paper's counts and, when every input has one, the motion tables. Throws
 // std::runtime_error naming the file and the reason when one cannot be read or added, including
 // a mix of version-1 and version-3 files or motion tables of other settings.
-void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output);
+void merge_tables(const std::vector<std::string>& inputs, const std::filesystem::path& output,
+                  double max_table_mb = default_max_table_mb);
 
 }  // namespace ssl_formation::trainer

@@ -11,6 +11,7 @@
 
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/match/match.hpp"
 #include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
@@ -74,6 +75,12 @@ void add_prior_table_option(po::options_description& options, std::string& prior
 // The prior's motion rows; none for an empty path. Throws UsageError, saying why, for a file
 // that does not load, holds no motion rows, or was trained with another step than `step_s`.
 std::shared_ptr<const MotionTable> loaded_prior_table(const std::string& path, double step_s);
+
+// --max-table-mb, for the programs that save a trained table (ssl-trainer and its merge) and the
+// one that scores the table as they would save it (ssl-evaluate).
+void add_max_table_option(po::options_description& options, double& max_table_mb);
+// The budget a --max-table-mb asks for. Throws UsageError for a negative or non-finite one.
+TableBudget table_budget_option(double max_table_mb);
 
 // --learn-during, for the program that trains from the referee (ssl-trainer).
 void add_learn_during_option(po::options_description& options, std::string& learn_during);

@@ -20,6 +20,7 @@
 
 #include "ssl_formation/evaluation/block_bootstrap.hpp"
 #include "ssl_formation/evaluation/evaluation.hpp"
+#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/match_event.hpp"
 #include "ssl_formation/models/model_factory.hpp"
@@ -123,6 +124,9 @@ struct PositionEvaluationConfig {
   // The model's prior: every team's table (ssl-evaluate --prior-table), under the rows it
   // learns from the training streams.
   std::shared_ptr<const MotionTable> prior_table = nullptr;
+  // The table the model predicts from is the one the programs would save: within this budget,
+  // its rows that add nothing folded (ssl-evaluate --max-table-mb, table_budget.hpp).
+  TableBudget table_budget;
   // Sees every prediction the model makes on the test streams, as the daemon would have sent it
   // (and ssl-predictor --from-log written it): for tools and tests that want them as they are.
   std::function<void(const PredictedFormation&)> on_model_prediction;

@@ -55,6 +55,9 @@ struct EvaluateOptions {
   double recalibration_half_life_s = OnlineCalibrationSettings{}.half_life_s;  // 0: off
   // holdout: every team's table under the model's rows, for the sections of its step.
   std::string prior_table;
+  // The model is scored on its table as ssl-trainer would save it within this size (0: no
+  // bound).
+  double max_table_mb = default_max_table_mb;
   std::string output_dir;  // none: no CSV files
   // holdout, grid-sweep: every scored robot as a CSV line (ev::ScoredSample); none without it.
   std::string write_samples;
