@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <numeric>
 
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 
@@ -191,22 +190,6 @@ std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t 
     if (!best || score.methods[m].error.mean() < score.methods[*best].error.mean()) best = m;
   }
   return best;
-}
-
-double ErrorStats::mean() const {
-  if (errors_.empty()) return 0.0;
-  return std::accumulate(errors_.begin(), errors_.end(), 0.0) /
-         static_cast<double>(errors_.size());
-}
-
-double ErrorStats::percentile(double p) const {
-  if (errors_.empty()) return 0.0;
-  std::sort(errors_.begin(), errors_.end());
-  const double rank = std::clamp(p, 0.0, 100.0) / 100.0 * static_cast<double>(errors_.size() - 1);
-  const auto below = static_cast<std::size_t>(std::floor(rank));
-  const std::size_t above = std::min(below + 1, errors_.size() - 1);
-  const double fraction = rank - static_cast<double>(below);
-  return errors_[below] + fraction * (errors_[above] - errors_[below]);
 }
 
 const Formation* formation_near(const std::vector<Formation>& formations, double time_s,

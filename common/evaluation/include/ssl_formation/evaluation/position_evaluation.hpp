@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ssl_formation/evaluation/block_bootstrap.hpp"
+#include "ssl_formation/evaluation/error_stats.hpp"
 #include "ssl_formation/evaluation/evaluation.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/match_event.hpp"
@@ -28,20 +29,6 @@
 #include "ssl_formation/pipeline/training.hpp"
 
 namespace ssl_formation::evaluation {
-
-// Errors in millimetres: mean, median and 90th percentile (linear interpolation between order
-// statistics, as numpy's default).
-class ErrorStats {
- public:
-  void add(double error_mm) { errors_.push_back(error_mm); }
-  std::size_t count() const { return errors_.size(); }
-  double mean() const;
-  double percentile(double p) const;  // p in [0, 100]; 0 without errors
-  double median() const { return percentile(50.0); }
-
- private:
-  mutable std::vector<double> errors_;
-};
 
 // How often the truth fell within the model's stated radii.
 struct RadiusCoverage {
