@@ -339,9 +339,29 @@ struct GridReport {
   ReportSamples chain_samples;    // the last section's robots, for --report
 };
 
-// Two-step predictions of the paper's model from `inputs` (test formations), timed.
-double time_predictions(const TransitionTable& table,
-                        const std::vector<std::vector<RobotStateById>>& inputs) {
+// Two-step predictions of the paper's model from the test formations, timed.
+double time_predictions(const TransitionTable& table, const Streams& test,
+                        const SamplerConfig& config) {
+  constexpr std::size_t timed = 5000;
+  std::vector<std::vector<RobotStateById>> inputs;
+  FormationSampler sampler(config, [&](const FormationSample& sample) {
+    if (inputs.size() < timed) inputs.push_back(robot_states(sample.formation));
+  });
+  struct Feed final : MatchEventSink {
+    FormationSampler& sampler;
+    const std::vector<std::vector<RobotStateById>>& inputs;
+    Feed(FormationSampler& s, const std::vector<std::vector<RobotStateById>>& i)
+        : sampler(s), inputs(i) {}
+    void on_event(const MatchEvent& event) override {
+      // Past the formations timed, the rest of the log is only read.
+      if (event.kind == MatchEventKind::vision && inputs.size() < timed) sampler.add(*event.frame);
+    }
+    void start_new_stream() override { sampler.start_new_stream(); }
+  } feed(sampler, inputs);
+  for (const ev::EventStream& stream : test) {
+    feed.start_new_stream();
+    stream(feed);
+  }
   Prediction prediction;
   const auto start = std::chrono::steady_clock::now();
   std::size_t runs = 0;
@@ -365,8 +385,6 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
   const SamplerConfig base = model.sampler_config();
   GridReport report;
   report.grid = base.grid;
-  // The chains' first test formations, to time the predictions from.
-  std::vector<std::vector<RobotStateById>> timed;
   // A prior serves the sections of its own step (the chained steps, and the single horizon equal
   // to it): a table's rows are learned for one step.
   std::vector<ev::PositionEvaluationConfig> configs;
@@ -392,11 +410,6 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
         if (report_this) report.chain_samples.add(s);
       };
     }
-    if (chain) {
-      config.on_model_prediction = [&timed](const PredictedFormation& p) {
-        if (timed.size() < 5000) timed.push_back(robot_states(p.formation()));
-      };
-    }
     configs.push_back(std::move(config));
   };
   for (const double horizon_s : options.horizons) section(horizon_s, 1, false);
@@ -407,7 +420,7 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     report.sections.push_back({configs[i].sampler.step_s, std::move(evaluations[i])});
   }
   if (const auto& table = report.sections.back().evaluation.table) {
-    report.prediction_us = time_predictions(table->table, timed);
+    report.prediction_us = time_predictions(table->table, test, base);
   }
   return report;
 }
