@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
+#include <limits>
 #include <memory>
-#include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
@@ -43,11 +45,15 @@ struct Instant {
   std::vector<PredictedStep> steps;
 };
 
-// What a method predicted over one test stream, and (the model's) the formations it sampled.
-struct StreamPredictions {
-  std::vector<Instant> instants;
-  std::vector<Formation> formations;  // kept for the model only: the truth
+// The model's prediction at an instant with the formation it was sampled from: the truth of the
+// predictions made before it.
+struct ModelInstant {
+  Instant instant;
+  Formation formation;
 };
+
+double model_time(const ModelInstant& x) { return x.formation.time_s; }
+double instant_time(const Instant& x) { return x.time_s; }
 
 const RobotPrediction* find_robot(const PredictedStep& step, std::uint32_t robot_id) {
   const auto it = std::find_if(step.robots.begin(), step.robots.end(),
@@ -55,29 +61,335 @@ const RobotPrediction* find_robot(const PredictedStep& step, std::uint32_t robot
   return it == step.robots.end() ? nullptr : &*it;
 }
 
-// A method as the evaluation runs it: its sampler and what it learned.
+// How long, in data time, an instant waits for a method that has predicted nothing at or after
+// it. Every front end reads the same events, so a method lags the model by a frame or two at
+// most: one that is further behind predicted nothing there, and waiting longer would only let
+// the instants kept grow.
+constexpr double wait_limit_s = 10.0;
+
+// A method as the evaluation runs it: its sampling, what it learned, its pipeline on the test
+// streams and the predictions it made there that may still be a model instant's nearest.
 struct Method {
   ModelKind kind;
   PredictionConfig prediction;
-  std::unique_ptr<Training> training;
+  std::unique_ptr<Training> training;            // until the test streams begin
+  std::unique_ptr<PredictionPipeline> pipeline;  // from then on
+  std::deque<Instant> waiting;                   // the baselines' (the model's: Evaluation::model_)
+  // Where in `waiting` the method's clock went back, since the last event.
+  std::optional<std::size_t> went_back_at;
 };
 
-// Scores the model's instant `i` of test stream `stream` and every method's prediction at its
-// nearest instant, at every horizon, into the rows "all" and the instant's phase.
-void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& config,
-                   const std::vector<StreamPredictions>& by_method, std::size_t stream,
-                   std::size_t i) {
-  const StreamPredictions& model = by_method.front();
-  const Instant& instant = model.instants[i];
-  const Formation& now = model.formations[i];
+// A configuration's front ends, one per sampling: its methods differ in nothing else that a
+// front end reads (the baselines that need every frame sample every frame where the model may
+// sample every step), so each message is parsed once per sampling rather than once per method.
+class FrontEnds final : public MatchEventSink {
+ public:
+  MatchFrontEnd& of(const FrontEndConfig& config) {
+    for (const auto& front_end : front_ends_) {
+      if (front_end->config().sampler.sampling == config.sampler.sampling) return *front_end;
+    }
+    front_ends_.push_back(std::make_unique<MatchFrontEnd>(config, MatchFrontEnd::Handlers{}));
+    return *front_ends_.back();
+  }
+  void on_event(const MatchEvent& event) override {
+    for (const auto& front_end : front_ends_) front_end->on_event(event);
+  }
+  void start_new_stream() override {
+    for (const auto& front_end : front_ends_) front_end->start_new_stream();
+  }
+  void clear() { front_ends_.clear(); }
+
+ private:
+  std::vector<std::unique_ptr<MatchFrontEnd>> front_ends_;
+};
+
+// One configuration evaluated as the streams go by: its methods trained on the training streams,
+// then each test stream's predictions scored as soon as the truth of their last horizon is in,
+// so that what is kept spans a few seconds of data, never a whole stream.
+class Evaluation {
+ public:
+  explicit Evaluation(const PositionEvaluationConfig& config);
+  Evaluation(const Evaluation&) = delete;
+  Evaluation& operator=(const Evaluation&) = delete;
+
+  MatchEventSink& training() { return training_front_ends_; }
+  // What was learned, handed to the methods' forecasters; the training is let go.
+  void end_training();
+  void start_test_stream(std::size_t stream);
+  void on_test_event(const MatchEvent& event);
+  void end_test_stream();
+  PositionEvaluation finish();
+
+ private:
+  void on_prediction(std::size_t m, const PredictedFormation& p);
+  // Scores every model instant whose predictions and truths are all in (every one at a stream's
+  // end), and lets go of what no later instant can need.
+  void score_ready(bool ended);
+  bool ready(double time_s) const;
+  // Scores the oldest model instant and every method's prediction at its nearest instant, at
+  // every horizon, into the rows "all" and the instant's phase.
+  void score_front();
+  void drop_stale();
+
+  const PositionEvaluationConfig& config_;
+  PositionEvaluation result_;
+  std::vector<Method> methods_;
+  FrontEnds training_front_ends_;
+  FrontEnds test_front_ends_;
+  std::deque<ModelInstant> model_;
+  std::optional<std::size_t> model_went_back_at_;
+  std::size_t stream_ = 0;
+  // Of the current test stream: the newest instant any method predicted at, and the model's.
+  double newest_s_ = -std::numeric_limits<double>::infinity();
+  double newest_model_s_ = -std::numeric_limits<double>::infinity();
+};
+
+Evaluation::Evaluation(const PositionEvaluationConfig& config) : config_(config) {
+  PositionEvaluation& result = result_;
+  result.methods.push_back(config.model);
+  result.methods.insert(result.methods.end(), config.baselines.begin(), config.baselines.end());
+  result.baselines_end = result.methods.size();
+  const RecordedPredictions* recorded = config.recorded_predictions.get();
+  result.labels.emplace_back(recorded ? "predictions" : "model");
+  result.model_states_cells = !recorded || recorded->has_cells;
+  result.model_states_states = !recorded || recorded->has_states;
+  for (const ModelKind kind : config.baselines) result.labels.emplace_back(describe(kind).label);
+  if (config.pooled_ablation && config.model == ModelKind::motion && !recorded) {
+    result.methods.push_back(ModelKind::motion);
+    result.labels.emplace_back("pooled model");
+  }
+  ModelSettings settings;
+  settings.grid = config.sampler.grid;
+  settings.step_s = config.sampler.step_s;
+  settings.horizons = config.steps;
+  settings.recalibration = config.recalibration;
+  settings.velocity_window_s = config.velocity_window_s;
+  settings.tolerance_s = config.tolerance_s;
+
+  // Each method learns through its own Training, with the sampling it needs (the baselines read
+  // every frame's velocities even where the model samples every step).
+  for (std::size_t m = 0; m < result.methods.size(); ++m) {
+    const ModelKind kind = result.methods[m];
+    const bool ablation = m >= result.baselines_end;
+    PredictionConfig prediction;
+    prediction.sampler = config.sampler;
+    if (kind != config.model && sampling_problem(kind, prediction.sampler.sampling)) {
+      prediction.sampler.sampling = Sampling::frame;
+    }
+    prediction.horizon = config.steps;
+    prediction.model = kind;
+    prediction.recalibration = config.recalibration;
+    prediction.opponent =
+        config.rules ? std::optional<OpponentChoice>(config.rules->opponent) : std::nullopt;
+    prediction.tracked_vision = config.tracked_vision;
+    TrainingConfig training;
+    training.sampler = prediction.sampler;
+    training.rules = config.rules;
+    training.tracked_vision = config.tracked_vision;
+    // The ablation learns the model's table again (the same counts) for forecasters of its own.
+    ModelSettings own_settings = settings;
+    own_settings.pooled_motion = ablation;
+    MatchFrontEnd& front_end = training_front_ends_.of(Training::front_end_config(training));
+    methods_.push_back(
+        {kind,
+         prediction,
+         std::make_unique<Training>(training, kind, make_learner(kind, own_settings), front_end),
+         nullptr,
+         {},
+         std::nullopt});
+  }
+}
+
+void Evaluation::end_training() {
+  PositionEvaluation& result = result_;
+  const PositionEvaluationConfig& config = config_;
+  const Training& model = *methods_.front().training;
+  TableMetadata metadata;
+  metadata.field = model.sampler().field();
+  metadata.step_s = config.sampler.step_s;
+  metadata.samples = model.samples();
+  result.train_formations = model.samples();
+  result.feed_problem = model.feed_problem();
+  // Each table-keeping method's table as the programs save it, pruned to the budget: what a
+  // team's predictor would read.
+  const auto as_saved = [&config](const Training& trained, const TableMetadata& own)
+      -> std::shared_ptr<const StoredTable> {
+    const TransitionTable* transitions = trained.learner().transitions();
+    if (!transitions) return nullptr;
+    const MotionTable* motion = trained.learner().motion();
+    std::optional<MotionTable> saved;
+    if (motion) {
+      auto fit = fit_table_to_budget(*transitions, own, *motion, config.table_budget);
+      if (!fit) throw std::invalid_argument(fit.error().message);
+      saved = std::move(fit->pruned.table);
+    }
+    return std::make_shared<const StoredTable>(StoredTable{*transitions, own, std::move(saved)});
+  };
+  if (const TransitionTable* transitions = model.learner().transitions()) {
+    const MotionTable* motion = model.learner().motion();
+    result.table = as_saved(model, metadata);
+    result.transitions = transitions->transitions();
+    result.table_memory_bytes = transitions->memory_bytes() + (motion ? motion->memory_bytes() : 0);
+  }
+
+  result.rows.assign(state_rows, std::vector<HorizonScore>(static_cast<std::size_t>(config.steps)));
+  for (auto& row : result.rows) {
+    for (int k = 0; k < config.steps; ++k) {
+      row[static_cast<std::size_t>(k)].horizon_s = (k + 1) * config.sampler.step_s;
+      row[static_cast<std::size_t>(k)].methods.resize(methods_.size());
+    }
+  }
+
+  for (std::size_t m = 0; m < methods_.size(); ++m) {
+    Method& method = methods_[m];
+    TableMetadata own = metadata;
+    own.field = method.training->sampler().field();
+    MatchFrontEnd& front_end =
+        test_front_ends_.of(PredictionPipeline::front_end_config(method.prediction));
+    std::unique_ptr<Forecaster> forecaster = method.training->learner().forecaster(
+        own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr);
+    // The model predicts from the very table the result keeps, rather than from a copy of it;
+    // its ablation from its own table, pruned the same way.
+    if (m == 0 && result.table) {
+      forecaster->set_table(result.table);
+    } else if (method.training->learner().motion()) {
+      forecaster->set_table(as_saved(*method.training, own));
+    }
+    method.pipeline = std::make_unique<PredictionPipeline>(
+        method.prediction, std::move(forecaster),
+        [this, m](const PredictedFormation& p) { on_prediction(m, p); }, front_end);
+  }
+  // The forecasters hold what they need: the tables learned are let go before the testing.
+  training_front_ends_.clear();
+  for (Method& method : methods_) method.training.reset();
+}
+
+void Evaluation::start_test_stream(std::size_t stream) {
+  stream_ = stream;
+  newest_s_ = -std::numeric_limits<double>::infinity();
+  newest_model_s_ = newest_s_;
+  test_front_ends_.start_new_stream();
+}
+
+void Evaluation::on_test_event(const MatchEvent& event) {
+  if (event.kind == MatchEventKind::referee) result_.test_has_referee = true;
+  test_front_ends_.on_event(event);
+  score_ready(false);
+}
+
+void Evaluation::end_test_stream() { score_ready(true); }
+
+void Evaluation::on_prediction(std::size_t m, const PredictedFormation& p) {
+  if (m == 0 && config_.on_model_prediction) config_.on_model_prediction(p);
+  const double time_s = p.formation().time_s;
+  Instant instant{time_s, p.context.phase, {}};
+  const RecordedPredictions* recorded = config_.recorded_predictions.get();
+  if (m == 0 && recorded) {
+    // The file's predictions at this instant, if it made any, in place of the sampling model's.
+    const auto at = nearest_index(recorded->instants, time_s, recorded_time_tolerance_s,
+                                  [](const RecordedPrediction& r) { return r.time_s; });
+    if (at) {
+      ++result_.recorded_matched;
+      instant.steps = recorded->instants[*at].prediction.steps;
+    }
+  } else {
+    instant.steps = p.prediction.steps;
+  }
+  newest_s_ = std::max(newest_s_, time_s);
+  if (m == 0) {
+    ++result_.test_formations;
+    if (!model_.empty() && time_s < model_time(model_.back()) && !model_went_back_at_) {
+      model_went_back_at_ = model_.size();
+    }
+    newest_model_s_ = std::max(newest_model_s_, time_s);
+    model_.push_back({std::move(instant), p.formation()});
+    return;
+  }
+  Method& method = methods_[m];
+  if (!method.waiting.empty() && time_s < method.waiting.back().time_s && !method.went_back_at) {
+    method.went_back_at = method.waiting.size();
+  }
+  method.waiting.push_back(std::move(instant));
+}
+
+void Evaluation::score_ready(bool ended) {
+  const bool went_back = model_went_back_at_ ||
+                         std::any_of(methods_.begin(), methods_.end(),
+                                     [](const Method& m) { return m.went_back_at.has_value(); });
+  if (went_back) {
+    // A clock that went back (a restarted feed) ends the pairing: what came before it is scored
+    // as at a stream's end, and what came after starts anew.
+    std::deque<ModelInstant> model_after;
+    if (model_went_back_at_) {
+      model_after.assign(std::make_move_iterator(model_.begin() + *model_went_back_at_),
+                         std::make_move_iterator(model_.end()));
+      model_.erase(model_.begin() + *model_went_back_at_, model_.end());
+    }
+    std::vector<std::deque<Instant>> after(methods_.size());
+    for (std::size_t m = 0; m < methods_.size(); ++m) {
+      Method& method = methods_[m];
+      if (!method.went_back_at) continue;
+      after[m].assign(std::make_move_iterator(method.waiting.begin() + *method.went_back_at),
+                      std::make_move_iterator(method.waiting.end()));
+      method.waiting.erase(method.waiting.begin() + *method.went_back_at, method.waiting.end());
+    }
+    model_went_back_at_.reset();
+    for (Method& method : methods_) method.went_back_at.reset();
+    score_ready(true);
+    model_ = std::move(model_after);
+    for (std::size_t m = 0; m < methods_.size(); ++m) methods_[m].waiting = std::move(after[m]);
+    newest_s_ = -std::numeric_limits<double>::infinity();
+    for (const ModelInstant& x : model_) newest_s_ = std::max(newest_s_, model_time(x));
+    newest_model_s_ = newest_s_;
+    for (const Method& method : methods_) {
+      for (const Instant& x : method.waiting) newest_s_ = std::max(newest_s_, x.time_s);
+    }
+  }
+  while (!model_.empty() && (ended || ready(model_time(model_.front())))) {
+    score_front();
+    model_.pop_front();
+  }
+  if (ended) {
+    for (Method& method : methods_) method.waiting.clear();
+    return;
+  }
+  drop_stale();
+}
+
+bool Evaluation::ready(double time_s) const {
+  if (newest_s_ >= time_s + config_.steps * config_.sampler.step_s + wait_limit_s) return true;
+  // The truth of the last horizon: the model's first formation at or after it.
+  if (newest_model_s_ < time_s + config_.steps * config_.sampler.step_s) return false;
+  // Every method's nearest instant: its first at or after this one.
+  return std::all_of(methods_.begin() + 1, methods_.end(), [&](const Method& method) {
+    return (!method.waiting.empty() && method.waiting.back().time_s >= time_s) ||
+           newest_s_ >= time_s + wait_limit_s;
+  });
+}
+
+void Evaluation::drop_stale() {
+  // No later model instant is earlier than this: a method's instants before its last one
+  // earlier than this are never anyone's nearest.
+  const double next_s = model_.empty() ? std::max(newest_model_s_, newest_s_ - wait_limit_s)
+                                       : model_time(model_.front());
+  for (std::size_t m = 1; m < methods_.size(); ++m) {
+    std::deque<Instant>& waiting = methods_[m].waiting;
+    while (waiting.size() >= 2 && waiting[1].time_s < next_s) waiting.pop_front();
+  }
+}
+
+void Evaluation::score_front() {
+  const PositionEvaluationConfig& config = config_;
+  const Instant& instant = model_.front().instant;
+  const Formation& now = model_.front().formation;
   // Each baseline's instant nearest the model's.
-  std::vector<const Instant*> at(by_method.size(), nullptr);
+  std::vector<const Instant*> at(methods_.size(), nullptr);
   at[0] = &instant;
-  for (std::size_t m = 1; m < by_method.size(); ++m) {
-    const auto j = nearest_index(by_method[m].instants, instant.time_s, config.tolerance_s,
-                                 [](const Instant& x) { return x.time_s; });
+  for (std::size_t m = 1; m < methods_.size(); ++m) {
+    const std::deque<Instant>& waiting = methods_[m].waiting;
+    const auto j = nearest_index(waiting, instant.time_s, config.tolerance_s, instant_time);
     if (!j) return;  // scored on the same instants or not at all
-    at[m] = &by_method[m].instants[*j];
+    at[m] = &waiting[*j];
   }
   const std::array<std::size_t, 2> rows{0, state_row_of(instant.phase)};
   // What a file of predictions does not state is not scored for it (method 0): its cells, its
@@ -91,9 +403,10 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
   const double step_s = config.sampler.step_s;
   for (int k = 0; k < config.steps; ++k) {
     const auto h = static_cast<std::size_t>(k);
-    const Formation* truth =
-        formation_near(model.formations, instant.time_s + (k + 1) * step_s, config.tolerance_s);
-    if (!truth) continue;
+    const auto truth_at =
+        nearest_index(model_, instant.time_s + (k + 1) * step_s, config.tolerance_s, model_time);
+    if (!truth_at) continue;
+    const Formation* truth = &model_[*truth_at].formation;
     // The robots every method predicted and the truth holds.
     struct Scored {
       const FormationRobot* now;
@@ -119,13 +432,13 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
     if (scored.empty()) continue;
     if (config.on_sample) {
       for (const Scored& s : scored) {
-        config.on_sample(ScoredSample{step_s, k + 1, stream, instant.time_s, s.now->robot_id,
+        config.on_sample(ScoredSample{step_s, k + 1, stream_, instant.time_s, s.now->robot_id,
                                       instant.phase, s.now->feed_position, s.actual->feed_position,
                                       &s.guesses});
       }
     }
     for (const std::size_t row : rows) {
-      HorizonScore& score = result.rows[row][h];
+      HorizonScore& score = result_.rows[row][h];
       bool every_cell_right = true;
       for (std::size_t m = 0; m < at.size(); ++m) {
         MethodScore& method = score.methods[m];
@@ -160,7 +473,7 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
       }
       if (config.bootstrap.enabled()) {
         std::vector<double> errors(at.size());
-        const DataBlock block = data_block(stream, instant.time_s, config.bootstrap.block_s);
+        const DataBlock block = data_block(stream_, instant.time_s, config.bootstrap.block_s);
         for (const Scored& s : scored) {
           for (std::size_t m = 0; m < at.size(); ++m) {
             errors[m] = distance(s.guesses[m]->feed_position, s.actual->feed_position);
@@ -170,6 +483,27 @@ void score_instant(PositionEvaluation& result, const PositionEvaluationConfig& c
       }
     }
   }
+}
+
+PositionEvaluation Evaluation::finish() {
+  PositionEvaluation& result = result_;
+  if (config_.bootstrap.enabled()) {
+    // One set of draws for every row and horizon: the blocks any robot was scored in.
+    std::vector<DataBlock> universe;
+    for (const HorizonScore& score : result.all()) {
+      for (const auto& [block, sums] : score.blocks) universe.push_back(block);
+    }
+    const BlockResamples draws(std::move(universe), config_.bootstrap);
+    // The model against every other method: RowIntervals::model_ratio[m - 1] is over method m.
+    std::vector<std::size_t> others;
+    for (std::size_t m = 1; m < result.methods.size(); ++m) others.push_back(m);
+    for (auto& row : result.rows) {
+      for (HorizonScore& score : row) {
+        score.intervals = bootstrap_row(score.blocks, draws, result.best_baseline(score), others);
+      }
+    }
+  }
+  return std::move(result_);
 }
 
 }  // namespace
@@ -194,21 +528,6 @@ std::optional<std::size_t> best_baseline(const HorizonScore& score, std::size_t 
   return best;
 }
 
-double ErrorStats::mean() const {
-  if (errors_.empty()) return 0.0;
-  return std::accumulate(errors_.begin(), errors_.end(), 0.0) / static_cast<double>(errors_.size());
-}
-
-double ErrorStats::percentile(double p) const {
-  if (errors_.empty()) return 0.0;
-  std::sort(errors_.begin(), errors_.end());
-  const double rank = std::clamp(p, 0.0, 100.0) / 100.0 * static_cast<double>(errors_.size() - 1);
-  const auto below = static_cast<std::size_t>(std::floor(rank));
-  const std::size_t above = std::min(below + 1, errors_.size() - 1);
-  const double fraction = rank - static_cast<double>(below);
-  return errors_[below] + fraction * (errors_[above] - errors_[below]);
-}
-
 const Formation* formation_near(const std::vector<Formation>& formations, double time_s,
                                 double tolerance_s) {
   const auto index =
@@ -216,164 +535,84 @@ const Formation* formation_near(const std::vector<Formation>& formations, double
   return index ? &formations[*index] : nullptr;
 }
 
+EventStream replay_of(const RecordedMatch& match) {
+  return [&match](MatchEventSink& sink) { match.replay(sink); };
+}
+
+namespace {
+
+// Hands every event to each of `sinks`, in order.
+class FanOut final : public MatchEventSink {
+ public:
+  explicit FanOut(std::vector<MatchEventSink*> sinks) : sinks_(std::move(sinks)) {}
+  void on_event(const MatchEvent& event) override {
+    for (MatchEventSink* sink : sinks_) sink->on_event(event);
+  }
+  void start_new_stream() override {
+    for (MatchEventSink* sink : sinks_) sink->start_new_stream();
+  }
+
+ private:
+  std::vector<MatchEventSink*> sinks_;
+};
+
+// The test streams' events for one evaluation: scored as they go.
+class TestSink final : public MatchEventSink {
+ public:
+  explicit TestSink(Evaluation& evaluation) : evaluation_(evaluation) {}
+  void on_event(const MatchEvent& event) override { evaluation_.on_test_event(event); }
+  void start_new_stream() override {}  // Evaluation::start_test_stream, with the stream's number
+
+ private:
+  Evaluation& evaluation_;
+};
+
+}  // namespace
+
+std::vector<PositionEvaluation> evaluate_positions(
+    const std::vector<PositionEvaluationConfig>& configs, const std::vector<EventStream>& train,
+    const std::vector<EventStream>& test) {
+  for (const PositionEvaluationConfig& config : configs) {
+    if (config.recorded_predictions && test.size() != 1) {
+      throw std::invalid_argument("recorded predictions are scored against one test stream");
+    }
+  }
+  std::vector<std::unique_ptr<Evaluation>> evaluations;
+  std::vector<MatchEventSink*> training;
+  std::vector<std::unique_ptr<TestSink>> test_sinks;
+  std::vector<MatchEventSink*> testing;
+  for (const PositionEvaluationConfig& config : configs) {
+    evaluations.push_back(std::make_unique<Evaluation>(config));
+    training.push_back(&evaluations.back()->training());
+    test_sinks.push_back(std::make_unique<TestSink>(*evaluations.back()));
+    testing.push_back(test_sinks.back().get());
+  }
+  // Each stream is read once, for every configuration.
+  FanOut train_fan(std::move(training));
+  for (const EventStream& stream : train) {
+    train_fan.start_new_stream();
+    stream(train_fan);
+  }
+  for (const auto& evaluation : evaluations) evaluation->end_training();
+  FanOut test_fan(std::move(testing));
+  for (std::size_t t = 0; t < test.size(); ++t) {
+    for (const auto& evaluation : evaluations) evaluation->start_test_stream(t);
+    test[t](test_fan);
+    for (const auto& evaluation : evaluations) evaluation->end_test_stream();
+  }
+  std::vector<PositionEvaluation> results;
+  for (const auto& evaluation : evaluations) results.push_back(evaluation->finish());
+  return results;
+}
+
 PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
                                       const std::vector<RecordedMatch>& train,
                                       const std::vector<RecordedMatch>& test) {
-  PositionEvaluation result;
-  result.methods.push_back(config.model);
-  result.methods.insert(result.methods.end(), config.baselines.begin(), config.baselines.end());
-  result.baselines_end = result.methods.size();
-  const RecordedPredictions* recorded = config.recorded_predictions.get();
-  if (recorded && test.size() != 1) {
-    throw std::invalid_argument("recorded predictions are scored against one test stream");
-  }
-  result.labels.emplace_back(recorded ? "predictions" : "model");
-  result.model_states_cells = !recorded || recorded->has_cells;
-  result.model_states_states = !recorded || recorded->has_states;
-  for (const ModelKind kind : config.baselines) result.labels.emplace_back(describe(kind).label);
-  if (config.pooled_ablation && config.model == ModelKind::motion && !recorded) {
-    result.methods.push_back(ModelKind::motion);
-    result.labels.emplace_back("pooled model");
-  }
-  ModelSettings settings;
-  settings.grid = config.sampler.grid;
-  settings.step_s = config.sampler.step_s;
-  settings.horizons = config.steps;
-  settings.recalibration = config.recalibration;
-  settings.velocity_window_s = config.velocity_window_s;
-  settings.tolerance_s = config.tolerance_s;
-
-  // Training: each method through its own Training, with the sampling it needs (the baselines
-  // read every frame's velocities even where the model samples every step).
-  std::vector<Method> methods;
-  for (std::size_t m = 0; m < result.methods.size(); ++m) {
-    const ModelKind kind = result.methods[m];
-    const bool ablation = m >= result.baselines_end;
-    PredictionConfig prediction;
-    prediction.sampler = config.sampler;
-    if (kind != config.model && sampling_problem(kind, prediction.sampler.sampling)) {
-      prediction.sampler.sampling = Sampling::frame;
-    }
-    prediction.horizon = config.steps;
-    prediction.model = kind;
-    prediction.recalibration = config.recalibration;
-    prediction.opponent =
-        config.rules ? std::optional<OpponentChoice>(config.rules->opponent) : std::nullopt;
-    prediction.tracked_vision = config.tracked_vision;
-    TrainingConfig training;
-    training.sampler = prediction.sampler;
-    training.rules = config.rules;
-    training.tracked_vision = config.tracked_vision;
-    // The ablation learns the model's table again (the same counts) for forecasters of its own.
-    ModelSettings own_settings = settings;
-    own_settings.pooled_motion = ablation;
-    auto trained = std::make_unique<Training>(training, kind, make_learner(kind, own_settings));
-    for (const RecordedMatch& stream : train) {
-      trained->start_new_stream();
-      stream.replay(*trained);
-    }
-    methods.push_back({kind, prediction, std::move(trained)});
-  }
-  const Training& model = *methods.front().training;
-  TableMetadata metadata;
-  metadata.field = model.sampler().field();
-  metadata.step_s = config.sampler.step_s;
-  metadata.samples = model.samples();
-  result.train_formations = model.samples();
-  result.feed_problem = model.feed_problem();
-  // Each table-keeping method's table as the programs save it, pruned to the budget: what a
-  // team's predictor would read.
-  const auto as_saved = [&config](const Training& trained,
-                                  const TableMetadata& own) -> std::shared_ptr<const StoredTable> {
-    const TransitionTable* transitions = trained.learner().transitions();
-    if (!transitions) return nullptr;
-    const MotionTable* motion = trained.learner().motion();
-    std::optional<MotionTable> saved;
-    if (motion) {
-      auto fit = fit_table_to_budget(*transitions, own, *motion, config.table_budget);
-      if (!fit) throw std::invalid_argument(fit.error().message);
-      saved = std::move(fit->pruned.table);
-    }
-    return std::make_shared<const StoredTable>(StoredTable{*transitions, own, std::move(saved)});
-  };
-  if (const TransitionTable* transitions = model.learner().transitions()) {
-    const MotionTable* motion = model.learner().motion();
-    result.table = as_saved(model, metadata);
-    result.transitions = transitions->transitions();
-    result.table_memory_bytes = transitions->memory_bytes() + (motion ? motion->memory_bytes() : 0);
-  }
-
-  result.rows.assign(state_rows, std::vector<HorizonScore>(static_cast<std::size_t>(config.steps)));
-  for (auto& row : result.rows) {
-    for (int k = 0; k < config.steps; ++k) {
-      row[static_cast<std::size_t>(k)].horizon_s = (k + 1) * config.sampler.step_s;
-      row[static_cast<std::size_t>(k)].methods.resize(methods.size());
-    }
-  }
-
-  // Testing: every method's pipeline over each test stream, then the stream scored.
-  std::vector<StreamPredictions> by_method(methods.size());
-  std::vector<std::unique_ptr<PredictionPipeline>> pipelines;
-  for (std::size_t m = 0; m < methods.size(); ++m) {
-    Method& method = methods[m];
-    TableMetadata own = metadata;
-    own.field = method.training->sampler().field();
-    std::unique_ptr<Forecaster> forecaster = method.training->learner().forecaster(
-        own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr);
-    if (method.training->learner().motion()) {
-      forecaster->set_table(m == 0 ? result.table : as_saved(*method.training, own));
-    }
-    pipelines.push_back(std::make_unique<PredictionPipeline>(
-        method.prediction, std::move(forecaster),
-        [&by_method, &config, &result, m, recorded](const PredictedFormation& p) {
-          if (m == 0 && config.on_model_prediction) config.on_model_prediction(p);
-          StreamPredictions& out = by_method[m];
-          const double time_s = p.formation().time_s;
-          if (m == 0 && recorded) {
-            // The file's predictions at this instant, if it made any, in place of the sampling
-            // model's.
-            const auto at = nearest_index(recorded->instants, time_s, recorded_time_tolerance_s,
-                                          [](const RecordedPrediction& r) { return r.time_s; });
-            if (at) ++result.recorded_matched;
-            out.instants.push_back(
-                {time_s, p.context.phase,
-                 at ? recorded->instants[*at].prediction.steps : std::vector<PredictedStep>{}});
-          } else {
-            out.instants.push_back({time_s, p.context.phase, p.prediction.steps});
-          }
-          if (m == 0) out.formations.push_back(p.formation());
-        }));
-  }
-  for (std::size_t t = 0; t < test.size(); ++t) {
-    const RecordedMatch& stream = test[t];
-    result.test_has_referee = result.test_has_referee || stream.has_referee();
-    for (std::size_t m = 0; m < methods.size(); ++m) {
-      by_method[m] = StreamPredictions{};
-      pipelines[m]->start_new_stream();
-      stream.replay(*pipelines[m]);
-    }
-    result.test_formations += by_method.front().formations.size();
-    for (std::size_t i = 0; i < by_method.front().instants.size(); ++i) {
-      score_instant(result, config, by_method, t, i);
-    }
-  }
-  if (config.bootstrap.enabled()) {
-    // One set of draws for every row and horizon: the blocks any robot was scored in.
-    std::vector<DataBlock> universe;
-    for (const HorizonScore& score : result.all()) {
-      for (const auto& [block, sums] : score.blocks) universe.push_back(block);
-    }
-    const BlockResamples draws(std::move(universe), config.bootstrap);
-    // The model against every other method: RowIntervals::model_ratio[m - 1] is over method m.
-    std::vector<std::size_t> others;
-    for (std::size_t m = 1; m < result.methods.size(); ++m) others.push_back(m);
-    for (auto& row : result.rows) {
-      for (HorizonScore& score : row) {
-        score.intervals = bootstrap_row(score.blocks, draws, result.best_baseline(score), others);
-      }
-    }
-  }
-  return result;
+  std::vector<EventStream> train_streams;
+  for (const RecordedMatch& match : train) train_streams.push_back(replay_of(match));
+  std::vector<EventStream> test_streams;
+  for (const RecordedMatch& match : test) test_streams.push_back(replay_of(match));
+  return std::move(evaluate_positions({config}, train_streams, test_streams).front());
 }
 
 double expected_calibration_error(const Calibration& calibration) {

@@ -10,10 +10,10 @@ MatchFrontEnd::MatchFrontEnd(FrontEndConfig config, Handlers handlers)
     : config_(std::move(config)),
       handlers_(std::move(handlers)),
       sampler_(config_.sampler, [this](const FormationSample& sample) { on_sample(sample); }),
-      match_(config_.opponent ? *config_.opponent
-                              : fixed_opponent(config_.sampler.opponent_color,
-                                               config_.sampler.opponent_attacks,
-                                               config_.sampler.infer_attacks)),
+      match_(config_.opponent
+                 ? *config_.opponent
+                 : fixed_opponent(config_.sampler.opponent_color, config_.sampler.opponent_attacks,
+                                  config_.sampler.infer_attacks)),
       ball_(config_.ball) {
   follow_opponent();
 }
@@ -82,7 +82,7 @@ void MatchFrontEnd::start_new_stream() {
   ball_.reset();
   phases_.reset();
   pending_commands_.clear();
-  if (handlers_.on_forget) handlers_.on_forget();
+  forget();
   follow_opponent();
   learn_from_s_ = -std::numeric_limits<double>::infinity();
   last_frame_time_s_.reset();
@@ -91,10 +91,15 @@ void MatchFrontEnd::start_new_stream() {
 
 void MatchFrontEnd::follow_opponent() {
   const Opponent& opponent = match_.opponent();
-  if (opponent.color != sampler_.config().opponent_color && handlers_.on_forget) {
-    handlers_.on_forget();
-  }
+  if (opponent.color != sampler_.config().opponent_color) forget();
   sampler_.set_opponent(opponent.color, opponent.attacks);
+}
+
+void MatchFrontEnd::forget() {
+  if (handlers_.on_forget) handlers_.on_forget();
+  for (const Handlers& joined : joined_) {
+    if (joined.on_forget) joined.on_forget();
+  }
 }
 
 void MatchFrontEnd::on_sample(const FormationSample& sample) {
@@ -104,7 +109,7 @@ void MatchFrontEnd::on_sample(const FormationSample& sample) {
   const double t = sample.formation.time_s;
   for (const int command : pending_commands_) phases_.on_command(command, t);
   pending_commands_.clear();
-  if (!handlers_.on_sample) return;
+  if (!handlers_.on_sample && joined_.empty()) return;
   // The ball and the placement's target, turned as the sample's robots were.
   const AttackDirection turned = sample.formation.opponent_attacks;
   const std::optional<BallState> ball = ball_.at(t);
@@ -125,7 +130,10 @@ void MatchFrontEnd::on_sample(const FormationSample& sample) {
       ball ? std::optional<Point>(normalise(ball->position, turned)) : std::nullopt,
       ball ? normalise(ball->velocity, turned) : Point{},
       designated_position};
-  handlers_.on_sample(moment);
+  if (handlers_.on_sample) handlers_.on_sample(moment);
+  for (const Handlers& joined : joined_) {
+    if (joined.on_sample) joined.on_sample(moment);
+  }
 }
 
 void MatchFrontEnd::note_frame_time(double t_capture) {

@@ -17,14 +17,6 @@ ModelSettings model_settings(const PredictionConfig& config) {
   return settings;
 }
 
-FrontEndConfig front_end_config(const PredictionConfig& config) {
-  FrontEndConfig front;
-  front.sampler = config.sampler;
-  front.opponent = config.opponent;
-  front.tracked_vision = config.tracked_vision;
-  return front;
-}
-
 // Checks what can be checked before the forecaster and the sampler are made.
 const PredictionConfig& checked(const PredictionConfig& config) {
   if (config.horizon < 1 || config.horizon > PredictionConfig::max_horizon) {
@@ -39,6 +31,14 @@ const PredictionConfig& checked(const PredictionConfig& config) {
 
 }  // namespace
 
+FrontEndConfig PredictionPipeline::front_end_config(const PredictionConfig& config) {
+  FrontEndConfig front;
+  front.sampler = config.sampler;
+  front.opponent = config.opponent;
+  front.tracked_vision = config.tracked_vision;
+  return front;
+}
+
 PredictionPipeline::PredictionPipeline(PredictionConfig config, Handler on_prediction)
     : PredictionPipeline(config, make_forecaster(checked(config).model, model_settings(config)),
                          std::move(on_prediction)) {}
@@ -49,9 +49,27 @@ PredictionPipeline::PredictionPipeline(PredictionConfig config,
     : config_(checked(config)),
       on_prediction_(std::move(on_prediction)),
       forecaster_(std::move(forecaster)),
-      front_end_(front_end_config(config_),
-                 {[this](const MatchMoment& moment) { on_sample(moment); },
-                  [this] { forget_match(); }}) {
+      own_front_end_(std::make_unique<MatchFrontEnd>(front_end_config(config_), handlers())),
+      front_end_(*own_front_end_) {
+  reserve_buffers();
+}
+
+PredictionPipeline::PredictionPipeline(PredictionConfig config,
+                                       std::unique_ptr<Forecaster> forecaster,
+                                       Handler on_prediction, MatchFrontEnd& shared)
+    : config_(checked(config)),
+      on_prediction_(std::move(on_prediction)),
+      forecaster_(std::move(forecaster)),
+      front_end_(shared) {
+  front_end_.join(handlers());
+  reserve_buffers();
+}
+
+MatchFrontEnd::Handlers PredictionPipeline::handlers() {
+  return {[this](const MatchMoment& moment) { on_sample(moment); }, [this] { forget_match(); }};
+}
+
+void PredictionPipeline::reserve_buffers() {
   // The per-sample buffers, allocated together now rather than wherever the first sample
   // leaves them: a daemon woken every 16 ms pays for every cold page its hot path touches.
   constexpr std::size_t usual_robots = 16;

@@ -6,18 +6,18 @@
 
 namespace ssl_formation {
 
-namespace {
-
-FrontEndConfig front_end_config(const TrainingConfig& config) {
+FrontEndConfig Training::front_end_config(const TrainingConfig& config) {
   FrontEndConfig front;
   front.sampler = config.sampler;
-  front.opponent = config.rules ? std::optional<OpponentChoice>(config.rules->opponent)
-                                : std::nullopt;
+  front.opponent =
+      config.rules ? std::optional<OpponentChoice>(config.rules->opponent) : std::nullopt;
   front.tracked_vision = config.tracked_vision;
   const LearnDuring learn_during = config.rules ? config.rules->learn_during : LearnDuring::all;
   front.keep_commands_apart = learn_during == LearnDuring::running;
   return front;
 }
+
+namespace {
 
 // Checks what can be checked before anything is counted.
 std::unique_ptr<Learner> checked(const TrainingConfig& config, ModelKind model,
@@ -44,12 +44,28 @@ Training::Training(TrainingConfig config, ModelKind model, std::unique_ptr<Learn
     : model_(model),
       learner_(checked(config, model, std::move(learner))),
       learn_during_(config.rules ? config.rules->learn_during : LearnDuring::all),
-      front_end_(front_end_config(config),
-                 {[this](const MatchMoment& moment) { on_sample(moment); },
-                  [this] { learner_->forget_match(); }}),
+      own_front_end_(std::make_unique<MatchFrontEnd>(front_end_config(config), handlers())),
+      front_end_(*own_front_end_),
       samples_before_(samples_before),
       saved_progress_(learner_->progress()),
       saved_samples_(samples_before) {}
+
+Training::Training(TrainingConfig config, ModelKind model, std::unique_ptr<Learner> learner,
+                   MatchFrontEnd& shared)
+    : model_(model),
+      learner_(checked(config, model, std::move(learner))),
+      learn_during_(config.rules ? config.rules->learn_during : LearnDuring::all),
+      front_end_(shared),
+      samples_before_(0),
+      saved_progress_(learner_->progress()),
+      saved_samples_(0) {
+  front_end_.join(handlers());
+}
+
+MatchFrontEnd::Handlers Training::handlers() {
+  return {[this](const MatchMoment& moment) { on_sample(moment); },
+          [this] { learner_->forget_match(); }};
+}
 
 namespace {
 TrainingConfig table_training_config(SamplerConfig sampler, std::optional<MatchRules> rules) {

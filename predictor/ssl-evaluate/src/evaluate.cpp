@@ -13,9 +13,9 @@
 #include <random>
 
 #include "ssl_formation/evaluate/html_report.hpp"
+#include "ssl_formation/evaluate/log_streams.hpp"
 #include "ssl_formation/evaluation/evaluation.hpp"
 #include "ssl_formation/evaluation/position_evaluation.hpp"
-#include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/files/real_log_shape.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
@@ -29,20 +29,30 @@ namespace ev = ssl_formation::evaluation;
 
 namespace {
 
-using Streams = std::vector<RecordedMatch>;
+using Streams = std::vector<ev::EventStream>;
 
-// A whole log in memory; everything before a damaged part is kept.
-RecordedMatch read_log(const std::string& path) {
-  Result<RecordedLog> log = read_recorded_log(path);
-  if (!log) throw std::runtime_error(log.error().message);
-  if (log->stopped_early) {
-    // A file with nothing before the damage is no data.
-    if (log->match.vision_events() == 0) throw std::runtime_error(log->stopped_early->message);
-    spdlog::warn("{}; using the {} vision packets before it", log->stopped_early->message,
-                 log->match.vision_events());
-  }
-  return std::move(log->match);
+// A simulation, kept in memory for as many replays as asked.
+ev::EventStream in_memory(RecordedMatch match) {
+  return [match = std::make_shared<const RecordedMatch>(std::move(match))](MatchEventSink& sink) {
+    match->replay(sink);
+  };
 }
+
+// Hands every event on to `sink`, counting the vision packets.
+class VisionCount final : public MatchEventSink {
+ public:
+  explicit VisionCount(MatchEventSink& sink) : sink_(sink) {}
+  void on_event(const MatchEvent& event) override {
+    if (event.kind == MatchEventKind::vision) ++packets_;
+    sink_.on_event(event);
+  }
+  void start_new_stream() override { sink_.start_new_stream(); }
+  std::size_t packets() const { return packets_; }
+
+ private:
+  MatchEventSink& sink_;
+  std::size_t packets_ = 0;
+};
 
 // The paper's simulated opponent (no referee): one formation every 2 s of data time.
 RecordedMatch paper_simulation(const EvaluateOptions& options, std::uint64_t seed, int formations) {
@@ -176,17 +186,20 @@ int run_paper(const EvaluateOptions& options) {
   // stream) or on the paper's simulated opponent.
   Streams training_data;
   if (options.train_logs.empty()) {
-    training_data.push_back(paper_simulation(options, options.seed, options.train_formations));
+    training_data.push_back(
+        in_memory(paper_simulation(options, options.seed, options.train_formations)));
   } else {
-    for (const std::string& log : options.train_logs) training_data.push_back(read_log(log));
+    for (const std::string& log : options.train_logs) {
+      training_data.push_back(LogFile(log).stream());
+    }
   }
   Training training(config, TransitionTable(config.grid));
-  std::size_t packets = 0;
-  for (const RecordedMatch& stream : training_data) {
-    training.start_new_stream();
-    stream.replay(training);
-    packets += stream.vision_events();
+  VisionCount counted(training);
+  for (const ev::EventStream& stream : training_data) {
+    counted.start_new_stream();
+    stream(counted);
   }
+  const std::size_t packets = counted.packets();
   const FieldSize field = training.sampler().field();
   const std::uint64_t training_samples = training.samples();
   const TransitionTable& table = training.table();
@@ -254,50 +267,60 @@ std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options,
   Streams train;
   Streams test;
   if (options.tune && !options.test_logs.empty()) {
-    throw app::UsageError("--tune reads only the first --split of each --train-log; --test-log "
-                          "files are reported data (docs/tuning.md), not tuning data");
+    throw app::UsageError(
+        "--tune reads only the first --split of each --train-log; --test-log "
+        "files are reported data (docs/tuning.md), not tuning data");
   }
   if (options.split > 0.0) {
     if (options.train_logs.empty()) throw app::UsageError("--split needs --train-log");
+    // As RecordedMatch::split cuts a match: after the first `split` of its vision packets.
+    const auto cut = [&](std::uint64_t vision_events) {
+      return static_cast<std::uint64_t>(std::clamp(options.split, 0.0, 1.0) *
+                                        static_cast<double>(vision_events));
+    };
     for (const std::string& log : options.train_logs) {
-      auto [head, tail] = read_log(log).split(options.split);
+      const LogFile file(log);
+      const std::uint64_t head = cut(file.vision_events());
       if (options.tune) {
-        // The inner split (docs/tuning.md): the reported part, `tail`, is left unread.
-        auto [inner_head, inner_tail] = head.split(options.split);
-        train.push_back(std::move(inner_head));
-        test.push_back(std::move(inner_tail));
+        // The inner split (docs/tuning.md): the reported part, after `head`, is left unread.
+        const std::uint64_t inner = cut(head);
+        train.push_back(file.stream({0, inner}));
+        test.push_back(file.stream({inner, head}));
       } else {
-        train.push_back(std::move(head));
-        test.push_back(std::move(tail));
+        train.push_back(file.stream({0, head}));
+        test.push_back(file.stream({head}));
       }
     }
     if (options.tune) {
-      std::printf("Tuning split: trained on the first %.4g of each log, tested on the next %.4g; "
-                  "the last %.4g, which reports, is not scored.\n",
-                  options.split * options.split, options.split * (1.0 - options.split),
-                  1.0 - options.split);
+      std::printf(
+          "Tuning split: trained on the first %.4g of each log, tested on the next %.4g; "
+          "the last %.4g, which reports, is not scored.\n",
+          options.split * options.split, options.split * (1.0 - options.split),
+          1.0 - options.split);
     }
   } else if (options.tune) {
-    throw app::UsageError("--tune is for --split F: it trains on the first F of each log's first F "
-                          "and tests on the rest of that, leaving the reported part unread");
+    throw app::UsageError(
+        "--tune is for --split F: it trains on the first F of each log's first F "
+        "and tests on the rest of that, leaving the reported part unread");
   } else if (!options.train_logs.empty() && options.test_logs.empty()) {
     throw app::UsageError(
         "--train-log needs --test-log (other logs to test on) or --split F (the rest of each "
         "log after its first F): a model is only judged on data it was not trained on");
   } else {
-    for (const std::string& log : options.train_logs) train.push_back(read_log(log));
+    for (const std::string& log : options.train_logs) train.push_back(LogFile(log).stream());
   }
-  for (const std::string& log : options.test_logs) test.push_back(read_log(log));
+  for (const std::string& log : options.test_logs) test.push_back(LogFile(log).stream());
   if (train.empty() != test.empty()) {
     throw app::UsageError("give both --train-log and --test-log, or neither (a simulation)");
   }
   if (train.empty()) {
     if (simulation == "paper") {
-      train.push_back(paper_simulation(options, options.seed, options.train_formations));
-      test.push_back(paper_simulation(options, options.test_seed, options.test_formations));
+      train.push_back(in_memory(paper_simulation(options, options.seed, options.train_formations)));
+      test.push_back(
+          in_memory(paper_simulation(options, options.test_seed, options.test_formations)));
     } else {
-      train.push_back(match_simulation(options, options.seed, options.train_seconds));
-      test.push_back(match_simulation(options, options.test_seed, options.test_seconds));
+      train.push_back(in_memory(match_simulation(options, options.seed, options.train_seconds)));
+      test.push_back(in_memory(match_simulation(options, options.test_seed, options.test_seconds)));
     }
   }
   return {std::move(train), std::move(test)};
@@ -319,21 +342,25 @@ struct GridReport {
 // Two-step predictions of the paper's model from the test formations, timed.
 double time_predictions(const TransitionTable& table, const Streams& test,
                         const SamplerConfig& config) {
+  constexpr std::size_t timed = 5000;
   std::vector<std::vector<RobotStateById>> inputs;
   FormationSampler sampler(config, [&](const FormationSample& sample) {
-    if (inputs.size() < 5000) inputs.push_back(robot_states(sample.formation));
+    if (inputs.size() < timed) inputs.push_back(robot_states(sample.formation));
   });
   struct Feed final : MatchEventSink {
     FormationSampler& sampler;
-    explicit Feed(FormationSampler& s) : sampler(s) {}
+    const std::vector<std::vector<RobotStateById>>& inputs;
+    Feed(FormationSampler& s, const std::vector<std::vector<RobotStateById>>& i)
+        : sampler(s), inputs(i) {}
     void on_event(const MatchEvent& event) override {
-      if (event.kind == MatchEventKind::vision) sampler.add(*event.frame);
+      // Past the formations timed, the rest of the log is only read.
+      if (event.kind == MatchEventKind::vision && inputs.size() < timed) sampler.add(*event.frame);
     }
     void start_new_stream() override { sampler.start_new_stream(); }
-  } feed(sampler);
-  for (const RecordedMatch& stream : test) {
+  } feed(sampler, inputs);
+  for (const ev::EventStream& stream : test) {
     feed.start_new_stream();
-    stream.replay(feed);
+    stream(feed);
   }
   Prediction prediction;
   const auto start = std::chrono::steady_clock::now();
@@ -360,7 +387,8 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
   report.grid = base.grid;
   // A prior serves the sections of its own step (the chained steps, and the single horizon equal
   // to it): a table's rows are learned for one step.
-  const auto evaluate = [&](double step_s, int steps, bool chain) {
+  std::vector<ev::PositionEvaluationConfig> configs;
+  const auto section = [&](double step_s, int steps, bool chain) {
     ev::PositionEvaluationConfig config;
     config.sampler = base;
     config.sampler.step_s = step_s;
@@ -368,7 +396,8 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.velocity_window_s = options.velocity_window_s;
     config.model = model.parsed_model();
     config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
-    config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
+    config.rules =
+        MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
     config.tracked_vision = options.network.tracked();
     if (prior && std::abs(prior->config().step_s - step_s) < 1e-9) config.prior_table = prior;
     config.table_budget = app::table_budget_option(options.max_table_mb);
@@ -376,16 +405,21 @@ GridReport holdout_for_grid(const EvaluateOptions& options, const std::string& g
     config.bootstrap.block_s = options.bootstrap_block_s;
     const bool report_this = chain && !options.report.empty();
     if (samples.enabled() || report_this) {
-      config.on_sample = [&samples, chain, report_this, &report, name = base.grid.to_string()](
-                             const ev::ScoredSample& s) {
+      config.on_sample = [&samples, chain, report_this, &report,
+                          name = base.grid.to_string()](const ev::ScoredSample& s) {
         if (samples.enabled()) samples.write(name, chain, s);
         if (report_this) report.chain_samples.add(s);
       };
     }
-    report.sections.push_back({step_s, ev::evaluate_positions(config, train, test)});
+    configs.push_back(std::move(config));
   };
-  for (const double horizon_s : options.horizons) evaluate(horizon_s, 1, false);
-  evaluate(base.step_s, options.chain_steps, true);
+  for (const double horizon_s : options.horizons) section(horizon_s, 1, false);
+  section(base.step_s, options.chain_steps, true);
+  // Every section over one read of each stream.
+  std::vector<ev::PositionEvaluation> evaluations = ev::evaluate_positions(configs, train, test);
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    report.sections.push_back({configs[i].sampler.step_s, std::move(evaluations[i])});
+  }
   if (const auto& table = report.sections.back().evaluation.table) {
     report.prediction_us = time_predictions(table->table, test, base);
   }
@@ -450,16 +484,17 @@ std::string interval_text(const ev::HorizonScore& score, std::size_t m, bool boo
 void print_ratios(const GridReport& report, const EvaluateOptions& options) {
   const ev::PositionEvaluation& first = report.sections.front().evaluation;
   const std::string scored = method_label(first, 0);  // "model" or "predictions"
-  std::printf("The %s against the best baseline of each row: mean error over the best's, 95%% "
-              "intervals from %d resamples of %.0f s blocks (none for a row over fewer than %zu "
-              "blocks):\n",
-              scored.c_str(), options.bootstrap, options.bootstrap_block_s,
-              ev::BootstrapConfig{}.min_blocks);
+  std::printf(
+      "The %s against the best baseline of each row: mean error over the best's, 95%% "
+      "intervals from %d resamples of %.0f s blocks (none for a row over fewer than %zu "
+      "blocks):\n",
+      scored.c_str(), options.bootstrap, options.bootstrap_block_s,
+      ev::BootstrapConfig{}.min_blocks);
   // The model's first ablation (the pooled model), if the evaluation ran one.
   const bool has_ablation = first.baselines_end < first.methods.size();
   const std::size_t ablation = first.baselines_end;
-  std::printf("%9s %5s %-24s %7s %-30s %12s %18s %20s", "horizon", "steps", "game state",
-              "blocks", "best baseline", (scored + "/best").c_str(), "95% interval",
+  std::printf("%9s %5s %-24s %7s %-30s %12s %18s %20s", "horizon", "steps", "game state", "blocks",
+              "best baseline", (scored + "/best").c_str(), "95% interval",
               (scored + " below best").c_str());
   if (has_ablation) {
     std::printf(" %26s", ("model below '" + method_label(first, ablation) + "'").c_str());
@@ -483,9 +518,9 @@ void print_ratios(const GridReport& report, const EvaluateOptions& options) {
     if (has_ablation && ablation < score.methods.size()) {
       const double over = score.methods[0].error.mean() / score.methods[ablation].error.mean();
       const bool drawn = score.intervals.model_ratio.size() >= ablation;
-      std::printf(" %26s",
-                  margin_text(over, drawn ? &score.intervals.model_ratio[ablation - 1] : nullptr)
-                      .c_str());
+      std::printf(
+          " %26s",
+          margin_text(over, drawn ? &score.intervals.model_ratio[ablation - 1] : nullptr).c_str());
     }
     std::printf("\n");
   });
@@ -498,12 +533,12 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
                    const EvaluateOptions& options) {
   const ev::PositionEvaluation& chains = report.sections.back().evaluation;
   if (chains.labels.front() == "predictions") {
-    std::printf("Scored predictions from %s against %s, grid %s: %llu formations of the log; "
-                "the damped baselines fitted on %llu formations\n",
-                options.predictions.c_str(), options.log.c_str(),
-                report.grid.to_string().c_str(),
-                static_cast<unsigned long long>(chains.test_formations),
-                static_cast<unsigned long long>(chains.train_formations));
+    std::printf(
+        "Scored predictions from %s against %s, grid %s: %llu formations of the log; "
+        "the damped baselines fitted on %llu formations\n",
+        options.predictions.c_str(), options.log.c_str(), report.grid.to_string().c_str(),
+        static_cast<unsigned long long>(chains.test_formations),
+        static_cast<unsigned long long>(chains.train_formations));
   } else {
     std::printf(
         "Held-out evaluation, grid %s, %s sampling: %llu test formations; the chains' table: "
@@ -515,13 +550,14 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
   }
   if (chains.feed_problem) std::printf("warning: %s\n", chains.feed_problem->c_str());
   if (!chains.test_has_referee) {
-    std::printf("The test streams carry no referee messages: every instant counts as running "
-                "play, and only the rows 'all' and 'running' are given.\n");
+    std::printf(
+        "The test streams carry no referee messages: every instant counts as running "
+        "play, and only the rows 'all' and 'running' are given.\n");
   }
   const bool intervals = options.bootstrap > 0;
   std::printf("%9s %5s %-30s %11s %11s %9s %9s %s%9s %9s %9s\n", "horizon", "steps", "method",
-              "exact state", "exact cell", "cells off", "mean mm", intervals ? "     95% interval " : "",
-              "median mm", "p90 mm", "robots");
+              "exact state", "exact cell", "cells off", "mean mm",
+              intervals ? "     95% interval " : "", "median mm", "p90 mm", "robots");
   for (const Section& section : report.sections) {
     const ev::PositionEvaluation& evaluation = section.evaluation;
     for (std::size_t h = 0; h < evaluation.all().size(); ++h) {
@@ -582,8 +618,8 @@ void print_holdout(const GridReport& report, const SamplerConfig& base,
 // The calibration of the probabilities stated (none: nothing printed, as for a file of
 // predictions without them).
 void print_calibration(const GridReport& report) {
-  const bool stated = std::any_of(
-      report.sections.begin(), report.sections.end(), [](const Section& section) {
+  const bool stated =
+      std::any_of(report.sections.begin(), report.sections.end(), [](const Section& section) {
         return std::any_of(section.evaluation.all().begin(), section.evaluation.all().end(),
                            [](const ev::HorizonScore& score) { return score.robot.n > 0; });
       });
@@ -683,8 +719,8 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
         }
         for (const bool robot : {true, false}) {
           const ev::Calibration& c = robot ? score.robot : score.formation;
-          calibration << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state
-                      << ",model," << quantity_name(robot) << ',' << c.brier() << ','
+          calibration << grid << ',' << h + 1 << ',' << score.horizon_s << ',' << state << ",model,"
+                      << quantity_name(robot) << ',' << c.brier() << ','
                       << ev::expected_calibration_error(c) << ',' << c.n << ','
                       << score.radii.share50() << ',' << score.radii.share90() << '\n';
           for (std::size_t b = 0; b < c.bin_count.size(); ++b) {
@@ -813,8 +849,7 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
     print_holdout(reports.back(), base, options);
     write_holdout_csv(accuracy, calibration, reliability, reports.back());
     write_report(options, "ssl-formation: held-out evaluation, the predictor's steps",
-                 reports.back().grid, reports.back().sections.back(),
-                 reports.back().chain_samples);
+                 reports.back().grid, reports.back().sections.back(), reports.back().chain_samples);
     samples.check();
     std::printf("\n");
   }
@@ -863,8 +898,9 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
 
 int run_score(const EvaluateOptions& options) {
   if (options.log.empty() || options.predictions.empty()) {
-    throw app::UsageError("score needs --log (the recorded match) and --predictions (a CSV of "
-                          "ssl-predictor --from-log's columns for that log)");
+    throw app::UsageError(
+        "score needs --log (the recorded match) and --predictions (a CSV of "
+        "ssl-predictor --from-log's columns for that log)");
   }
   if (!options.test_logs.empty() || options.split > 0.0) {
     throw app::UsageError("score takes one --log; --test-log and --split are for holdout");
@@ -893,12 +929,13 @@ int run_score(const EvaluateOptions& options) {
   sampler.step_s = recorded->step_s;
   sampler.sampling = Sampling::frame;
   Streams test;
-  test.push_back(read_log(options.log));
+  test.push_back(LogFile(options.log).stream());
   Streams train;
-  for (const std::string& log : options.train_logs) train.push_back(read_log(log));
+  for (const std::string& log : options.train_logs) train.push_back(LogFile(log).stream());
   if (train.empty()) {
-    std::printf("No --train-log: the damped baselines' factors are fitted on the scored log "
-                "itself, which favours them.\n");
+    std::printf(
+        "No --train-log: the damped baselines' factors are fitted on the scored log "
+        "itself, which favours them.\n");
     train.push_back(test.front());
   }
   ev::PositionEvaluationConfig config;
@@ -906,7 +943,8 @@ int run_score(const EvaluateOptions& options) {
   config.steps = recorded->steps;
   config.model = ModelKind::persistence;  // samples the instants; the file predicts
   config.velocity_window_s = options.velocity_window_s;
-  config.rules = MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
+  config.rules =
+      MatchRules{model.opponent_choice(), app::parsed_learn_during(options.learn_during)};
   config.tracked_vision = options.network.tracked();
   config.bootstrap.resamples = options.bootstrap;
   config.bootstrap.block_s = options.bootstrap_block_s;
@@ -916,22 +954,25 @@ int run_score(const EvaluateOptions& options) {
   if (!options.report.empty()) {
     config.on_sample = [&report](const ev::ScoredSample& s) { report.chain_samples.add(s); };
   }
-  report.sections.push_back({sampler.step_s, ev::evaluate_positions(config, train, test)});
+  report.sections.push_back(
+      {sampler.step_s, std::move(ev::evaluate_positions({config}, train, test).front())});
   std::uint64_t scored = 0;
   for (const ev::HorizonScore& score : report.sections.back().evaluation.all()) {
     scored += score.methods.front().cells.robots;
   }
   const ev::PositionEvaluation& evaluation = report.sections.back().evaluation;
-  std::printf("%zu of the file's %zu instants are frames of the log (within %.0f ms), which has "
-              "%llu frames: a frame without a prediction is not scored, nor is a robot the file "
-              "leaves out.\n",
-              static_cast<std::size_t>(evaluation.recorded_matched), recorded->instants.size(),
-              1000.0 * ev::recorded_time_tolerance_s,
-              static_cast<unsigned long long>(evaluation.test_formations));
+  std::printf(
+      "%zu of the file's %zu instants are frames of the log (within %.0f ms), which has "
+      "%llu frames: a frame without a prediction is not scored, nor is a robot the file "
+      "leaves out.\n",
+      static_cast<std::size_t>(evaluation.recorded_matched), recorded->instants.size(),
+      1000.0 * ev::recorded_time_tolerance_s,
+      static_cast<unsigned long long>(evaluation.test_formations));
   if (scored == 0) {
     throw std::runtime_error("none of the " + std::to_string(recorded->instants.size()) +
                              " instants of " + options.predictions + " is a frame of " +
-                             options.log + " with its robots there at every horizon: is it that "
+                             options.log +
+                             " with its robots there at every horizon: is it that "
                              "log's CSV?");
   }
   ReportFiles files(options, "score-");

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ssl_formation/evaluation/block_bootstrap.hpp"
+#include "ssl_formation/evaluation/error_stats.hpp"
 #include "ssl_formation/evaluation/evaluation.hpp"
 #include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/match/game_phase.hpp"
@@ -29,20 +30,6 @@
 #include "ssl_formation/pipeline/training.hpp"
 
 namespace ssl_formation::evaluation {
-
-// Errors in millimetres: mean, median and 90th percentile (linear interpolation between order
-// statistics, as numpy's default).
-class ErrorStats {
- public:
-  void add(double error_mm) { errors_.push_back(error_mm); }
-  std::size_t count() const { return errors_.size(); }
-  double mean() const;
-  double percentile(double p) const;  // p in [0, 100]; 0 without errors
-  double median() const { return percentile(50.0); }
-
- private:
-  mutable std::vector<double> errors_;
-};
 
 // How often the truth fell within the model's stated radii.
 struct RadiusCoverage {
@@ -144,7 +131,7 @@ struct PositionEvaluationConfig {
 };
 
 struct PositionEvaluation {
-  std::vector<ModelKind> methods;  // the model, then the baselines, then the ablations
+  std::vector<ModelKind> methods;   // the model, then the baselines, then the ablations
   std::vector<std::string> labels;  // by method: "model", a baseline's label, "pooled model"
   // Methods 1 to baselines_end - 1 are the baselines; from it on, the model's ablations (no
   // row's best baseline is one of them).
@@ -177,9 +164,24 @@ struct PositionEvaluation {
   std::vector<std::size_t> reported_rows() const;
 };
 
-// Trains every method on the training streams (each its own stream: nothing spans two), then
-// predicts every test stream and scores every method at every horizon, by phase of the game.
-// Throws std::invalid_argument for a configuration a method cannot run with.
+// A match's events as the evaluation reads them: each call hands them to `sink` from the start
+// (no start_new_stream: the evaluation says where a stream begins). A log is read as it goes, so
+// nothing of it stays in memory; a match in memory is replayed (replay_of).
+using EventStream = std::function<void(MatchEventSink& sink)>;
+// `match` must outlive the stream.
+EventStream replay_of(const RecordedMatch& match);
+
+// Trains every method of every configuration on the training streams (each its own stream:
+// nothing spans two), then predicts every test stream and scores every method at every horizon,
+// by phase of the game. Each stream is read once for all the configurations, and the methods of
+// a configuration that sample alike read one front end: a message is parsed once per sampling,
+// not once per method. Predictions are scored as soon as the truth of their last horizon has
+// been seen, so what is kept does not grow with a stream's length. Throws std::invalid_argument
+// for a configuration a method cannot run with.
+std::vector<PositionEvaluation> evaluate_positions(
+    const std::vector<PositionEvaluationConfig>& configs, const std::vector<EventStream>& train,
+    const std::vector<EventStream>& test);
+// One configuration on matches in memory.
 PositionEvaluation evaluate_positions(const PositionEvaluationConfig& config,
                                       const std::vector<RecordedMatch>& train,
                                       const std::vector<RecordedMatch>& test);

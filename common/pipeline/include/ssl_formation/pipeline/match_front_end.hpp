@@ -71,6 +71,11 @@ class MatchFrontEnd final : public MatchEventSink {
   void add(const SSL_WrapperPacket& packet);
   RefereeChange add_referee(std::string_view payload, double receive_s);
 
+  // Hands every sample and forget to `handlers` too, after the ones it was made with: consumers
+  // that sample alike (the evaluation's methods) share one front end, so that each message is
+  // read once rather than once per consumer. Whoever joins must outlive the front end's use.
+  void join(Handlers handlers) { joined_.push_back(std::move(handlers)); }
+
   const FrontEndConfig& config() const { return config_; }
   const FormationSampler& sampler() const { return sampler_; }
   const MatchFollower& match() const { return match_; }
@@ -101,9 +106,11 @@ class MatchFrontEnd final : public MatchEventSink {
   // Hands the match's opponent to the sampler; another colour forgets what was followed.
   void follow_opponent();
   void note_frame_time(double t_capture);
+  void forget();
 
   FrontEndConfig config_;
   Handlers handlers_;
+  std::vector<Handlers> joined_;
   FormationSampler sampler_;
   MatchFollower match_;
   TrackedVision tracked_;

@@ -59,8 +59,17 @@ class PredictionPipeline final : public MatchEventSink {
   // learner's to give it).
   PredictionPipeline(PredictionConfig config, std::unique_ptr<Forecaster> forecaster,
                      Handler on_prediction);
+  // The same on `shared`, a front end made with front_end_config(config) that others read too
+  // (MatchFrontEnd::join): the evaluation predicts with every method of one sampling on one.
+  // Events go to `shared`, which hands them to all its consumers; it must not be fed after this
+  // pipeline is gone.
+  PredictionPipeline(PredictionConfig config, std::unique_ptr<Forecaster> forecaster,
+                     Handler on_prediction, MatchFrontEnd& shared);
   PredictionPipeline(const PredictionPipeline&) = delete;
   PredictionPipeline& operator=(const PredictionPipeline&) = delete;
+
+  // The front end a pipeline of `config` reads.
+  static FrontEndConfig front_end_config(const PredictionConfig& config);
 
   // The table predictions come from. A model that needs one samples formations until it has one
   // (so the data clock and the chains run on) and counts them, but predicts nothing. Throws
@@ -109,13 +118,16 @@ class PredictionPipeline final : public MatchEventSink {
   void forget_match();
   // Fills prediction_ and context_ for `moment` from the forecaster; false when it cannot yet.
   bool predict(const MatchMoment& moment, ForecastUse use);
+  MatchFrontEnd::Handlers handlers();
+  void reserve_buffers();
 
   PredictionConfig config_;
   Handler on_prediction_;
   std::unique_ptr<Forecaster> forecaster_;
   std::shared_ptr<const StoredTable> table_;
   LiveScore live_score_;
-  MatchFrontEnd front_end_;
+  std::unique_ptr<MatchFrontEnd> own_front_end_;  // none on a shared front end
+  MatchFrontEnd& front_end_;
   Prediction prediction_;  // reused from sample to sample
   PredictionContext context_;
   // The last sample, as the front end handed it (the sampler's own buffer, unchanged until the

@@ -46,8 +46,17 @@ class Training final : public MatchEventSink {
   Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before = 0,
            std::optional<MotionTable> motion = std::nullopt,
            std::optional<MatchRules> rules = std::nullopt);
+  // The same on `shared`, a front end made with front_end_config(config) that others read too
+  // (MatchFrontEnd::join): the evaluation trains every method of one sampling on one. Events go
+  // to `shared`, which hands them to all its consumers; it must not be fed after this training
+  // is gone.
+  Training(TrainingConfig config, ModelKind model, std::unique_ptr<Learner> learner,
+           MatchFrontEnd& shared);
   Training(const Training&) = delete;
   Training& operator=(const Training&) = delete;
+
+  // The front end a training of `config` reads.
+  static FrontEndConfig front_end_config(const TrainingConfig& config);
 
   void on_event(const MatchEvent& event) override { front_end_.on_event(event); }
   // A new log file: its first formation follows nothing (no transition across two files), and
@@ -104,11 +113,13 @@ class Training final : public MatchEventSink {
  private:
   Training(TrainingConfig config, ResumedLearner resumed, std::uint64_t samples_before);
   void on_sample(const MatchMoment& moment);
+  MatchFrontEnd::Handlers handlers();
 
   ModelKind model_;
   std::unique_ptr<Learner> learner_;
   LearnDuring learn_during_;
-  MatchFrontEnd front_end_;
+  std::unique_ptr<MatchFrontEnd> own_front_end_;  // none on a shared front end
+  MatchFrontEnd& front_end_;
   std::uint64_t samples_outside_play_ = 0;
   std::uint64_t samples_before_;
   std::uint64_t saved_progress_;
