@@ -77,6 +77,7 @@ struct Method {
   std::deque<Instant> waiting;                   // the baselines' (the model's: Evaluation::model_)
   // Where in `waiting` the method's clock went back, since the last event.
   std::optional<std::size_t> went_back_at;
+  ModelSettings settings;  // what its learner and forecaster are made with
 };
 
 // A configuration's front ends, one per sampling: its methods differ in nothing else that a
@@ -186,17 +187,18 @@ Evaluation::Evaluation(const PositionEvaluationConfig& config) : config_(config)
     training.sampler = prediction.sampler;
     training.rules = config.rules;
     training.tracked_vision = config.tracked_vision;
-    // The ablation learns the model's table again (the same counts) for forecasters of its own.
     ModelSettings own_settings = settings;
     own_settings.pooled_motion = ablation;
-    MatchFrontEnd& front_end = training_front_ends_.of(Training::front_end_config(training));
+    // The ablation forecasts from the model's table (the same counts, the same sampling): it
+    // learns nothing of its own.
+    std::unique_ptr<Training> trained;
+    if (!ablation) {
+      MatchFrontEnd& front_end = training_front_ends_.of(Training::front_end_config(training));
+      trained =
+          std::make_unique<Training>(training, kind, make_learner(kind, own_settings), front_end);
+    }
     methods_.push_back(
-        {kind,
-         prediction,
-         std::make_unique<Training>(training, kind, make_learner(kind, own_settings), front_end),
-         nullptr,
-         {},
-         std::nullopt});
+        {kind, prediction, std::move(trained), nullptr, {}, std::nullopt, own_settings});
   }
 }
 
@@ -243,17 +245,24 @@ void Evaluation::end_training() {
   for (std::size_t m = 0; m < methods_.size(); ++m) {
     Method& method = methods_[m];
     TableMetadata own = metadata;
-    own.field = method.training->sampler().field();
+    if (method.training) own.field = method.training->sampler().field();
     MatchFrontEnd& front_end =
         test_front_ends_.of(PredictionPipeline::front_end_config(method.prediction));
-    std::unique_ptr<Forecaster> forecaster = method.training->learner().forecaster(
-        own, m == 0 || m >= result.baselines_end ? config.prior_table : nullptr);
-    // The model predicts from the very table the result keeps, rather than from a copy of it;
-    // its ablation from its own table, pruned the same way.
-    if (m == 0 && result.table) {
-      forecaster->set_table(result.table);
-    } else if (method.training->learner().motion()) {
-      forecaster->set_table(as_saved(*method.training, own));
+    std::shared_ptr<const MotionTable> prior =
+        m == 0 || m >= result.baselines_end ? config.prior_table : nullptr;
+    std::unique_ptr<Forecaster> forecaster;
+    if (method.kind == ModelKind::motion) {
+      // The model and its ablation predict from the very table the result keeps, built once
+      // (the learner's own forecaster would first build one of the rows before pruning).
+      ModelSettings own_settings = method.settings;
+      own_settings.prior_table = std::move(prior);
+      own_settings.prior_field = own.field;
+      forecaster = make_forecaster(method.kind, own_settings);
+      forecaster->set_table(m == 0 || !method.training ? result.table
+                                                       : as_saved(*method.training, own));
+    } else {
+      forecaster = method.training->learner().forecaster(own, std::move(prior));
+      if (m == 0 && result.table) forecaster->set_table(result.table);
     }
     method.pipeline = std::make_unique<PredictionPipeline>(
         method.prediction, std::move(forecaster),
@@ -261,7 +270,7 @@ void Evaluation::end_training() {
   }
   // The forecasters hold what they need: the tables learned are let go before the testing.
   training_front_ends_.clear();
-  for (Method& method : methods_) method.training.reset();
+  for (Method& method : methods_) method.training.reset();  // (the ablation had none)
 }
 
 void Evaluation::start_test_stream(std::size_t stream) {
