@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+
 #include "match_logs.hpp"
 #include "moving_robots.hpp"
 #include "scratch_dir.hpp"
@@ -42,7 +46,8 @@ std::string match_against(const std::string& them) {
 }
 
 struct InProcess {
-  explicit InProcess(TrainerOptions o) : options(std::move(o)), trainer(options, clock) {}
+  explicit InProcess(TrainerOptions o, SaveHooks hooks = {})
+      : options(std::move(o)), trainer(options, clock, std::move(hooks)) {}
   // Frames `from` to `to` - 1, 1/60 s apart on both clocks, the timers ticking as they would.
   void frames(int from, int to) {
     for (int f = from; f < to; ++f) {
@@ -82,6 +87,7 @@ TEST(LiveTrainer, SavesAsSoonAsItHasSomethingThenEveryFlushInterval) {
   EXPECT_FALSE(std::filesystem::exists(options.table));
   live.frames(0, 60);  // one second
   ASSERT_EQ(live.trainer.saves(), 1u);
+  ASSERT_TRUE(live.trainer.wait_for_saves());  // made on the saver's thread
   ASSERT_TRUE(std::filesystem::exists(options.table));
   live.frames(60, 9 * 60);  // nine seconds on: within the flush interval of the first save
   EXPECT_EQ(live.trainer.saves(), 1u);
@@ -93,6 +99,54 @@ TEST(LiveTrainer, SavesAsSoonAsItHasSomethingThenEveryFlushInterval) {
   EXPECT_EQ(saved->metadata.samples, 12u * 60u);
   ASSERT_TRUE(saved->motion);
   EXPECT_GT(saved->motion->instances(), 1000u);
+}
+
+// A save is made on a thread of its own: while one is held at its end (a slow disk, a big table),
+// the trainer goes on taking frames and learning from them, and the file appears once the save
+// is let go.
+TEST(LiveTrainer, TrainsOnWhileATableIsBeingSaved) {
+  testing::ScratchDir dir;
+  TrainerOptions options;
+  options.table = (dir.path() / "t.bin").string();
+  options.model.opponent_color = "blue";
+  options.flush_interval_s = 10.0;
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool saving = false;
+  bool released = false;
+  SaveHooks hooks;
+  hooks.before_rename = [&] {
+    std::unique_lock lock(mutex);
+    saving = true;
+    changed.notify_all();
+    changed.wait(lock, [&] { return released; });
+    return true;
+  };
+  InProcess live(options, std::move(hooks));
+  live.frames(0, 60);
+  ASSERT_EQ(live.trainer.saves(), 1u);
+  {
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(changed.wait_for(lock, std::chrono::seconds(60), [&] { return saving; }))
+        << "the first save never began";
+  }
+  // Held: ten more seconds of frames are taken and learned from meanwhile.
+  const std::uint64_t before = live.trainer.training().samples();
+  live.frames(60, 11 * 60);
+  EXPECT_EQ(live.trainer.training().samples(), before + 10 * 60);
+  EXPECT_FALSE(std::filesystem::exists(options.table)) << "written before it was let go";
+  {
+    const std::lock_guard lock(mutex);
+    released = true;
+  }
+  changed.notify_all();
+  ASSERT_TRUE(live.trainer.wait_for_saves());
+  ASSERT_TRUE(std::filesystem::exists(options.table));
+  // The second save (at 11 s) is the latest; at exit everything is in the file.
+  ASSERT_TRUE(live.trainer.save_at_exit());
+  const auto saved = load_table(options.table, Grid(3, 2));
+  ASSERT_TRUE(saved) << saved.error().message;
+  EXPECT_EQ(saved->metadata.samples, 11u * 60u);
 }
 
 TEST(LiveTrainer, ATablePerOpponentAsTheRefereeNamesThem) {
@@ -107,6 +161,7 @@ TEST(LiveTrainer, ATablePerOpponentAsTheRefereeNamesThem) {
   live.frames(0, 150);
   // Alpha's table is written as Beta comes, while the trainer runs on.
   live.referee_held(match_against("Beta"));
+  ASSERT_TRUE(live.trainer.wait_for_saves());
   EXPECT_TRUE(std::filesystem::exists(tables / "alpha.bin"));
   live.frames(1000, 1150);  // later on the data clock: a new stream
   ASSERT_TRUE(live.trainer.save_at_exit());

@@ -9,10 +9,12 @@
 
 namespace ssl_formation::trainer {
 
-LiveTrainer::LiveTrainer(const TrainerOptions& options, const app::Clock& clock)
+LiveTrainer::LiveTrainer(const TrainerOptions& options, const app::Clock& clock,
+                         SaveHooks save_hooks)
     : options_(options),
       clock_(clock),
-      tables_((check_table_option(options), options)),
+      saver_(std::move(save_hooks)),
+      tables_((check_table_option(options), options), &saver_),
       field_log_(options.model.sampler_config().field,
                  options.model.sampler_config().use_geometry) {
   if (options.model.opponent_team == "all") {

@@ -14,8 +14,9 @@ namespace {
 std::string named_opponent(const MatchRules& rules) { return rules.opponent.opponent_team; }
 }  // namespace
 
-OpponentTables::OpponentTables(const TrainerOptions& options)
+OpponentTables::OpponentTables(const TrainerOptions& options, TableSaver* saver)
     : options_(options),
+      saver_(saver),
       config_(options.model.sampler_config()),
       motion_(motion_config(options)),
       rules_(match_rules(options)),
@@ -48,6 +49,8 @@ RefereeChange OpponentTables::handle(const MatchEvent& event) {
                                        team_table_file_name(training_->match().opponent().name);
   if (wanted == path_) return change;
   save_if_changed();
+  // The new opponent's file may be one whose save is still under way (met before in this run).
+  if (saver_) saver_->wait();
   spdlog::info("opponent '{}': training {} (the table of the last one saved in {})",
                training_->match().opponent().name, wanted.string(), path_.string());
   std::unique_ptr<Training> next;
@@ -83,12 +86,19 @@ RefereeChange OpponentTables::handle(const MatchEvent& event) {
 
 bool OpponentTables::save_if_changed() {
   if (!saving_ || !training_->changed_since_save()) return true;
-  return save_training(path_, *training_, app::table_budget_option(options_.max_table_mb))
-      .has_value();
+  const TableBudget budget = app::table_budget_option(options_.max_table_mb);
+  if (!saver_) return save_training(path_, *training_, budget).has_value();
+  // A failed save is logged on the saver's thread; the next change saves again.
+  saver_->submit(path_, snapshot_training(*training_), budget);
+  training_->mark_saved();
+  return true;
 }
 
 bool OpponentTables::save_at_exit() {
-  if (per_opponent() || !saving_) return save_if_changed();
+  // The saves under way first: the last one must be this one. One that failed is saved again.
+  const bool saves_done = !saver_ || saver_->wait();
+  if (!saving_) return true;
+  if (per_opponent() && saves_done && !training_->changed_since_save()) return true;
   return save_training(path_, *training_, app::table_budget_option(options_.max_table_mb))
       .has_value();
 }

@@ -133,16 +133,37 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                                     stored.metadata.samples);
 }
 
-std::optional<TableSaveReport> save_training(const std::filesystem::path& table_path,
-                                             Training& training, const TableBudget& budget) {
+namespace {
+TableMetadata metadata_of(const Training& training) {
   TableMetadata metadata;
   metadata.field = training.sampler().field();
   metadata.step_s = training.sampler().config().step_s;
   metadata.samples = training.samples();
+  return metadata;
+}
+}  // namespace
+
+TableSnapshot snapshot_training(const Training& training) {
+  return TableSnapshot{
+      training.table(), metadata_of(training),
+      training.motion() ? std::optional<MotionTable>(*training.motion()) : std::nullopt};
+}
+
+std::optional<TableSaveReport> save_training(const std::filesystem::path& table_path,
+                                             Training& training, const TableBudget& budget) {
+  const auto report = save_snapshot(table_path, snapshot_training(training), budget);
+  if (report) training.mark_saved();
+  return report;
+}
+
+std::optional<TableSaveReport> save_snapshot(const std::filesystem::path& table_path,
+                                             const TableSnapshot& snapshot,
+                                             const TableBudget& budget, const SaveHooks& hooks) {
+  const TableMetadata& metadata = snapshot.metadata;
   TableSaveReport report;
   Result<TableSaved> saved = fail("nothing saved");
-  if (training.motion()) {
-    auto fit = fit_table_to_budget(training.table(), metadata, *training.motion(), budget);
+  if (snapshot.motion) {
+    auto fit = fit_table_to_budget(snapshot.table, metadata, *snapshot.motion, budget);
     if (!fit) {
       spdlog::error("cannot save table {}: {}", table_path.string(), fit.error().message);
       return std::nullopt;
@@ -160,9 +181,9 @@ std::optional<TableSaveReport> save_training(const std::filesystem::path& table_
       }
     }
     report = {fit->file_bytes, fit->pruned.rows_after, fit->pruned.folded};
-    saved = save_table(table_path, training.table(), metadata, fit->pruned.table);
+    saved = save_table(table_path, snapshot.table, metadata, fit->pruned.table, hooks);
   } else {
-    saved = save_table(table_path, training.table(), metadata);
+    saved = save_table(table_path, snapshot.table, metadata, hooks);
   }
   if (!saved) {
     spdlog::error("{}", saved.error().message);
@@ -170,9 +191,8 @@ std::optional<TableSaveReport> save_training(const std::filesystem::path& table_
   }
   // The new file is in place; only its survival of a machine crash is in doubt.
   if (!saved->durable) spdlog::warn("{}", saved->warning);
-  training.mark_saved();
   spdlog::debug("saved {} ({} transitions, {} formations)", table_path.string(),
-                training.table().transitions(), training.samples());
+                snapshot.table.transitions(), metadata.samples);
   return report;
 }
 

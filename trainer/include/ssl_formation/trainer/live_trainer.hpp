@@ -22,7 +22,9 @@ class LiveTrainer final : public MatchEventSink {
   // Opens the table (or --table-dir's first) and logs what it trains. Throws app::UsageError for
   // bad options (a --table in a folder that does not exist among them) and std::runtime_error
   // when the table cannot be resumed.
-  LiveTrainer(const TrainerOptions& options, const app::Clock& clock);
+  // Its saves while it runs are made on a thread of their own (TableSaver, with `save_hooks`
+  // for tests), so that the feed is read on while a big table is written.
+  LiveTrainer(const TrainerOptions& options, const app::Clock& clock, SaveHooks save_hooks = {});
 
   void on_event(const MatchEvent& event) override;
   void start_new_stream() override;
@@ -38,12 +40,15 @@ class LiveTrainer final : public MatchEventSink {
   void log_status(const net::LiveMatchEvents* live = nullptr);
 
   const OpponentTables& tables() const { return tables_; }
+  // Blocks until the saves handed to the saver's thread are done; false if one failed.
+  bool wait_for_saves() { return saver_.wait(); }
   const Training& training() const { return tables_.training(); }
   std::uint64_t saves() const { return saves_; }
 
  private:
   const TrainerOptions& options_;
   const app::Clock& clock_;
+  TableSaver saver_;  // before tables_, which hands it saves
   OpponentTables tables_;
   app::FieldSizeLog field_log_;
   app::MatchLog match_log_;

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/trainer/table_saver.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
 namespace ssl_formation::trainer {
@@ -20,7 +21,9 @@ class OpponentTables {
   // Opens --table, or --table-dir's table of the opponent the options name (the unnamed team's
   // until a referee names one). Throws std::runtime_error when that file cannot be resumed, and
   // app::UsageError for bad options.
-  explicit OpponentTables(const TrainerOptions& options);
+  // With `saver`, the saves while training runs (save_if_changed) are handed to it and made on
+  // its thread; without, they are made at once.
+  explicit OpponentTables(const TrainerOptions& options, TableSaver* saver = nullptr);
 
   Training& training() { return *training_; }
   const Training& training() const { return *training_; }
@@ -45,6 +48,7 @@ class OpponentTables {
   std::unique_ptr<Training> open(const std::filesystem::path& path);
 
   const TrainerOptions& options_;
+  TableSaver* saver_;
   SamplerConfig config_;
   std::optional<MotionConfig> motion_;
   MatchRules rules_;

@@ -35,6 +35,20 @@ struct TableSaveReport {
   std::size_t motion_folded = 0;  // robot and zone rows folded into their parents
 };
 
+// A training's table copied as it is now, to save while the training goes on.
+struct TableSnapshot {
+  TransitionTable table;
+  TableMetadata metadata;
+  std::optional<MotionTable> motion;
+};
+// Copies the training's table.
+TableSnapshot snapshot_training(const Training& training);
+// Saves a snapshot atomically, as save_training does; logs and returns nothing on failure.
+std::optional<TableSaveReport> save_snapshot(const std::filesystem::path& table_path,
+                                             const TableSnapshot& snapshot,
+                                             const TableBudget& budget = {},
+                                             const SaveHooks& hooks = {});
+
 // Saves the training's table atomically (version 5 with its motion table, pruned to `budget`;
 // else version 1); logs and returns nothing on failure. A save whose folder could not be synced
 // after the rename is a success, logged as a warning. The training's own table is left whole:
