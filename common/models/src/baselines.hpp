@@ -65,7 +65,7 @@ class BaselineForecaster : public Forecaster {
  public:
   BaselineForecaster(Extrapolation extrapolation, const ModelSettings& settings,
                      std::vector<StepFactors> factors = {});
-  void set_table(std::shared_ptr<const StoredTable>) override {}  // needs none
+  PreparedTable install_table(PreparedTable) noexcept override { return {}; }  // needs none
   bool ready() const override { return true; }
   void observe(const MatchMoment& moment) override { tracks_.add(moment.formation()); }
   void forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse use) override;

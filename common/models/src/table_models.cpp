@@ -148,24 +148,29 @@ MotionForecaster::MotionForecaster(const ModelSettings& settings)
   }
 }
 
-void MotionForecaster::set_table(std::shared_ptr<const StoredTable> table) {
-  std::shared_ptr<const MotionModel> model;
-  if (table) {
-    if (!table->motion) {
-      throw std::invalid_argument(
-          "the table holds only the paper's counts (a version-1 table): it serves --model paper; "
-          "train a table with --model motion to use the motion model");
-    }
-    if (std::abs(table->motion->config().step_s - settings_.step_s) > 1e-9) {
-      throw std::invalid_argument("the table's motion model was trained with another step");
-    }
-    model = std::make_shared<const MotionModel>(*table->motion, settings_.grid,
-                                                table->metadata.field, model_settings(),
-                                                prior_model_.get());
+PreparedTable MotionForecaster::prepare_table(std::shared_ptr<const StoredTable> table) const {
+  if (!table) return PreparedTable{};
+  if (!table->motion) {
+    throw std::invalid_argument(
+        "the table holds only the paper's counts (a version-1 table): it serves --model paper; "
+        "train a table with --model motion to use the motion model");
   }
+  if (std::abs(table->motion->config().step_s - settings_.step_s) > 1e-9) {
+    throw std::invalid_argument("the table's motion model was trained with another step");
+  }
+  auto model = std::make_shared<const MotionModel>(
+      *table->motion, settings_.grid, table->metadata.field, model_settings(), prior_model_.get());
+  return PreparedTable{std::move(table), std::move(model)};
+}
+
+PreparedTable MotionForecaster::install_table(PreparedTable prepared) noexcept {
+  // The prior stays with this forecaster; only the table's own model goes back.
+  PreparedTable old{std::move(table_), model_ == prior_model_ ? nullptr : std::move(model_)};
+  auto model = std::static_pointer_cast<const MotionModel>(std::move(prepared.built));
   model_ = model ? std::move(model) : prior_model_;
   cache_.clear();
-  table_ = std::move(table);
+  table_ = std::move(prepared.table);
+  return old;
 }
 
 void MotionForecaster::observe(const MatchMoment& moment) {

@@ -63,7 +63,11 @@ class MotionLearner : public Learner {
 
 class PaperForecaster : public Forecaster {
  public:
-  void set_table(std::shared_ptr<const StoredTable> table) override { table_ = std::move(table); }
+  PreparedTable install_table(PreparedTable prepared) noexcept override {
+    PreparedTable old{std::move(table_), nullptr};
+    table_ = std::move(prepared.table);
+    return old;
+  }
   bool ready() const override { return table_ != nullptr; }
   void observe(const MatchMoment&) override {}
   void forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse use) override;
@@ -77,7 +81,9 @@ class PaperForecaster : public Forecaster {
 class MotionForecaster : public Forecaster {
  public:
   explicit MotionForecaster(const ModelSettings& settings);
-  void set_table(std::shared_ptr<const StoredTable> table) override;
+  // Builds the table's MotionModel (under the prior), which is what a table costs.
+  PreparedTable prepare_table(std::shared_ptr<const StoredTable> table) const override;
+  PreparedTable install_table(PreparedTable prepared) noexcept override;
   bool ready() const override { return model_ != nullptr; }
   void observe(const MatchMoment& moment) override;
   void forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse use) override;
@@ -92,7 +98,8 @@ class MotionForecaster : public Forecaster {
   ModelSettings settings_;
   std::shared_ptr<const StoredTable> table_;
   // Every team's model (settings.prior_table), built for the first table's field; serves alone
-  // until the opponent has a table.
+  // until the opponent has a table. Like settings_, set once in the constructor: prepare_table
+  // reads both from another thread.
   std::shared_ptr<const MotionModel> prior_model_;
   std::shared_ptr<const MotionModel> model_;  // built from table_ (under the prior), or the prior
   MotionModel::Cache cache_;

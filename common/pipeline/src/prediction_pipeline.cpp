@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace ssl_formation {
 
@@ -83,14 +84,22 @@ void PredictionPipeline::forget_match() {
   last_moment_.reset();
 }
 
-void PredictionPipeline::set_table(std::shared_ptr<const StoredTable> table) {
+PreparedTable PredictionPipeline::prepare_table(std::shared_ptr<const StoredTable> table) const {
   if (table && table->table.grid() != config_.sampler.grid) {
     throw std::invalid_argument("the table's grid " + table->table.grid().to_string() +
                                 " differs from the predictor's " +
                                 config_.sampler.grid.to_string());
   }
-  forecaster_->set_table(table);  // throws, keeping the old one, for a table it cannot use
-  table_ = std::move(table);
+  return forecaster_->prepare_table(std::move(table));  // throws for a table it cannot use
+}
+
+PreparedTable PredictionPipeline::install_table(PreparedTable prepared) noexcept {
+  std::shared_ptr<const StoredTable> previous = std::exchange(table_, prepared.table);
+  PreparedTable old = forecaster_->install_table(std::move(prepared));
+  // Handed back even when the forecaster kept no copy of it, so that it is freed where the
+  // caller chooses.
+  if (!old.table) old.table = std::move(previous);
+  return old;
 }
 
 std::optional<std::string> PredictionPipeline::feed_problem() const {

@@ -160,6 +160,27 @@ TEST(ModelForecaster, TheMotionModelRefusesAVersionOneTableAndKeepsItsOwn) {
   EXPECT_TRUE(motion->ready());
 }
 
+TEST(ModelForecaster, APreparedTableChangesNothingUntilInstalledAndTheReplacedOneComesBack) {
+  const auto motion = make_forecaster(ModelKind::motion, ModelSettings{});
+  const auto first = motion_table(0.5);
+  motion->set_table(first);
+  // Prepared apart (a daemon's loader thread does this while the forecaster predicts).
+  const auto second = motion_table(0.5);
+  PreparedTable prepared = motion->prepare_table(second);
+  EXPECT_EQ(prepared.table, second);
+  EXPECT_NE(prepared.built, nullptr);  // the motion model, built already
+  EXPECT_THROW(motion->prepare_table(paper_table()), std::invalid_argument);
+  EXPECT_TRUE(motion->ready());
+  // Installed: the replaced table and its model come back, for the caller to free.
+  const PreparedTable old = motion->install_table(std::move(prepared));
+  EXPECT_EQ(old.table, first);
+  EXPECT_NE(old.built, nullptr);
+  EXPECT_TRUE(motion->ready());
+  const PreparedTable last = motion->install_table(motion->prepare_table(nullptr));
+  EXPECT_EQ(last.table, second);
+  EXPECT_FALSE(motion->ready());
+}
+
 TEST(ModelFactory, BadSettingsAreRefused) {
   ModelSettings no_step;
   no_step.step_s = 0.0;

@@ -225,6 +225,33 @@ TEST(PredictionPipeline, ATableOfAnotherGridIsRefused) {
   EXPECT_GT(pipeline.samples_without_table(), 0u);
 }
 
+TEST(PredictionPipeline, ATablePreparedApartIsUsedFromTheSampleAfterItIsInstalled) {
+  Recorder out;
+  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 1, ModelKind::paper},
+                              out.handler());
+  const auto first = trained_table(sampler_config(), 10);
+  const auto second = trained_table(sampler_config(), 30);
+  ASSERT_NE(first->table.transitions(), second->table.transitions());
+  pipeline.set_table(first);
+  PreparedTable prepared = pipeline.prepare_table(second);
+  EXPECT_THROW(pipeline.prepare_table(trained_table(sampler_config(Grid(4, 3)), 10)),
+               std::invalid_argument);
+  for (int k = 0; k < 4; ++k) pipeline.add(detection(2.0 * k, play(k)));
+  ASSERT_FALSE(out.seen.empty());
+  for (const Seen& seen : out.seen) {
+    EXPECT_EQ(seen.context.table_transitions, first->table.transitions());
+  }
+  const std::size_t before = out.seen.size();
+  const PreparedTable old = pipeline.install_table(std::move(prepared));
+  EXPECT_EQ(old.table, first);
+  EXPECT_EQ(pipeline.table(), second);
+  for (int k = 4; k < 8; ++k) pipeline.add(detection(2.0 * k, play(k)));
+  ASSERT_GT(out.seen.size(), before);
+  for (std::size_t i = before; i < out.seen.size(); ++i) {
+    EXPECT_EQ(out.seen[i].context.table_transitions, second->table.transitions());
+  }
+}
+
 TEST(PredictionPipeline, HorizonBounds) {
   const auto ignore = [](const PredictedFormation&) {};
   EXPECT_THROW(PredictionPipeline(PredictionConfig{sampler_config(), 0, ModelKind::paper}, ignore),

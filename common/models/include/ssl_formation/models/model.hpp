@@ -87,6 +87,14 @@ class Learner {
   }
 };
 
+// A table as a forecaster predicts from it: the table, and what the forecaster built of it (the
+// motion model's index; none for a model that reads the table as it is). Made by
+// Forecaster::prepare_table, put in use by Forecaster::install_table of the same forecaster.
+struct PreparedTable {
+  std::shared_ptr<const StoredTable> table;
+  std::shared_ptr<const void> built;
+};
+
 // What forecast() is for: a prediction that counts, or a rehearsal (the daemon runs the last one
 // again just before a frame is due, to bring its caches back; it must change nothing).
 enum class ForecastUse { predict, rehearse };
@@ -98,7 +106,19 @@ class Forecaster {
   // The table predictions come from (none: forget it). Throws std::invalid_argument, saying why,
   // for a table this model cannot use; the forecaster keeps its previous one then. What the
   // forecaster follows of the match (histories, recalibration) is kept across tables.
-  virtual void set_table(std::shared_ptr<const StoredTable> table) = 0;
+  void set_table(std::shared_ptr<const StoredTable> table) {
+    install_table(prepare_table(std::move(table)));
+  }
+  // set_table in two steps, so that a daemon can build a large table's model (seconds) while it
+  // goes on predicting from the old one. prepare_table does all the work and throws as set_table
+  // does; it changes nothing and reads only what is fixed when the forecaster is made, so it may
+  // run on another thread while this one forecasts. install_table puts the result in use between
+  // two forecasts with a few pointer moves, and hands back the table it replaces: the caller
+  // chooses where its memory is freed, which for a large model takes milliseconds.
+  virtual PreparedTable prepare_table(std::shared_ptr<const StoredTable> table) const {
+    return PreparedTable{std::move(table), nullptr};
+  }
+  virtual PreparedTable install_table(PreparedTable prepared) noexcept = 0;
   // Whether it can forecast now: a model that needs a table has one.
   virtual bool ready() const = 0;
   // Every sample, in time order, forecast from or not.

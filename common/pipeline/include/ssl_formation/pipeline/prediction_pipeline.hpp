@@ -75,7 +75,15 @@ class PredictionPipeline final : public MatchEventSink {
   // (so the data clock and the chains run on) and counts them, but predicts nothing. Throws
   // std::invalid_argument for a table of another grid than the sampler's, or one the model
   // cannot use (a version-1 table for the motion model), keeping the table it had.
-  void set_table(std::shared_ptr<const StoredTable> table);
+  void set_table(std::shared_ptr<const StoredTable> table) {
+    install_table(prepare_table(std::move(table)));
+  }
+  // set_table in two steps (Forecaster::prepare_table): a daemon prepares a new table on a thread
+  // of its own, which is safe while this pipeline predicts (prepare_table reads only what is
+  // fixed at construction), and installs it between two frames, cheaply. install_table returns
+  // the table it replaces, for the caller to free off the prediction's path.
+  PreparedTable prepare_table(std::shared_ptr<const StoredTable> table) const;
+  PreparedTable install_table(PreparedTable prepared) noexcept;
   const std::shared_ptr<const StoredTable>& table() const { return table_; }
   // Whether the model needs a table to predict.
   bool needs_table() const { return describe(config_.model).keeps_table; }
