@@ -65,14 +65,13 @@ void MulticastPredictionOutput::print(std::string_view line) {
 
 PredictorDaemon::PredictorDaemon(boost::asio::io_context& io, const PredictorOptions& options,
                                  const PredictionConfig& config, const app::Clock& clock,
-                                 PredictionOutput& output)
+                                 PredictionOutput& output, TableFileLoader load_file)
     : options_((check_table_folder(options), options)),
       clock_(clock),
       output_(output),
       config_(config.sampler),
-      watcher_(table_path(config.opponent ? config.opponent->opponent_team : ""),
-               config.sampler.grid),
       pipeline_(config, [this](const PredictedFormation& predicted) { on_prediction(predicted); }),
+      table_file_(table_path(config.opponent ? config.opponent->opponent_team : "")),
       field_log_(config.sampler.field, config.sampler.use_geometry),
       // Our robots are kept as long as the sampler keeps a camera live.
       ours_(opposite(config.sampler.opponent_color), config.sampler.camera_live_window_s(),
@@ -88,6 +87,14 @@ PredictorDaemon::PredictorDaemon(boost::asio::io_context& io, const PredictorOpt
     web_options.max_clients = static_cast<std::size_t>(options.http_max_clients);
     web_options.send_buffer_bytes = options.http_send_buffer_bytes;
     web_.emplace(io, web_options);
+  }
+  if (pipeline_.needs_table()) {
+    // Called on the loader's thread while this one predicts: prepare_table reads only what the
+    // pipeline fixed at construction.
+    loader_.emplace(table_file_, config_.grid, std::move(load_file),
+                    [this](std::shared_ptr<const StoredTable> table) {
+                      return pipeline_.prepare_table(std::move(table));
+                    });
   }
 }
 
@@ -110,17 +117,20 @@ void PredictorDaemon::start() {
     return;
   }
   check_table();
-  if (!watcher_.table()) {
-    spdlog::info("waiting for the table {}: ssl-trainer writes it as soon as it has learned "
-                 "something (start ssl-trainer with --{} {} if it is not running)",
-                 watcher_.path().string(), options_.table_dir.empty() ? "table" : "table-dir",
-                 options_.table_dir.empty() ? options_.table : options_.table_dir);
+  settle_table_loads();
+  if (!pipeline_.table()) {
+    spdlog::info(
+        "waiting for the table {}: ssl-trainer writes it as soon as it has learned "
+        "something (start ssl-trainer with --{} {} if it is not running)",
+        table_file_.string(), options_.table_dir.empty() ? "table" : "table-dir",
+        options_.table_dir.empty() ? options_.table : options_.table_dir);
   }
 }
 
 void PredictorDaemon::stop() {
   warm_up_timer_.cancel();
   if (web_) web_->stop();
+  if (loader_) loader_->stop();
 }
 
 bool PredictorDaemon::serving_web() const { return web_.has_value(); }
@@ -137,7 +147,7 @@ std::vector<std::pair<std::string, std::string>> PredictorDaemon::ready_facts() 
       {"referee", options_.network.referee_address},
       {"predictions", options_.prediction_address},
       {"model", std::string(to_string(pipeline_.config().model))},
-      {"table", pipeline_.needs_table() ? watcher_.path().string() : "none"},
+      {"table", pipeline_.needs_table() ? table_file_.string() : "none"},
       // The table predictions come from: a table the model refused is not loaded.
       {"table_loaded", pipeline_.table() ? "1" : "0"}};
   if (web_) facts.emplace_back("http", web_->url());
@@ -145,6 +155,8 @@ std::vector<std::pair<std::string, std::string>> PredictorDaemon::ready_facts() 
 }
 
 void PredictorDaemon::on_event(const MatchEvent& event) {
+  // Between two frames, never during one: each prediction is of one table.
+  if (loader_ && loader_->has_outcome()) take_table_outcomes();
   if (web_ && event.kind == MatchEventKind::vision && event.frame) {
     // Only the field view shows these.
     last_packet_s_ = clock_.steady_s();
@@ -219,7 +231,7 @@ void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
     if (stored.motion) status.table_motion_instances = stored.motion->instances();
     status.table_states_seen = stored.table.rows_seen();
   }
-  status.table_reloads = watcher_.reloads();
+  status.table_reloads = table_reloads_;
   status.table_loaded_unix_ms = table_loaded_unix_ms_;
   status.table_error = table_error_;
   const web::FieldViewCounters web_counters = web_->counters();
@@ -254,54 +266,80 @@ void PredictorDaemon::check_table() {
       feed_problem_said_ = true;
     }
   }
-  if (!pipeline_.needs_table()) return;
-  switch (watcher_.poll()) {
-    case TableWatcher::Change::loaded: {
-      const StoredTable& stored = *watcher_.table();
-      try {
-        pipeline_.set_table(watcher_.table());
-      } catch (const std::invalid_argument& error) {
-        // A table this model cannot use (a version-1 table for --model motion): keep
-        // predicting with the one we have, and say why.
-        table_error_ = watcher_.path().string() + ": " + error.what();
-        spdlog::error("{}", table_error_);
+  if (!loader_) return;
+  take_table_outcomes();
+  loader_->look();
+}
+
+bool PredictorDaemon::wait_for_table_loader(std::chrono::steady_clock::duration timeout) {
+  return !loader_ || loader_->wait_idle(timeout);
+}
+
+bool PredictorDaemon::settle_table_loads(std::chrono::steady_clock::duration timeout) {
+  const bool idle = wait_for_table_loader(timeout);
+  if (loader_) take_table_outcomes();
+  return idle;
+}
+
+void PredictorDaemon::take_table_outcomes() {
+  using Kind = TableLoader::Outcome::Kind;
+  while (std::optional<TableLoader::Outcome> outcome = loader_->take()) {
+    table_reloads_ = outcome->reloads;
+    if (say_when_missing_ && outcome->first_look) {
+      say_when_missing_ = false;
+      if (outcome->kind != Kind::loaded) {
+        spdlog::info("no table for this opponent yet: waiting for {}", outcome->path.string());
+      }
+    }
+    switch (outcome->kind) {
+      case Kind::loaded: {
+        const std::shared_ptr<const StoredTable> table = outcome->prepared.table;
+        const StoredTable& stored = *table;
+        // The swap is all this thread does; the replaced table is freed on the loader's.
+        loader_->release(pipeline_.install_table(std::move(outcome->prepared)));
+        spdlog::info(
+            "loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
+            outcome->path.string(), outcome->reloads, stored.table.transitions(),
+            stored.metadata.samples, stored.table.rows_seen());
+        table_loaded_unix_ms_ = clock_.unix_ms();
+        table_error_.clear();
+        if (stored.metadata.step_s != config_.step_s) {
+          spdlog::warn("the table was trained with --step {} but this predictor samples every {} s",
+                       stored.metadata.step_s, config_.step_s);
+        }
         break;
       }
-      spdlog::info("loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
-                   watcher_.path().string(), watcher_.reloads(), stored.table.transitions(),
-                   stored.metadata.samples, stored.table.rows_seen());
-      table_loaded_unix_ms_ = clock_.unix_ms();
-      table_error_.clear();
-      if (stored.metadata.step_s != config_.step_s) {
-        spdlog::warn("the table was trained with --step {} but this predictor samples every {} s",
-                     stored.metadata.step_s, config_.step_s);
-      }
-      break;
+      case Kind::refused:
+        // A table this model cannot use (a version-1 table for --model motion): keep
+        // predicting with the one we have, and say why.
+        table_error_ = outcome->path.string() + ": " + outcome->error;
+        spdlog::error("{}", table_error_);
+        break;
+      case Kind::unreadable:
+        table_error_ = outcome->error;
+        spdlog::error("{}; {}", outcome->error,
+                      pipeline_.table() ? "keeping the table loaded before"
+                                        : "still waiting for a valid table");
+        break;
+      case Kind::absent:
+        break;
     }
-    case TableWatcher::Change::failed:
-      table_error_ = watcher_.last_error();
-      spdlog::error("{}; {}", watcher_.last_error(),
-                    watcher_.table() ? "keeping the table loaded before"
-                                     : "still waiting for a valid table");
-      break;
-    case TableWatcher::Change::none:
-      break;
   }
 }
 
 void PredictorDaemon::follow_opponent_table() {
-  if (!pipeline_.needs_table()) return;
+  if (!loader_) return;
   const std::filesystem::path wanted = table_path(pipeline_.match().opponent().name);
-  if (wanted == watcher_.path()) return;
+  if (wanted == table_file_) return;
   spdlog::info("opponent '{}': predicting from {}", pipeline_.match().opponent().name,
                wanted.string());
-  watcher_ = TableWatcher(wanted, config_.grid);
-  pipeline_.set_table(nullptr);
+  table_file_ = wanted;
+  table_reloads_ = 0;
+  loader_->follow(wanted);
+  loader_->release(pipeline_.install_table(PreparedTable{}));
   table_error_.clear();
-  check_table();
-  if (!watcher_.table()) {
-    spdlog::info("no table for this opponent yet: waiting for {}", wanted.string());
-  }
+  say_when_missing_ = true;
+  loader_->look();
 }
 
 std::filesystem::path PredictorDaemon::table_path(const std::string& opponent) const {
@@ -316,7 +354,7 @@ void PredictorDaemon::log_status(const net::LiveMatchEvents* live) {
       "attacks={} {} | {}",
       live ? app::describe_reception(live->vision()) : std::string("packets=(in-process)"),
       app::describe_tracked(pipeline_.front_end()), c.samples, pipeline_.predictions(),
-      output_.sent(), warm_ups_, watcher_.reloads(), describe_for_status(pipeline_.live_score()),
+      output_.sent(), warm_ups_, table_reloads_, describe_for_status(pipeline_.live_score()),
       app::describe_attacks(pipeline_.sampler().attacks(),
                             pipeline_.match().opponent().attacks_because),
       app::describe_referee_counts(pipeline_.match()), describe_rejections(c));

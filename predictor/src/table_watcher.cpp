@@ -4,8 +4,8 @@
 
 namespace ssl_formation::predictor {
 
-TableWatcher::TableWatcher(std::filesystem::path path, Grid expected_grid)
-    : path_(std::move(path)), expected_grid_(expected_grid) {}
+TableWatcher::TableWatcher(std::filesystem::path path, Grid expected_grid, TableFileLoader load)
+    : path_(std::move(path)), expected_grid_(expected_grid), load_(std::move(load)) {}
 
 std::optional<TableWatcher::Identity> TableWatcher::identify() const {
   struct stat info {};
@@ -20,7 +20,7 @@ TableWatcher::Change TableWatcher::poll() {
   const std::optional<Identity> now = identify();
   if (!now || (seen_ && *now == *seen_)) return Change::none;
   seen_ = now;
-  auto loaded = load_table(path_, expected_grid_);
+  auto loaded = load_ ? load_(path_, expected_grid_) : load_table(path_, expected_grid_);
   if (!loaded) {
     last_error_ = std::move(loaded).error().message;
     return Change::failed;

@@ -8,6 +8,10 @@
 
 #include <boost/asio/io_context.hpp>
 #include <cmath>
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+#include <thread>
 
 #include "match_logs.hpp"
 #include "moving_robots.hpp"
@@ -21,6 +25,8 @@ namespace ssl_formation::predictor {
 namespace {
 
 constexpr double start_s = 500.0;  // t_capture of the feed's first frame
+// Generous: a loaded machine may take seconds to read and prepare a small table.
+constexpr std::chrono::seconds load_timeout{30};
 
 // Frame `f` of the feed: our team yellow (standing in a row), theirs blue, moving as
 // moving_robots.hpp's robots turned about the centre (they attack -x).
@@ -50,8 +56,8 @@ testing::RefereeSpec referee_says(Referee::Command command, std::uint32_t counte
 
 // A daemon with its own io_context (never run: no timers fire) and a clock the test moves.
 struct InProcess {
-  explicit InProcess(PredictorOptions o) : options(std::move(o)) {
-    daemon.emplace(io, options, prediction_config(options), clock, output);
+  explicit InProcess(PredictorOptions o, TableFileLoader load_file = {}) : options(std::move(o)) {
+    daemon.emplace(io, options, prediction_config(options), clock, output, std::move(load_file));
     daemon->start();
   }
   void frames(int from, int to) {
@@ -81,11 +87,12 @@ struct InProcess {
   std::optional<PredictorDaemon> daemon;
 };
 
-// A table of robots like theirs, trained as the default opponent (yellow attacking +x).
-void train_table(const std::filesystem::path& path) {
+// A table of robots like theirs, trained as the default opponent (yellow attacking +x) on
+// `seconds` of play: tables of other lengths tell themselves apart by their transitions.
+void train_table(const std::filesystem::path& path, double seconds = 30.0) {
   testing::MovingRobots moving;
   moving.seed = 5;
-  moving.seconds = 30.0;
+  moving.seconds = seconds;
   SamplerConfig config = sampler_config_for(ModelKind::motion);
   MotionConfig motion;
   motion.step_s = config.step_s;
@@ -153,6 +160,157 @@ TEST(PredictorDaemon, FollowsTheRefereesOpponentSideAndGameStateAndTheFirstGameC
   EXPECT_EQ(pipeline.sampler().counters().samples, 300u);
 }
 
+// Reads table files as load_table does, but holds each read, once hold() is called, until the
+// test calls release(): a slow disk or a 40 MB table, on the test's schedule.
+class HeldLoads {
+ public:
+  TableFileLoader loader() {
+    return [this](const std::filesystem::path& path, Grid grid) {
+      {
+        std::unique_lock lock(mutex_);
+        ++started_;
+        changed_.notify_all();
+        // Bounded, so that a daemon that waited for its loader would fail rather than hang.
+        if (!changed_.wait_for(lock, load_timeout, [this] { return !holding_; })) {
+          released_by_timeout_ = true;
+        }
+      }
+      return load_table(path, grid);
+    };
+  }
+  void hold() {
+    const std::lock_guard lock(mutex_);
+    holding_ = true;
+  }
+  void release() {
+    {
+      const std::lock_guard lock(mutex_);
+      holding_ = false;
+    }
+    changed_.notify_all();
+  }
+  // Until `reads` reads have started.
+  bool wait_started(int reads) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, load_timeout, [&] { return started_ >= reads; });
+  }
+  bool released_by_timeout() {
+    const std::lock_guard lock(mutex_);
+    return released_by_timeout_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  bool holding_ = false;
+  int started_ = 0;
+  bool released_by_timeout_ = false;
+};
+
+// Saves a table over `path` as the trainer does: written beside it, then renamed over it.
+void replace_table(const std::filesystem::path& path, double seconds) {
+  const std::filesystem::path next = path.string() + ".new";
+  train_table(next, seconds);
+  std::filesystem::rename(next, path);
+}
+
+std::uint64_t transitions_of(const PredictorDaemon& daemon) {
+  return daemon.pipeline().table() ? daemon.pipeline().table()->table.transitions() : 0;
+}
+
+// A daemon predicting from a table of 30 s of play, which it reads through `loads`.
+struct FollowingATable {
+  FollowingATable() : path(dir.path() / "t.table") {
+    train_table(path, 30.0);
+    PredictorOptions options;
+    options.table = path.string();
+    options.model.our_team = "us";
+    options.quiet = true;
+    predictor.emplace(options, loads.loader());  // the table there at start: read unheld
+  }
+  // The trainer saves a longer table, and the daemon's read of it starts and is held; false if
+  // it did not start.
+  bool start_held_reload() {
+    replace_table(path, 60.0);
+    loads.hold();
+    predictor->daemon->check_table();
+    return loads.wait_started(2);
+  }
+  PredictorDaemon& daemon() { return *predictor->daemon; }
+
+  testing::ScratchDir dir;
+  std::filesystem::path path;
+  HeldLoads loads;
+  std::optional<InProcess> predictor;
+};
+
+TEST(PredictorDaemon, PredictsEveryFrameWhileATableLoadsAndSwitchesTablesBetweenTwoFrames) {
+  FollowingATable following;
+  InProcess& predictor = *following.predictor;
+  const std::uint64_t old_table = transitions_of(following.daemon());
+  ASSERT_GT(old_table, 0u);
+  ASSERT_TRUE(following.start_held_reload());
+  // Meanwhile every frame is predicted, from the old table, and the reload timer's checks
+  // return at once.
+  predictor.frames(0, 60);
+  following.daemon().check_table();
+  predictor.frames(60, 120);
+  auto messages = predictor.output.messages();
+  ASSERT_EQ(messages.size(), 120u);
+  for (const auto& message : messages) ASSERT_EQ(message.table_transitions(), old_table);
+  EXPECT_EQ(following.daemon().table_reloads(), 1u);
+
+  // Read and prepared: not put in use behind a prediction's back, but before the next frame.
+  following.loads.release();
+  ASSERT_TRUE(following.daemon().wait_for_table_loader(load_timeout));
+  EXPECT_EQ(transitions_of(following.daemon()), old_table);
+  predictor.frames(120, 121);
+  const std::uint64_t new_table = transitions_of(following.daemon());
+  ASSERT_NE(new_table, old_table);
+  EXPECT_EQ(following.daemon().table_reloads(), 2u);
+  predictor.frames(121, 180);
+  messages = predictor.output.messages();
+  ASSERT_EQ(messages.size(), 180u);
+  for (std::size_t i = 120; i < messages.size(); ++i) {
+    ASSERT_EQ(messages[i].table_transitions(), new_table) << "frame " << i;
+  }
+  EXPECT_FALSE(following.loads.released_by_timeout());
+}
+
+TEST(PredictorDaemon, ABadTableFileOnTheLoaderKeepsTheTableAndTheDaemon) {
+  FollowingATable following;
+  const std::uint64_t table = transitions_of(following.daemon());
+  ASSERT_GT(table, 0u);
+  const std::string written = following.path.string() + ".new";
+  {
+    std::ofstream garbage(written, std::ios::binary);
+    garbage << "not a table";
+  }
+  std::filesystem::rename(written, following.path);
+  following.daemon().check_table();
+  ASSERT_TRUE(following.daemon().wait_for_table_loader(load_timeout));
+  following.predictor->frames(0, 30);
+  EXPECT_NE(following.daemon().table_error().find(following.path.string()), std::string::npos)
+      << following.daemon().table_error();
+  EXPECT_EQ(transitions_of(following.daemon()), table);
+  const auto messages = following.predictor->output.messages();
+  ASSERT_EQ(messages.size(), 30u);
+  EXPECT_EQ(messages.back().table_transitions(), table);
+}
+
+TEST(PredictorDaemon, StopsWithATableLoadUnderWay) {
+  FollowingATable following;
+  ASSERT_TRUE(following.start_held_reload());
+  // stop() waits for the file read under way (it cannot be cut short), then joins the loader;
+  // the table it read is dropped. Released from another thread, as a disk would finish it.
+  std::thread disk([&] { following.loads.release(); });
+  following.daemon().stop();
+  disk.join();
+  EXPECT_EQ(following.daemon().table_reloads(), 1u);
+  following.predictor.reset();
+  EXPECT_FALSE(following.loads.released_by_timeout());
+}
+
 TEST(PredictorDaemon, BaselinesPredictFromTheFirstFormationWithoutATable) {
   testing::ScratchDir dir;
   PredictorOptions options;
@@ -197,14 +355,20 @@ TEST(PredictorDaemon, ATablePerOpponentIsLoadedAsTheRefereeNamesIt) {
   options.quiet = true;
   InProcess predictor(options);
   EXPECT_FALSE(predictor.daemon->pipeline().table());  // no opponent named yet
+  // The table is read on the loader's thread: settle_table_loads waits for it.
   predictor.referee(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "BETA")));
-  EXPECT_EQ(predictor.daemon->watcher().path(), tables / "beta.bin");
+  EXPECT_EQ(predictor.daemon->table_file(), tables / "beta.bin");
+  ASSERT_TRUE(predictor.daemon->settle_table_loads(load_timeout));
   EXPECT_TRUE(predictor.daemon->pipeline().table());
   predictor.referee_held(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Alpha")));
-  EXPECT_EQ(predictor.daemon->watcher().path(), tables / "alpha.bin");
+  EXPECT_EQ(predictor.daemon->table_file(), tables / "alpha.bin");
+  ASSERT_TRUE(predictor.daemon->settle_table_loads(load_timeout));
   EXPECT_TRUE(predictor.daemon->pipeline().table());
   predictor.referee_held(testing::referee_payload(referee_says(Referee::NORMAL_START, 1, "Gamma")));
-  EXPECT_EQ(predictor.daemon->watcher().path(), tables / "gamma.bin");
+  EXPECT_EQ(predictor.daemon->table_file(), tables / "gamma.bin");
+  // Alpha's is dropped at once, not when the loader has looked for Gamma's.
+  EXPECT_FALSE(predictor.daemon->pipeline().table());
+  ASSERT_TRUE(predictor.daemon->settle_table_loads(load_timeout));
   EXPECT_FALSE(predictor.daemon->pipeline().table());  // waits for Gamma's table
 }
 

@@ -7,6 +7,7 @@
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -24,6 +25,7 @@
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
+#include "ssl_formation/predictor/table_loader.hpp"
 #include "ssl_formation/predictor/table_watcher.hpp"
 // The field view's library (predictor/web).
 #include "field_view_json.hpp"
@@ -61,23 +63,37 @@ class PredictorDaemon final : public MatchEventSink {
  public:
   // Throws app::UsageError for bad options (a --table in a folder that does not exist among
   // them). `io` runs the field view and the warm-up timer; a test that drives the daemon by hand
-  // need not run it.
+  // need not run it. `load_file` reads the table files (load_table when empty; a test's can take
+  // its time).
   PredictorDaemon(boost::asio::io_context& io, const PredictorOptions& options,
-                  const PredictionConfig& config, const app::Clock& clock,
-                  PredictionOutput& output);
+                  const PredictionConfig& config, const app::Clock& clock, PredictionOutput& output,
+                  TableFileLoader load_file = {});
   PredictorDaemon(const PredictorDaemon&) = delete;
   PredictorDaemon& operator=(const PredictorDaemon&) = delete;
 
-  // Starts the field view (a busy port fails here) and loads the table there at start.
+  // Starts the field view (a busy port fails here) and loads the table there at start, waiting
+  // for it: nothing is predicted before.
   void start();
+  // Stops the field view and the warm-up, and joins the table's loader thread: after the file
+  // read under way, if any (see TableLoader::stop).
   void stop();
 
   void on_event(const MatchEvent& event) override;
   void start_new_stream() override { pipeline_.start_new_stream(); }
 
-  // What the reload timer does: loads the table when the trainer replaced it, and says once, in
-  // plain words, when the model cannot predict from this feed.
+  // What the reload timer does: installs a table the loader has ready, asks it to look at the
+  // file again (it reads and prepares a replaced one on its own thread), and says once, in plain
+  // words, when the model cannot predict from this feed. Never waits for the file. A table the
+  // loader has ready is also installed before the next frame is handled.
   void check_table();
+  // Waits until the loader has nothing under way (false if `timeout` passed first). What it
+  // has ready is installed before the next frame, or by check_table().
+  bool wait_for_table_loader(
+      std::chrono::steady_clock::duration timeout = std::chrono::steady_clock::duration::max());
+  // The same, then installs what the loader has ready: start() does, for the table there at
+  // start, and tests.
+  bool settle_table_loads(
+      std::chrono::steady_clock::duration timeout = std::chrono::steady_clock::duration::max());
   // One status line, then a warning for each kind of bad input that arrived since the last one.
   // `live`: the network's counters, when the events come from there.
   void log_status(const net::LiveMatchEvents* live = nullptr);
@@ -91,7 +107,10 @@ class PredictorDaemon final : public MatchEventSink {
   std::vector<std::pair<std::string, std::string>> ready_facts() const;
 
   const PredictionPipeline& pipeline() const { return pipeline_; }
-  const TableWatcher& watcher() const { return watcher_; }
+  // The table file followed (the current opponent's with --table-dir).
+  const std::filesystem::path& table_file() const { return table_file_; }
+  // Tables loaded from it and put in use or refused (TableWatcher::reloads).
+  std::uint64_t table_reloads() const { return table_reloads_; }
   const std::string& table_error() const { return table_error_; }
   std::uint64_t warm_ups() const { return warm_ups_; }
 
@@ -102,6 +121,8 @@ class PredictorDaemon final : public MatchEventSink {
   void schedule_warm_up();
   // --table-dir: the current opponent's table, loaded as soon as the referee names another.
   void follow_opponent_table();
+  // Puts what the loader has to say in use: a table, or why there is none.
+  void take_table_outcomes();
   std::filesystem::path table_path(const std::string& opponent) const;
   web::FieldViewSetup view_setup() const;
 
@@ -109,8 +130,11 @@ class PredictorDaemon final : public MatchEventSink {
   const app::Clock& clock_;
   PredictionOutput& output_;
   SamplerConfig config_;
-  TableWatcher watcher_;
   PredictionPipeline pipeline_;
+  std::filesystem::path table_file_;
+  std::uint64_t table_reloads_ = 0;
+  // follow_opponent_table's: say so if the new opponent has no table yet.
+  bool say_when_missing_ = false;
   std::string datagram_;                // FormationPrediction datagrams, by encode_prediction
   proto::FormationPrediction message_;  // for the field view only
   SamplerCounters reported_;            // counters at the last status line
@@ -133,6 +157,9 @@ class PredictorDaemon final : public MatchEventSink {
   std::optional<double> last_prediction_s_;
   std::optional<double> frame_period_ms_;
   std::uint64_t warm_ups_ = 0;
+  // Reads and prepares the table off the prediction's thread (models that keep a table only).
+  // Last, so that its thread, which prepares with pipeline_, stops before anything else goes.
+  std::optional<TableLoader> loader_;
 };
 
 }  // namespace ssl_formation::predictor

@@ -4,6 +4,7 @@
 // that fails to load is reported once and the table in use is kept.
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,9 +14,14 @@
 
 namespace ssl_formation::predictor {
 
+// How a table file is read: load_table, or a test's stand-in (one that takes its time).
+using TableFileLoader =
+    std::function<Result<StoredTable, TableLoadError>(const std::filesystem::path&, Grid)>;
+
 class TableWatcher {
  public:
-  TableWatcher(std::filesystem::path path, Grid expected_grid);
+  // `load`: load_table when empty.
+  TableWatcher(std::filesystem::path path, Grid expected_grid, TableFileLoader load = {});
 
   enum class Change { none, loaded, failed };
   // Looks at the file once; loads it if it changed since the last look.
@@ -39,6 +45,7 @@ class TableWatcher {
 
   std::filesystem::path path_;
   Grid expected_grid_;
+  TableFileLoader load_;
   std::optional<Identity> seen_;
   std::shared_ptr<const StoredTable> table_;
   std::string last_error_;
