@@ -11,6 +11,10 @@
 //               goes first swaps every 100 packets). Each is timed from just before its send to
 //               the reception of the matching prediction (by frame_number) or echoed datagram.
 //               Both paths run interleaved in the same run, so they see the same machine.
+//               With --replace-table, the table file the predictor follows is replaced every
+//               --replace-every seconds meanwhile, as the trainer saves, and the longest gap
+//               between two predictions received is reported: a predictor that loads its table
+//               on the prediction's path stops predicting for as long as a load takes.
 //   pipeline    times, in this process, the work ssl-predictor does for one packet (decode,
 //               sample, predict, encode the message: net::VisionReceiver and predictor/main.cpp's
 //               on_sample), back to back and after sleeping --idle seconds before each packet, as
@@ -33,10 +37,13 @@
 #include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <thread>
@@ -282,7 +289,92 @@ struct LatencyOptions {
   double drain_s = 0.5;
   bool no_echo = false;
   bool no_predictor = false;
+  // The table file the predictor follows, replaced during the run by a copy of replace_from
+  // (of itself as it was at the start when empty); empty: never replaced.
+  std::string replace_table;
+  std::string replace_from;
+  double replace_every_s = 2.0;
 };
+
+// Replaces a table file on a schedule of its own thread, as the trainer saves: the new file is
+// written beside the old one, then renamed over it, so the predictor sees a new file each time.
+class TableReplacer {
+ public:
+  TableReplacer(const std::string& target, const std::string& from, double every_s)
+      : target_(target),
+        // A copy taken now, so that replacing the file with itself changes nothing but its
+        // identity.
+        source_(from.empty() ? target + ".e2e-bench-source" : from),
+        owns_source_(from.empty()),
+        every_(
+            std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(every_s))) {
+    if (owns_source_) {
+      std::filesystem::copy_file(target_, source_,
+                                 std::filesystem::copy_options::overwrite_existing);
+    }
+    thread_ = std::thread([this] { run(); });
+  }
+  TableReplacer(const TableReplacer&) = delete;
+  TableReplacer& operator=(const TableReplacer&) = delete;
+  ~TableReplacer() {
+    {
+      const std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    stop_.notify_all();
+    thread_.join();
+    std::error_code ignored;
+    if (owns_source_) std::filesystem::remove(source_, ignored);
+    std::filesystem::remove(target_ + ".e2e-bench-new", ignored);
+  }
+  std::uint64_t replacements() const { return replacements_.load(); }
+
+ private:
+  void run() {
+    std::unique_lock lock(mutex_);
+    for (Clock::time_point next = Clock::now() + every_;; next += every_) {
+      if (stop_.wait_until(lock, next, [this] { return stopping_; })) return;
+      // A failed copy (a full disk) leaves the file as it was: fewer replacements are counted.
+      const std::string written = target_ + ".e2e-bench-new";
+      std::error_code error;
+      std::filesystem::copy_file(source_, written,
+                                 std::filesystem::copy_options::overwrite_existing, error);
+      if (!error) std::filesystem::rename(written, target_, error);
+      if (!error) replacements_.fetch_add(1);
+    }
+  }
+
+  std::string target_;
+  std::string source_;
+  bool owns_source_;
+  Clock::duration every_;
+  std::mutex mutex_;
+  std::condition_variable stop_;
+  bool stopping_ = false;
+  std::atomic<std::uint64_t> replacements_{0};
+  std::thread thread_;
+};
+
+// The longest time between two sends or two receptions of `times` (after `skip`).
+double longest_gap_ms(const std::vector<std::atomic<std::int64_t>>& times, std::size_t skip) {
+  std::vector<std::int64_t> at;
+  for (std::size_t i = skip; i < times.size(); ++i) {
+    if (const std::int64_t t = times[i].load(); t != 0) at.push_back(t);
+  }
+  std::sort(at.begin(), at.end());
+  std::int64_t longest = 0;
+  for (std::size_t i = 1; i < at.size(); ++i) longest = std::max(longest, at[i] - at[i - 1]);
+  return static_cast<double>(longest) / 1e6;
+}
+
+// The longest time between two predictions received (after `skip`): how long the predictor
+// stopped predicting, whatever stopped it. The sender's own longest gap goes with it: on a busy
+// machine the sender itself is sometimes late by more than the predictor ever is.
+void print_gaps(const PathTimes& times, std::size_t skip, std::uint64_t replacements) {
+  std::printf("gaps path=predictor replacements=%llu longest_ms=%.2f sender_longest_ms=%.2f\n",
+              static_cast<unsigned long long>(replacements), longest_gap_ms(times.received, skip),
+              longest_gap_ms(times.sent, skip));
+}
 
 // One detection packet per formation of a one-camera simulated feed, t_capture advancing by one
 // step each, so every packet completes one sample and the predictor answers every packet.
@@ -310,6 +402,9 @@ int run_latency(const LatencyOptions& o) {
   if (!(o.seconds > 0 && o.seconds <= 600)) throw sf::app::UsageError("--seconds must be 0 to 600");
   const auto count = static_cast<std::size_t>(std::llround(o.rate * o.seconds));
   if (count <= o.warmup) throw sf::app::UsageError("--rate * --seconds must exceed --warmup");
+  if (!o.replace_table.empty() && !(o.replace_every_s >= 0.1 && o.replace_every_s <= 600)) {
+    throw sf::app::UsageError("--replace-every must be 0.1 to 600 seconds");
+  }
   const auto interface = interface_option(o.interface);
   const std::vector<std::string> packets = latency_packets(o, count);
 
@@ -351,6 +446,11 @@ int run_latency(const LatencyOptions& o) {
       }
     });
   }
+  // Before the receiving thread: a table that cannot be copied ends the run here.
+  std::optional<TableReplacer> replacer;
+  if (!o.replace_table.empty()) {
+    replacer.emplace(o.replace_table, o.replace_from, o.replace_every_s);
+  }
   std::thread receiving([&] { receive_io.run(); });
 
   tighten_timer_slack();
@@ -375,7 +475,10 @@ int run_latency(const LatencyOptions& o) {
   for (std::size_t i = 0; i < count; ++i) {
     const std::int64_t due = start + static_cast<std::int64_t>(i) * period_ns;
     const std::int64_t half_later = due + period_ns / 2;
-    const bool predictor_on_the_period = (i / kBlock) % 2 == 0;
+    // One path alone keeps to the period: a swap would put one and a half periods between two
+    // of its packets, which --replace-table would count as a gap.
+    const bool predictor_on_the_period =
+        o.no_echo || (!o.no_predictor && (i / kBlock) % 2 == 0);
     const std::int64_t predictor_due = predictor_on_the_period ? due : half_later;
     const std::int64_t echo_due = predictor_on_the_period ? half_later : due;
     if (predictor_on_the_period && !o.no_predictor) {
@@ -387,6 +490,8 @@ int run_latency(const LatencyOptions& o) {
     }
   }
   const double achieved_s = static_cast<double>(now_ns() - start) / 1e9;
+  const std::uint64_t replacements = replacer ? replacer->replacements() : 0;
+  replacer.reset();
   std::this_thread::sleep_for(std::chrono::duration<double>(o.drain_s));
   receive_io.stop();
   receiving.join();
@@ -400,6 +505,7 @@ int run_latency(const LatencyOptions& o) {
   if (!o.no_echo) print_summary("floor", o.rate, summarise(echo_times, o.warmup), echo_times);
   if (!o.no_predictor) {
     print_summary("predictor", o.rate, summarise(predictor_times, o.warmup), predictor_times);
+    if (!o.replace_table.empty()) print_gaps(predictor_times, o.warmup, replacements);
   }
   std::fflush(stdout);
   return 0;
@@ -624,6 +730,16 @@ int main(int argc, char** argv) {
         "latency: seconds to wait for the last replies")(
         "no-echo", po::bool_switch(&latency.no_echo), "latency: time the predictor alone")(
         "no-predictor", po::bool_switch(&latency.no_predictor), "latency: time the echo alone")(
+        "replace-table", po::value(&latency.replace_table)->value_name("FILE"),
+        "latency: the table file the predictor follows, replaced during the run (written "
+        "beside it, then renamed over it, as ssl-trainer saves); prints the longest gap "
+        "between two predictions")(
+        "replace-from", po::value(&latency.replace_from)->value_name("FILE"),
+        "latency: the table written over --replace-table (default: --replace-table as it was "
+        "at the start)")(
+        "replace-every",
+        po::value(&latency.replace_every_s)->default_value(latency.replace_every_s),
+        "latency: seconds between two replacements of --replace-table")(
         "packets", po::value(&pipeline_packets)->default_value(pipeline_packets),
         "pipeline: packets to time each way")("idle",
                                               po::value(&idle_s)->default_value(idle_s, "1/60"),
