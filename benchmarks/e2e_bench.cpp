@@ -477,8 +477,7 @@ int run_latency(const LatencyOptions& o) {
     const std::int64_t half_later = due + period_ns / 2;
     // One path alone keeps to the period: a swap would put one and a half periods between two
     // of its packets, which --replace-table would count as a gap.
-    const bool predictor_on_the_period =
-        o.no_echo || (!o.no_predictor && (i / kBlock) % 2 == 0);
+    const bool predictor_on_the_period = o.no_echo || (!o.no_predictor && (i / kBlock) % 2 == 0);
     const std::int64_t predictor_due = predictor_on_the_period ? due : half_later;
     const std::int64_t echo_due = predictor_on_the_period ? half_later : due;
     if (predictor_on_the_period && !o.no_predictor) {

@@ -184,6 +184,7 @@ void PredictorDaemon::on_event(const MatchEvent& event) {
       match_log_.update(pipeline_.front_end());
       break;
   }
+  release_retired();
 }
 
 void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
@@ -268,6 +269,7 @@ void PredictorDaemon::check_table() {
   }
   if (!loader_) return;
   take_table_outcomes();
+  release_retired();
   loader_->look();
 }
 
@@ -278,7 +280,17 @@ bool PredictorDaemon::wait_for_table_loader(std::chrono::steady_clock::duration 
 bool PredictorDaemon::settle_table_loads(std::chrono::steady_clock::duration timeout) {
   const bool idle = wait_for_table_loader(timeout);
   if (loader_) take_table_outcomes();
+  release_retired();
   return idle;
+}
+
+void PredictorDaemon::retire(PreparedTable old) {
+  if (retired_.table || retired_.built) loader_->release(std::move(retired_));
+  retired_ = std::move(old);
+}
+
+void PredictorDaemon::release_retired() {
+  if (retired_.table || retired_.built) loader_->release(std::exchange(retired_, {}));
 }
 
 void PredictorDaemon::take_table_outcomes() {
@@ -296,7 +308,7 @@ void PredictorDaemon::take_table_outcomes() {
         const std::shared_ptr<const StoredTable> table = outcome->prepared.table;
         const StoredTable& stored = *table;
         // The swap is all this thread does; the replaced table is freed on the loader's.
-        loader_->release(pipeline_.install_table(std::move(outcome->prepared)));
+        retire(pipeline_.install_table(std::move(outcome->prepared)));
         spdlog::info(
             "loaded table {} (reload {}): {} transitions from {} formations, {} states seen",
             outcome->path.string(), outcome->reloads, stored.table.transitions(),
@@ -336,7 +348,7 @@ void PredictorDaemon::follow_opponent_table() {
   table_file_ = wanted;
   table_reloads_ = 0;
   loader_->follow(wanted);
-  loader_->release(pipeline_.install_table(PreparedTable{}));
+  retire(pipeline_.install_table(PreparedTable{}));
   table_error_.clear();
   say_when_missing_ = true;
   loader_->look();

@@ -1,5 +1,6 @@
 #include "ssl_formation/predictor/table_loader.hpp"
 
+#include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -94,6 +95,10 @@ void TableLoader::run() {
       std::vector<PreparedTable> garbage = std::exchange(to_release_, {});
       lock.unlock();
       garbage.clear();
+      // A 40 MB table and its model are over 100 MB in many blocks, freed into this thread's
+      // malloc arena, which keeps them: without the trim the process grew to about 550 MB over
+      // 20 reloads, where freeing them on the main thread had kept it at 360 MB.
+      ::malloc_trim(0);
       lock.lock();
       continue;
     }

@@ -123,6 +123,11 @@ class PredictorDaemon final : public MatchEventSink {
   void follow_opponent_table();
   // Puts what the loader has to say in use: a table, or why there is none.
   void take_table_outcomes();
+  // A table the pipeline replaced, kept until the frame that replaced it is predicted and sent,
+  // then freed on the loader's thread: freeing a large model there (munmap, page-table
+  // shootdowns) then overlaps the wait for the next frame, not this one's prediction.
+  void retire(PreparedTable old);
+  void release_retired();
   std::filesystem::path table_path(const std::string& opponent) const;
   web::FieldViewSetup view_setup() const;
 
@@ -157,6 +162,7 @@ class PredictorDaemon final : public MatchEventSink {
   std::optional<double> last_prediction_s_;
   std::optional<double> frame_period_ms_;
   std::uint64_t warm_ups_ = 0;
+  PreparedTable retired_;  // see retire()
   // Reads and prepares the table off the prediction's thread (models that keep a table only).
   // Last, so that its thread, which prepares with pipeline_, stops before anything else goes.
   std::optional<TableLoader> loader_;
