@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <boost/asio/io_context.hpp>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <fstream>
@@ -275,6 +276,39 @@ TEST(PredictorDaemon, PredictsEveryFrameWhileATableLoadsAndSwitchesTablesBetween
     ASSERT_EQ(messages[i].table_transitions(), new_table) << "frame " << i;
   }
   EXPECT_FALSE(following.loads.released_by_timeout());
+}
+
+TEST(PredictorDaemon, FramesFedWhileTheLoaderPreparesATableSwitchTablesAtOneFrame) {
+  FollowingATable following;
+  InProcess& predictor = *following.predictor;
+  const std::uint64_t old_table = transitions_of(following.daemon());
+  replace_table(following.path, 60.0);
+  following.daemon().check_table();
+  // Frames as fast as they come while the loader reads and prepares the table on its thread,
+  // until one is predicted from the new table.
+  const auto deadline = std::chrono::steady_clock::now() + load_timeout;
+  int frames = 0;
+  while (transitions_of(following.daemon()) == old_table &&
+         std::chrono::steady_clock::now() < deadline) {
+    predictor.frames(frames, frames + 1);
+    ++frames;
+  }
+  const std::uint64_t new_table = transitions_of(following.daemon());
+  ASSERT_NE(new_table, old_table);
+  predictor.frames(frames, frames + 10);
+  // Every frame predicted, each from one table: the old one up to a frame, the new one after.
+  const auto messages = predictor.output.messages();
+  ASSERT_EQ(messages.size(), static_cast<std::size_t>(frames + 10));
+  std::size_t first_new = messages.size();
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    const std::uint64_t used = messages[i].table_transitions();
+    ASSERT_TRUE(used == old_table || used == new_table) << "frame " << i;
+    if (used == new_table && first_new == messages.size()) first_new = i;
+    if (i > first_new) {
+      ASSERT_EQ(used, new_table) << "frame " << i;
+    }
+  }
+  EXPECT_LT(first_new, messages.size());
 }
 
 TEST(PredictorDaemon, ABadTableFileOnTheLoaderKeepsTheTableAndTheDaemon) {
