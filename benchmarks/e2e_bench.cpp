@@ -52,12 +52,12 @@
 #include "formation_prediction.pb.h"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/pipeline/prediction_message.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -118,8 +118,8 @@ sf::net::InterfaceChoice interface_option(const std::string& text) {
 // The paper's model: a formation every `step_s` of the simulated opponent, a version-1 table.
 // The motion model (what the predictor runs by default): the same opponent sampled at 60 Hz, a
 // formation per frame, into a version-3 table of the predictor's default motion step.
-int make_table(const std::string& path, std::uint64_t formations, std::uint64_t seed,
-               double step_s, sf::ModelKind model) {
+int make_table(const std::string& path, std::uint64_t formations, std::uint64_t seed, double step_s,
+               sf::ModelKind model) {
   const bool motion = model == sf::ModelKind::motion;
   sf::sim::SimulationConfig simulation;
   simulation.seed = seed;
@@ -154,8 +154,9 @@ int make_table(const std::string& path, std::uint64_t formations, std::uint64_t 
   std::cout << "make-table path=" << path << " model=" << sf::to_string(model)
             << " formations=" << training.samples()
             << " transitions=" << training.table().transitions()
-            << " states_seen=" << training.table().rows_seen() << " motion_instances="
-            << (training.motion() ? training.motion()->instances() : 0) << '\n';
+            << " states_seen=" << training.table().rows_seen()
+            << " motion_instances=" << (training.motion() ? training.motion()->instances() : 0)
+            << '\n';
   return 0;
 }
 

@@ -214,8 +214,8 @@ void Evaluation::end_training() {
   result.feed_problem = model.feed_problem();
   // Each table-keeping method's table as the programs save it, pruned to the budget: what a
   // team's predictor would read.
-  const auto as_saved = [&config](const Training& trained, const TableMetadata& own)
-      -> std::shared_ptr<const StoredTable> {
+  const auto as_saved = [&config](const Training& trained,
+                                  const TableMetadata& own) -> std::shared_ptr<const StoredTable> {
     const TransitionTable* transitions = trained.learner().transitions();
     if (!transitions) return nullptr;
     const MotionTable* motion = trained.learner().motion();

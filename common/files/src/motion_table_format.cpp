@@ -285,8 +285,7 @@ namespace {
 // The checks of every row, whichever its layout, as the rows are read in file order.
 class RowChecker {
  public:
-  RowChecker(MotionTable& table, std::uint64_t instances)
-      : table_(table), instances_(instances) {}
+  RowChecker(MotionTable& table, std::uint64_t instances) : table_(table), instances_(instances) {}
 
   std::optional<std::string> add(std::uint64_t i, MotionKey key, const MotionRow& row) {
     const std::string where = "motion row " + std::to_string(i);

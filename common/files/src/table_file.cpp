@@ -111,13 +111,12 @@ Result<std::uint32_t, TableLoadError> check_magic_and_version(
                             std::to_string(table_file_compact_motion_version) + ")");
   }
   if (version != table_file_version && !motion_layout_of(version)) {
-    return load_failure(TableFileError::wrong_version, path,
-                        "format version " + std::to_string(version) +
-                            ", but this program reads version " +
-                            std::to_string(table_file_version) + ", " +
-                            std::to_string(table_file_motion_version) + ", " +
-                            std::to_string(table_file_set_play_version) + " or " +
-                            std::to_string(table_file_compact_motion_version));
+    return load_failure(
+        TableFileError::wrong_version, path,
+        "format version " + std::to_string(version) + ", but this program reads version " +
+            std::to_string(table_file_version) + ", " + std::to_string(table_file_motion_version) +
+            ", " + std::to_string(table_file_set_play_version) + " or " +
+            std::to_string(table_file_compact_motion_version));
   }
   return version;
 }

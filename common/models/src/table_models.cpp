@@ -1,10 +1,10 @@
 #include "table_models.hpp"
 
-#include "ssl_formation/models/braking_advice.hpp"
-#include "ssl_formation/models/game_rules.hpp"
-
 #include <cmath>
 #include <stdexcept>
+
+#include "ssl_formation/models/braking_advice.hpp"
+#include "ssl_formation/models/game_rules.hpp"
 
 namespace ssl_formation::models {
 
@@ -49,8 +49,7 @@ std::unique_ptr<Forecaster> PaperLearner::forecaster(const TableMetadata& metada
   return forecaster;
 }
 
-void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out,
-                               ForecastUse) {
+void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse) {
   robot_states_.clear();
   for (const FormationRobot& robot : moment.formation().robots) {
     robot_states_.push_back({robot.robot_id, robot.state});
@@ -69,8 +68,7 @@ void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction&
 // ---- The motion model -----------------------------------------------------------------------
 
 MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
-                             std::optional<OnlineCalibrationSettings> recalibration,
-                             bool pooled)
+                             std::optional<OnlineCalibrationSettings> recalibration, bool pooled)
     : table_(std::move(table)),
       motion_(std::move(motion)),
       history_(motion_.config()),

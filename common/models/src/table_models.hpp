@@ -35,9 +35,10 @@ class MotionLearner : public Learner {
  public:
   // `recalibration`: what the forecasters it makes recalibrate with.
   // `pooled`: its forecasters are the pooled ablation (ModelSettings::pooled_motion).
-  MotionLearner(TransitionTable table, MotionTable motion,
-                std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{},
-                bool pooled = false);
+  MotionLearner(
+      TransitionTable table, MotionTable motion,
+      std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{},
+      bool pooled = false);
   void observe(const MatchMoment& moment) override;
   void learn(const MatchMoment& moment) override;
   void forget_match() override;
@@ -49,8 +50,7 @@ class MotionLearner : public Learner {
   const MotionTable* motion() const override { return &motion_; }
   std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const override;
   std::unique_ptr<Forecaster> forecaster(
-      const TableMetadata& metadata,
-      std::shared_ptr<const MotionTable> prior_table) const override;
+      const TableMetadata& metadata, std::shared_ptr<const MotionTable> prior_table) const override;
 
  private:
   TransitionTable table_;

@@ -168,8 +168,11 @@ void MotionModel::index_estimates(const MotionLevelEstimates& estimates,
   for (std::size_t i = 0; i < estimates.size(); ++i) {
     const Estimate& e = estimates.estimate(i);
     Slot& slot = place(estimates.key(i));
-    slot = Slot{estimates.key(i), static_cast<float>(e.mean_x), static_cast<float>(e.mean_y),
-                static_cast<float>(e.mean_square), {}};
+    slot = Slot{estimates.key(i),
+                static_cast<float>(e.mean_x),
+                static_cast<float>(e.mean_y),
+                static_cast<float>(e.mean_square),
+                {}};
     for (int c = 0; c < motion_regressors; ++c) {
       slot.coefficients[static_cast<std::size_t>(c)] =
           static_cast<float>(e.coefficients[static_cast<std::size_t>(c)]);
@@ -489,8 +492,7 @@ MotionModel::IsotonicMap MotionModel::IsotonicMap::fit(
   for (const Block& block : blocks) {
     map.mass_upper.push_back(block.upper);
     // Two pseudo-instances at the block's own mean mass keep a small block off 0 and 1.
-    map.hit_rate.push_back((block.hits + 2.0 * block.mass_sum / block.count) /
-                           (block.count + 2.0));
+    map.hit_rate.push_back((block.hits + 2.0 * block.mass_sum / block.count) / (block.count + 2.0));
   }
   return map;
 }

@@ -1,5 +1,5 @@
 #pragma once
-// The table file of DESIGN.md §4: a transition table with what its counts mean (grid, field
+// The table file: a transition table with what its counts mean (grid, field
 // size, step, totals), and optionally the motion model's table, saved atomically and loaded with
 // every field checked. In src/: table_format (the header and the counts), motion_table_format
 // (the motion section), byte_codec (the encodings and the CRC), durable_file (the atomic write).

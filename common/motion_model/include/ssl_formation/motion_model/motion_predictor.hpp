@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/motion_model/motion_estimates.hpp"
-#include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/base/probed_memory.hpp"
 #include "ssl_formation/base/state.hpp"
+#include "ssl_formation/motion_model/motion_estimates.hpp"
+#include "ssl_formation/motion_model/motion_model.hpp"
 
 namespace ssl_formation {
 
@@ -42,8 +42,7 @@ struct MotionRules {
   // says where it ends, not where it is half a second on.
   bool own_half = false;
   bool any() const {
-    return max_speed_mm_s < std::numeric_limits<double>::infinity() || keep_away_from ||
-           own_half;
+    return max_speed_mm_s < std::numeric_limits<double>::infinity() || keep_away_from || own_half;
   }
   // Where a robot at `from` may be `horizon_s` later, nearest to `to`.
   Point apply(std::uint32_t robot_id, Point from, double horizon_s, Point to) const;
