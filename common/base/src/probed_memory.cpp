@@ -2,7 +2,7 @@
 
 #include <sys/mman.h>
 
-#include <cstdlib>
+#include <cstdint>
 #include <new>
 
 namespace ssl_formation {
@@ -17,11 +17,23 @@ std::size_t huge_pages_of(std::size_t bytes) {
 }
 }  // namespace
 
+// Large arrays are mapped from the kernel and unmapped when freed, not taken from malloc: glibc
+// raises its mapping threshold each time a mapped block is freed, after which blocks this large
+// come from the heap, whose holes it never gives back. A table pruned while it learns frees its
+// old rows once a while; through malloc the process's memory stayed at its largest table's.
 void* allocate_probed(std::size_t bytes) {
   if (bytes < probed_min_bytes) return ::operator new(bytes, probed_alignment);
   const std::size_t size = huge_pages_of(bytes);
-  void* memory = std::aligned_alloc(huge_page_bytes, size);
-  if (!memory) throw std::bad_alloc();
+  // A huge page more than needed, and the ends cut off, so that the array starts on one.
+  const std::size_t mapped = size + huge_page_bytes;
+  void* map = ::mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (map == MAP_FAILED) throw std::bad_alloc();
+  const auto start = reinterpret_cast<std::uintptr_t>(map);
+  const std::uintptr_t aligned = (start + huge_page_bytes - 1) / huge_page_bytes * huge_page_bytes;
+  if (aligned > start) ::munmap(map, aligned - start);
+  const std::size_t tail = start + mapped - (aligned + size);
+  if (tail > 0) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
+  void* memory = reinterpret_cast<void*>(aligned);
 #ifdef MADV_HUGEPAGE
   ::madvise(memory, size, MADV_HUGEPAGE);  // advice only: without it, 4 KiB pages
 #endif
@@ -32,7 +44,7 @@ void free_probed(void* memory, std::size_t bytes) {
   if (bytes < probed_min_bytes) {
     ::operator delete(memory, probed_alignment);
   } else {
-    std::free(memory);
+    ::munmap(memory, huge_pages_of(bytes));
   }
 }
 
