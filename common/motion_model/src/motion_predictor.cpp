@@ -149,7 +149,10 @@ void MotionModel::index_estimates(const MotionLevelEstimates& estimates,
                                   const MotionModel* prior_model) {
   // The rows only the prior has: a new opponent is predicted from every team's.
   std::vector<const Slot*> prior_only;
-  if (prior_model) {
+  // The pooled ablation reads no row (MotionModel::forecast starts it past the finest level):
+  // an index of them would only take memory, as much as the model's.
+  const bool rows_read = !settings_.pooled;
+  if (prior_model && rows_read) {
     for (const Slot& slot : prior_model->index_) {
       if (slot.key != empty_slot && estimates.number(slot.key) == MotionRowMap::no_row) {
         prior_only.push_back(&slot);
@@ -157,7 +160,8 @@ void MotionModel::index_estimates(const MotionLevelEstimates& estimates,
     }
   }
   std::size_t size = 16;
-  while (size < 2 * (estimates.size() + prior_only.size())) size *= 2;
+  const std::size_t keys = rows_read ? estimates.size() : 0;
+  while (size < 2 * (keys + prior_only.size())) size *= 2;
   index_mask_ = size - 1;
   index_.assign(size, Slot{empty_slot, 0, 0, 0, {}});
   const auto place = [this](MotionKey key) -> Slot& {
@@ -165,7 +169,7 @@ void MotionModel::index_estimates(const MotionLevelEstimates& estimates,
     while (index_[slot].key != empty_slot) slot = (slot + 1) & index_mask_;
     return index_[slot];
   };
-  for (std::size_t i = 0; i < estimates.size(); ++i) {
+  for (std::size_t i = 0; i < keys; ++i) {
     const Estimate& e = estimates.estimate(i);
     Slot& slot = place(estimates.key(i));
     slot = Slot{estimates.key(i),
