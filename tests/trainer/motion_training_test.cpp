@@ -287,6 +287,43 @@ TEST_F(MotionTraining, FramesReadFromALogTrainWhatItsPacketsTrain) {
   EXPECT_EQ(from_frames.samples(), from_packets->samples());
 }
 
+// A learner whose table outgrows ModelSettings::motion_rows_in_memory prunes it as a saved table
+// is pruned: it holds fewer rows than one that keeps them all, and the same evidence at
+// every level a pruning keeps exactly.
+TEST_F(MotionTraining, ALearnerBoundedInMemoryKeepsTheEvidenceOfOneThatIsNot) {
+  const TrainerOptions options = parse({});
+  const auto learn = [&](std::size_t rows_in_memory) {
+    ModelSettings settings;
+    settings.grid = options.model.parsed_grid();
+    settings.step_s = options.model.sampler_config().step_s;
+    settings.horizons = motion_config(options)->horizons;
+    settings.motion_rows_in_memory = rows_in_memory;
+    TrainingConfig config;
+    config.sampler = options.model.sampler_config();
+    auto training = std::make_unique<Training>(config, ModelKind::motion,
+                                               make_learner(ModelKind::motion, settings));
+    for (const auto* stream : {&a_, &b_}) {
+      training->start_new_stream();
+      for (const auto& packet : *stream) training->add(packet);
+    }
+    return training;
+  };
+  const auto unbounded = learn(0);
+  const MotionTable& all_rows = *unbounded->learner().motion();
+  const std::size_t saved_rows = as_saved(all_rows).rows();
+  ASSERT_LT(4 * saved_rows, 3 * all_rows.rows()) << "the logs must give rows a pruning folds";
+
+  const std::size_t bound = all_rows.rows() / 4;
+  const auto bounded = learn(bound);
+  const MotionTable& held = *bounded->learner().motion();
+  EXPECT_LT(held.rows(), all_rows.rows() / 2)
+      << "pruned " << held.rows() << " of " << all_rows.rows();
+  EXPECT_TRUE(same_coarse_evidence(held, all_rows));
+  EXPECT_EQ(held.instances(), all_rows.instances());
+  EXPECT_EQ(entries(*bounded->learner().transitions()),
+            entries(*unbounded->learner().transitions()));
+}
+
 // Two tables trained from two logs and merged hold what the table trained on both logs at once
 // holds, at every level a pruning keeps exactly.
 TEST_F(MotionTraining, MergeOfMotionTablesEqualsTrainingOnBothLogs) {

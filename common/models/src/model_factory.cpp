@@ -113,7 +113,8 @@ std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& setti
       if (!config.valid()) throw std::invalid_argument("invalid step or horizon for the motion model");
       return std::make_unique<models::MotionLearner>(TransitionTable(settings.grid),
                                                      MotionTable(config), settings.recalibration,
-                                                     settings.pooled_motion);
+                                                     settings.pooled_motion,
+                                                     settings.motion_rows_in_memory);
     }
     case ModelKind::persistence:
     case ModelKind::constant_velocity:

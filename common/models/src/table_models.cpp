@@ -1,8 +1,10 @@
 #include "table_models.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/models/braking_advice.hpp"
 #include "ssl_formation/models/game_rules.hpp"
 
@@ -68,9 +70,11 @@ void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction&
 // ---- The motion model -----------------------------------------------------------------------
 
 MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
-                             std::optional<OnlineCalibrationSettings> recalibration, bool pooled)
+                             std::optional<OnlineCalibrationSettings> recalibration, bool pooled,
+                             std::size_t rows_in_memory)
     : table_(std::move(table)),
       motion_(std::move(motion)),
+      rows_in_memory_(rows_in_memory),
       history_(motion_.config()),
       set_plays_(motion_.config().horizons * motion_.config().step_s),
       recalibration_(recalibration),
@@ -87,6 +91,20 @@ void MotionLearner::learn(const MatchMoment& moment) {
   set_plays_.record(moment.formation().time_s, moment.phase,
                     moment.game_state == GameState::kickoff_preparation, moment.since_command_s,
                     moment.formation(), motion_.set_plays());
+  bound_memory();
+}
+
+void MotionLearner::bound_memory() {
+  if (rows_in_memory_ == 0 || motion_.rows() <= rows_in_memory_) return;
+  // Pruned as a table is saved, by the same rule (the budget's defaults), and then to half the
+  // bound, the rows that gain least folded first: every coarser key's sums stay exact, a folded
+  // robot row that goes on gaining starts again beneath its zone, and the next pruning waits
+  // for half the bound's rows, so that its cost (one estimate per key) stays a fixed share of
+  // the learning.
+  const TableBudget budget;
+  MotionPruning pruning = budget.pruning;
+  pruning.max_rows = std::max<std::size_t>(1, rows_in_memory_ / 2);
+  motion_ = prune_motion_table(motion_, budget.settings, pruning).table;
 }
 
 void MotionLearner::forget_match() {
@@ -102,6 +120,7 @@ void MotionLearner::absorb(const Learner& other) {
   }
   table_.merge(motion->table_);  // checks the grid
   motion_.merge(motion->motion_);
+  bound_memory();
 }
 
 std::unique_ptr<Forecaster> MotionLearner::forecaster(const TableMetadata& metadata) const {

@@ -3,6 +3,7 @@
 // motion model (the paper's counts at every frame, plus how each robot moves). Made by the
 // factory only.
 
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -35,10 +36,11 @@ class MotionLearner : public Learner {
  public:
   // `recalibration`: what the forecasters it makes recalibrate with.
   // `pooled`: its forecasters are the pooled ablation (ModelSettings::pooled_motion).
+  // `rows_in_memory`: ModelSettings::motion_rows_in_memory.
   MotionLearner(
       TransitionTable table, MotionTable motion,
       std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{},
-      bool pooled = false);
+      bool pooled = false, std::size_t rows_in_memory = ModelSettings{}.motion_rows_in_memory);
   void observe(const MatchMoment& moment) override;
   void learn(const MatchMoment& moment) override;
   void forget_match() override;
@@ -53,8 +55,12 @@ class MotionLearner : public Learner {
       const TableMetadata& metadata, std::shared_ptr<const MotionTable> prior_table) const override;
 
  private:
+  // Prunes the motion table once it holds more rows than rows_in_memory_.
+  void bound_memory();
+
   TransitionTable table_;
   MotionTable motion_;
+  std::size_t rows_in_memory_;
   MotionHistory history_;
   SetPlayRecorder set_plays_;
   std::optional<OnlineCalibrationSettings> recalibration_;

@@ -15,6 +15,7 @@
 // extrapolate.
 
 #include <array>
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <string>
@@ -37,14 +38,13 @@ enum class ModelKind {
   constant_acceleration,
   damped_constant_acceleration,
 };
-inline constexpr std::array<ModelKind, 7> all_model_kinds{
-    ModelKind::paper,
-    ModelKind::motion,
-    ModelKind::persistence,
-    ModelKind::constant_velocity,
-    ModelKind::damped_constant_velocity,
-    ModelKind::constant_acceleration,
-    ModelKind::damped_constant_acceleration};
+inline constexpr std::array<ModelKind, 7> all_model_kinds{ModelKind::paper,
+                                                          ModelKind::motion,
+                                                          ModelKind::persistence,
+                                                          ModelKind::constant_velocity,
+                                                          ModelKind::damped_constant_velocity,
+                                                          ModelKind::constant_acceleration,
+                                                          ModelKind::damped_constant_acceleration};
 // The baselines every evaluation compares a model with, in the order its tables show them.
 inline constexpr std::array<ModelKind, 5> baseline_kinds{
     ModelKind::persistence, ModelKind::constant_velocity, ModelKind::damped_constant_velocity,
@@ -60,9 +60,9 @@ struct ModelDescription {
   // Its positions are its own, in millimetres (the paper's model states cells, whose centres
   // stand for its positions).
   bool states_positions = true;
-  bool keeps_table = false;  // learns into a table file, which ssl-trainer writes
+  bool keeps_table = false;        // learns into a table file, which ssl-trainer writes
   bool keeps_motion_rows = false;  // its table holds the motion model's rows (version 3)
-  bool learns = false;       // learns anything at all (a table, or the damped baselines' factors)
+  bool learns = false;  // learns anything at all (a table, or the damped baselines' factors)
   // Samples a formation at every frame: it reads the robots' velocities, which need frames a few
   // hundredths of a second apart. False: it also takes a formation every --step.
   bool needs_every_frame = true;
@@ -70,7 +70,7 @@ struct ModelDescription {
 };
 
 const ModelDescription& describe(ModelKind kind);
-std::string_view to_string(ModelKind kind);            // describe(kind).name
+std::string_view to_string(ModelKind kind);  // describe(kind).name
 std::optional<ModelKind> parse_model(std::string_view name);
 std::string model_names();  // "paper, motion, persistence, ..." for messages and --help
 
@@ -109,6 +109,12 @@ struct ModelSettings {
   // The motion model as an ablation: one fit for every robot and state instead of its keyed
   // rows (MotionModelSettings::pooled; ssl-evaluate's "pooled model").
   bool pooled_motion = false;
+  // The motion model's learner prunes the table it holds as a saved table is pruned (the rows
+  // that add nothing folded into their parents, motion_table_pruning.hpp), and further to half
+  // this many rows, once it holds more than this: what training holds in memory stops growing
+  // with the data, as the file does. 2^17 rows take about 40 MB; the file of a 4 MB budget
+  // keeps fewer. 0: never (the table holds every row).
+  std::size_t motion_rows_in_memory = std::size_t{1} << 16;
   // The motion model's table settings for these (its step and horizons from above).
   MotionConfig motion_config() const;
 };
