@@ -9,7 +9,7 @@
 #   predictions at 60 frames/s while the hour's table is replaced every 2 s
 #   (scripts/bench-reload.sh, on loopback test groups).
 # The logs are made by ssl-producer --write-log (the 5-hour one gzipped, about 240 MB), in a
-# temporary folder that is removed at the end. Takes about 6 minutes on 2 cores.
+# temporary folder that is removed at the end. Takes about 8 minutes on 2 cores.
 #   SSLF_BUILD_DIR        build folder (default: build)
 #   SSLF_SCALE_SECONDS    the match lengths (default "600 3600 18000")
 #   SSLF_SCALE_GENERIC_SECONDS  seconds of each of the three playbooks (default 6000: 5 h in all)
@@ -71,8 +71,6 @@ for seconds in $lengths; do
     "$(size_mb "$log")" "$(size_mb "$work/t$seconds.bin")" "$(rows_of "train$seconds")" \
     "$(wall "train$seconds")" "$(peak_mb "train$seconds")" "$(wall "load$seconds")" \
     "$(peak_mb "load$seconds")"
-  # Only the 10-minute and hour logs are kept for the evaluation and the reload.
-  [ "$seconds" -gt 3600 ] && rm -f "$log"
 done
 
 # A generic table: three playbooks (the two built in and one written here), each its own
@@ -115,6 +113,8 @@ printf '| generic: 3 x %s s merged | | %s MB | %s | | %s MB (merge) | %s s | %s 
   "$(sed -n 's/.*motion_rows=\([0-9]*\).*/\1/p' "$work/merge.err" | tail -1)" \
   "$(peak_mb merge)" "$(wall generic-load)" "$(peak_mb generic-load)"
 
+# A log of the run by its name (m600, b600, m18000: the long ones are gzipped).
+log_of() { if [ -f "$work/$1.log" ]; then echo "$work/$1.log"; else echo "$work/$1.log.gz"; fi; }
 if [ -f "$work/m600.log" ] && [ -f "$work/m3600.log" ]; then
   "$producer" --write-log "$work/b600.log" --duration 600 --seed 2 2>/dev/null
   echo
@@ -122,10 +122,12 @@ if [ -f "$work/m600.log" ] && [ -f "$work/m3600.log" ]; then
   echo
   echo "| training log | test log | time | peak memory |"
   echo "| --- | --- | --- | --- |"
-  for pair in "m600 b600" "m600 m3600" "m3600 b600"; do
+  pairs=("m600 b600" "m600 m3600" "m3600 b600")
+  [ -f "$work/m18000.log.gz" ] && pairs+=("m18000 b600")
+  for pair in "${pairs[@]}"; do
     set -- $pair
-    measure "holdout-$1-$2" "$evaluate" holdout --train-log "$work/$1.log" --test-log "$work/$2.log" \
-      --our-team ssl-formation
+    measure "holdout-$1-$2" "$evaluate" holdout --train-log "$(log_of "$1")" \
+      --test-log "$(log_of "$2")" --our-team ssl-formation
     printf '| %s | %s | %s s | %s MB |\n' "$1" "$2" "$(wall "holdout-$1-$2")" "$(peak_mb "holdout-$1-$2")"
   done
 fi
