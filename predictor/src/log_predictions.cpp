@@ -2,20 +2,21 @@
 // runs, as fast as the machine allows, every prediction written as CSV (prediction_csv.hpp).
 // What the daemon would have multicast during the recorded match, without any network.
 
-#include <stdexcept>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 
 #include "ssl_formation/app/progress.hpp"
+#include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/files/replacing_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/prediction_csv.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
-#include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/files/log_events.hpp"
 
 namespace ssl_formation::predictor {
 
@@ -42,12 +43,10 @@ int run_from_log(const PredictorOptions& options) {
   }
 
   const bool to_stdout = options.output.empty() || options.output == "-";
-  std::ofstream file;
-  if (!to_stdout) {
-    file.open(options.output, std::ios::binary | std::ios::trunc);
-    if (!file) throw std::runtime_error("cannot write " + options.output);
-  }
-  std::ostream& out = to_stdout ? std::cout : file;
+  // Replaced only when every log was read whole: a failed run leaves an earlier file as it was.
+  std::optional<ReplacingFile> file;
+  if (!to_stdout) file.emplace(options.output, true);
+  std::ostream& out = to_stdout ? std::cout : file->stream();
   std::string text(prediction_csv_header());
   const auto flush = [&] {
     out.write(text.data(), static_cast<std::streamsize>(text.size()));
@@ -99,6 +98,13 @@ int run_from_log(const PredictorOptions& options) {
   out.flush();
   if (!out)
     throw std::runtime_error("cannot write " + (to_stdout ? "standard output" : options.output));
+  if (file && !every_file_whole) {
+    file->discard();
+    spdlog::error("{} not written (left as it was): not every log could be read whole",
+                  options.output);
+    return 1;
+  }
+  if (file) file->commit();
   spdlog::info("{} predictions from {} formations{}", pipeline.predictions(),
                pipeline.sampler().counters().samples,
                to_stdout ? std::string() : " written to " + options.output);

@@ -5,16 +5,24 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
-#include <thread>
 #include <sstream>
+#include <string>
+#include <thread>
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
 
 namespace ssl_formation {
 namespace {
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
 
 using namespace std::chrono_literals;
 using testing::ChildProcess;
@@ -28,9 +36,9 @@ const std::filesystem::path predictor_program = SSLF_PREDICTOR_PATH;
 
 testing::RunResult write_log(const TempDir& dir, const std::string& name,
                              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(),
-                                "--count",   "120", "--seed",      "3",
-                                "--cameras", "2"};
+  std::vector<std::string> args{
+      "--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(),
+      "--count",      "120",   "--seed",    "3",   "--cameras",   "2"};
   args.insert(args.end(), extra.begin(), extra.end());
   return testing::run_to_end(producer_program, args, dir.path(), "write-" + name, 30s);
 }
@@ -48,8 +56,8 @@ TEST(DaemonReports, StatusLinesGiveTheFastPathShareAndTheFieldSizeIsLoggedWithIt
   const std::string vision = new_group();
   for (const std::filesystem::path& program : {trainer_program, predictor_program}) {
     SCOPED_TRACE(program.filename().string());
-    std::vector<std::string> args{"--vision-address", vision, "--table",
-                                  (dir / "t.bin").string(), "--status-interval", "0.1"};
+    std::vector<std::string> args{"--vision-address",  vision, "--table", (dir / "t.bin").string(),
+                                  "--status-interval", "0.1"};
     if (program == predictor_program) args.push_back("--quiet");
     ChildProcess daemon(program, args, dir.path(), program.filename().string(),
                         Readiness::ready_file);
@@ -64,8 +72,8 @@ TEST(DaemonReports, StatusLinesGiveTheFastPathShareAndTheFieldSizeIsLoggedWithIt
         dir.path(), "replay");
     ASSERT_EQ(replayed.exit_code, 0) << replayed.err;
     // Once per change: the geometry packets of the log say Division A.
-    ASSERT_TRUE(daemon.wait_for_stderr("field: 12000 x 9000 mm (Division A) from a geometry packet",
-                                       10s))
+    ASSERT_TRUE(
+        daemon.wait_for_stderr("field: 12000 x 9000 mm (Division A) from a geometry packet", 10s))
         << daemon.stderr_text();
     // Every detection packet of the simulation takes the fast path; geometry goes through
     // protobuf. The share is in every status line once packets came.
@@ -107,18 +115,23 @@ TEST(DaemonReports, ALogCutOffInsideItsLastMessageIsAWarningUnlessStrict) {
   }
   const auto trained = testing::run_to_end(
       trainer_program,
-      {"--from-log", (dir / "cut.log").string(), "--table", (dir / "cut.bin").string()},
-      dir.path(), "cut");
+      {"--from-log", (dir / "cut.log").string(), "--table", (dir / "cut.bin").string()}, dir.path(),
+      "cut");
   EXPECT_EQ(trained.exit_code, 0) << trained.err;
   EXPECT_NE(trained.err.find("ends inside its last message"), std::string::npos) << trained.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "cut.bin"));
 
-  const auto strict = testing::run_to_end(trainer_program,
-                                          {"--from-log", (dir / "cut.log").string(), "--table",
-                                           (dir / "strict.bin").string(), "--strict"},
-                                          dir.path(), "strict");
+  // --strict fails before it writes: a table there before is left as it was.
+  std::filesystem::copy_file(dir / "cut.bin", dir / "strict.bin");
+  const auto table_before = read_bytes(dir / "strict.bin");
+  const auto strict =
+      testing::run_to_end(trainer_program,
+                          {"--from-log", (dir / "whole.log").string(), (dir / "cut.log").string(),
+                           "--table", (dir / "strict.bin").string(), "--strict"},
+                          dir.path(), "strict");
   EXPECT_EQ(strict.exit_code, 1) << strict.err;
-  EXPECT_TRUE(std::filesystem::exists(dir / "strict.bin"));  // what was read is still saved
+  EXPECT_EQ(read_bytes(dir / "strict.bin"), table_before) << strict.err;
+  EXPECT_NE(strict.err.find("no table written"), std::string::npos) << strict.err;
 
   // Damage before the end (an absurd message size in the middle) stays an error.
   std::string damaged = bytes;
@@ -144,6 +157,7 @@ TEST(DaemonReports, ALogCutOffInsideItsLastMessageIsAWarningUnlessStrict) {
       dir.path(), "damaged");
   EXPECT_EQ(broken.exit_code, 1) << broken.err;
   EXPECT_NE(broken.err.find("absurd message size"), std::string::npos) << broken.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "damaged.bin")) << "a failed run writes no table";
 }
 
 }  // namespace

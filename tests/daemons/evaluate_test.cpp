@@ -130,16 +130,28 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
   // Five horizons, six methods, and without a referee the rows "all" and "running" only.
   const auto accuracy = csv_rows(read(dir / "holdout" / "holdout-accuracy.csv"));
   ASSERT_EQ(accuracy.size(), 1u + 5u * 6u * 2u);
-  EXPECT_EQ(accuracy[0], (std::vector<std::string>{"grid", "horizon_steps", "horizon_s",
-                                                   "game_state", "method", "state_accuracy",
-                                                   "cell_accuracy", "mean_cell_distance",
-                                                   "mean_error_mm", "median_error_mm",
-                                                   "p90_error_mm", "robots",
-                                                   "mean_error_mm_ci_low", "mean_error_mm_ci_high",
-                                                   "best_baseline", "ratio_to_best_baseline",
-                                                   "ratio_ci_low", "ratio_ci_high",
-                                                   "model_ratio_to_method", "model_ratio_ci_low",
-                                                   "model_ratio_ci_high", "bootstrap_blocks"}));
+  EXPECT_EQ(accuracy[0], (std::vector<std::string>{"grid",
+                                                   "horizon_steps",
+                                                   "horizon_s",
+                                                   "game_state",
+                                                   "method",
+                                                   "state_accuracy",
+                                                   "cell_accuracy",
+                                                   "mean_cell_distance",
+                                                   "mean_error_mm",
+                                                   "median_error_mm",
+                                                   "p90_error_mm",
+                                                   "robots",
+                                                   "mean_error_mm_ci_low",
+                                                   "mean_error_mm_ci_high",
+                                                   "best_baseline",
+                                                   "ratio_to_best_baseline",
+                                                   "ratio_ci_low",
+                                                   "ratio_ci_high",
+                                                   "model_ratio_to_method",
+                                                   "model_ratio_ci_low",
+                                                   "model_ratio_ci_high",
+                                                   "bootstrap_blocks"}));
   for (std::size_t i = 1; i < accuracy.size(); ++i) {
     ASSERT_EQ(accuracy[i].size(), 22u);
     EXPECT_EQ(accuracy[i][0], "3x2");
@@ -181,10 +193,10 @@ TEST(Evaluate, HoldoutScoresEveryMethodAtEveryHorizonInMillimetresAndCells) {
 
   const auto calibration = csv_rows(read(dir / "holdout" / "holdout-calibration.csv"));
   ASSERT_EQ(calibration.size(), 1u + 5u * 2u * 2u);
-  EXPECT_EQ(calibration[0], (std::vector<std::string>{
-                                "grid", "horizon_steps", "horizon_s", "game_state", "method",
-                                "quantity", "brier", "ece", "predictions", "within_radius_50",
-                                "within_radius_90"}));
+  EXPECT_EQ(calibration[0],
+            (std::vector<std::string>{"grid", "horizon_steps", "horizon_s", "game_state", "method",
+                                      "quantity", "brier", "ece", "predictions", "within_radius_50",
+                                      "within_radius_90"}));
   EXPECT_EQ(calibration[3][5], "robot");
   EXPECT_EQ(calibration[4][5], "formation");
   // The paper's model states no radii: nothing is within them, and the report has no radii
@@ -205,11 +217,11 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
   for (const auto& [name, seed] :
        {std::pair{"a.log", "1"}, std::pair{"b.log.gz", "2"}, std::pair{"c.log", "3"}}) {
-    const auto written =
-        testing::run_to_end(producer_program,
-                            {"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(), "--count",
-                             "300", "--seed", seed, "--cameras", "2"},
-                            dir.path(), std::string("write-") + name, 30s);
+    const auto written = testing::run_to_end(
+        producer_program,
+        {"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(),
+         "--count", "300", "--seed", seed, "--cameras", "2"},
+        dir.path(), std::string("write-") + name, 30s);
     ASSERT_EQ(written.exit_code, 0) << written.err;
   }
   const auto split =
@@ -249,6 +261,23 @@ TEST(Evaluate, HoldoutOnSeveralLogsSplitInTimeAndOnSeparateTestLogs) {
   EXPECT_NE(separate.out.find("transitions from 600 formations"), std::string::npos)
       << separate.out;
   EXPECT_NE(separate.out.find(": 300 test formations"), std::string::npos) << separate.out;
+
+  // A run that fails leaves the CSVs of an earlier run in the same folder as they were: a test
+  // log that is missing, and one that is not a log.
+  const std::string accuracy = read(dir / "separate" / "holdout-accuracy.csv");
+  ASSERT_NE(accuracy.find("mean_error_mm"), std::string::npos);
+  { std::ofstream(dir / "notes.log") << "not a log at all, but long enough to be read as one\n"; }
+  for (const char* test_log : {"missing.log", "notes.log"}) {
+    const auto failed = evaluate(dir,
+                                 {"holdout", "--train-log", (dir / "a.log").string(), "--test-log",
+                                  (dir / test_log).string(), "--horizons", "2", "--model", "paper"},
+                                 "separate");
+    EXPECT_NE(failed.exit_code, 0) << test_log << ": " << failed.out;
+    EXPECT_EQ(read(dir / "separate" / "holdout-accuracy.csv"), accuracy) << test_log;
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "separate")) {
+    EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << "left behind: " << entry;
+  }
 }
 
 // The default model on logs of robots that really move (60 Hz frames): every horizon of its own
@@ -343,9 +372,9 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
     }
   }
   ASSERT_EQ(robots.size(), 11u);
-  for (const std::string state : {"all", "running", "stop", "halt", "ball_placement_opponent",
-                                  "ball_placement_us", "kickoff_opponent", "kickoff_us",
-                                  "free_kick_opponent", "free_kick_us", "penalty"}) {
+  for (const std::string state :
+       {"all", "running", "stop", "halt", "ball_placement_opponent", "ball_placement_us",
+        "kickoff_opponent", "kickoff_us", "free_kick_opponent", "free_kick_us", "penalty"}) {
     EXPECT_TRUE(robots.contains(state)) << state;
   }
   // The simulated match kicks off, plays, stops and places the ball.
@@ -367,7 +396,9 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
     }
   }
   EXPECT_TRUE(std::regex_search(
-      run.out, std::regex(R"(1\.00 s\s+1 all\s+\d+ damped constant (velocity|acceleration)\s+[\d.]+\s+\[[\d.]+, [\d.]+\])")))
+      run.out,
+      std::regex(
+          R"(1\.00 s\s+1 all\s+\d+ damped constant (velocity|acceleration)\s+[\d.]+\s+\[[\d.]+, [\d.]+\])")))
       << run.out;
 
   // --bootstrap 0: the same means, no intervals.
@@ -603,8 +634,7 @@ TEST(Evaluate, ScoresThePredictorsOwnCsvAsHoldoutScoresItsChains) {
   const auto team_rows = csv_rows(read(dir / "team" / "score-accuracy.csv"));
   for (std::size_t i = 1; i < team_rows.size(); ++i) {
     if (team_rows[i][4] != "predictions") continue;
-    EXPECT_TRUE(team_rows[i][5].empty() && team_rows[i][6].empty() && team_rows[i][7].empty())
-        << i;
+    EXPECT_TRUE(team_rows[i][5].empty() && team_rows[i][6].empty() && team_rows[i][7].empty()) << i;
     EXPECT_GT(std::stod(team_rows[i][8]), 0.0) << i;
   }
   // Half the instants, the same predictions on them: about the whole file's error.
@@ -617,9 +647,8 @@ TEST(Evaluate, ScoresThePredictorsOwnCsvAsHoldoutScoresItsChains) {
                                       testing::moving_robots_packets(
                                           {.seed = 3, .seconds = 20.0, .start_time_s = 5000.0})),
             "");
-  const auto mismatched =
-      evaluate(dir, {"score", "--log", other_log.string(), "--predictions", csv.string()},
-               "mismatched");
+  const auto mismatched = evaluate(
+      dir, {"score", "--log", other_log.string(), "--predictions", csv.string()}, "mismatched");
   EXPECT_EQ(mismatched.exit_code, 1);
   EXPECT_NE(mismatched.err.find("is it that log's CSV?"), std::string::npos) << mismatched.err;
   const auto missing = evaluate(
@@ -641,7 +670,8 @@ TEST(Evaluate, BadModeAndOptionsExitWithTwo) {
   EXPECT_EQ(evaluate(dir, {"holdout", "--sampling", "sometimes"}, "sampling").exit_code, 2);
   EXPECT_EQ(evaluate(dir, {"holdout", "--simulation", "dream"}, "simulation").exit_code, 2);
   // A train log without anything to test on is refused, not tested on a simulation.
-  const auto no_test = evaluate(dir, {"holdout", "--train-log", (dir / "x.log").string()}, "no-test");
+  const auto no_test =
+      evaluate(dir, {"holdout", "--train-log", (dir / "x.log").string()}, "no-test");
   EXPECT_EQ(no_test.exit_code, 2);
   EXPECT_NE(no_test.err.find("--test-log"), std::string::npos) << no_test.err;
   EXPECT_EQ(

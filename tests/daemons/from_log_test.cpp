@@ -38,18 +38,17 @@ class PredictFromLog : public ::testing::Test {
     // another, as a team would with two recorded matches.
     for (const auto& [name, seed, count] :
          {std::tuple{"train.log.gz", "1", "400"}, std::tuple{"test.log", "9", "60"}}) {
-      const auto written =
-          testing::run_to_end(producer_program,
-                              {"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(), "--count",
-                               count, "--seed", seed, "--cameras", "2", "--jitter-mm", "10"},
-                              dir.path(), std::string("write-") + name, 30s);
+      const auto written = testing::run_to_end(
+          producer_program,
+          {"--simulation", "paper", "--referee", "off", "--write-log", (dir / name).string(),
+           "--count", count, "--seed", seed, "--cameras", "2", "--jitter-mm", "10"},
+          dir.path(), std::string("write-") + name, 30s);
       ASSERT_EQ(written.exit_code, 0) << written.err;
     }
-    const auto trained = testing::run_to_end(
-        trainer_program,
-        {"--from-log", (dir / "train.log.gz").string(), "--table", table.string(), "--model",
-         "paper"},
-        dir.path(), "train", 30s);
+    const auto trained = testing::run_to_end(trainer_program,
+                                             {"--from-log", (dir / "train.log.gz").string(),
+                                              "--table", table.string(), "--model", "paper"},
+                                             dir.path(), "train", 30s);
     ASSERT_EQ(trained.exit_code, 0) << trained.err;
   }
 
@@ -66,11 +65,11 @@ class PredictFromLog : public ::testing::Test {
 
 TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
   const auto csv_path = dir / "predictions.csv";
-  const auto offline = testing::run_to_end(
-      predictor_program,
-      {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--horizon", "3",
-       "--output", csv_path.string(), "--model", "paper"},
-      dir.path(), "from-log", 30s);
+  const auto offline =
+      testing::run_to_end(predictor_program,
+                          {"--from-log", (dir / "test.log").string(), "--table", table.string(),
+                           "--horizon", "3", "--output", csv_path.string(), "--model", "paper"},
+                          dir.path(), "from-log", 30s);
   ASSERT_EQ(offline.exit_code, 0) << offline.err;
   std::vector<std::string> lines = split(read_text(csv_path), '\n');
   ASSERT_GT(lines.size(), 1u);
@@ -143,9 +142,9 @@ TEST_F(PredictFromLog, WritesToStandardOutputAndKeepsEachFileItsOwnStream) {
 }
 
 TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
-  const auto no_table = predict(
-      {"--from-log", (dir / "test.log").string(), "--table", (dir / "none.bin").string()},
-      "no-table");
+  const auto no_table =
+      predict({"--from-log", (dir / "test.log").string(), "--table", (dir / "none.bin").string()},
+              "no-table");
   EXPECT_EQ(no_table.exit_code, 1);
   EXPECT_NE(no_table.err.find("none.bin"), std::string::npos) << no_table.err;
   EXPECT_EQ(no_table.out, "");
@@ -156,15 +155,34 @@ TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
   EXPECT_EQ(other_grid.exit_code, 1);
   EXPECT_NE(other_grid.err.find("6x4"), std::string::npos) << other_grid.err;
 
-  // A missing log among good ones: the good ones are predicted, the exit status says it.
-  const auto csv_path = dir / "partial.csv";
+  // A missing log among good ones: on standard output the good ones are predicted, and the exit
+  // status says it.
   const auto partial = predict({"--from-log", (dir / "missing.log").string(),
-                                (dir / "test.log").string(), "--table", table.string(), "--output",
-                                csv_path.string()},
+                                (dir / "test.log").string(), "--table", table.string()},
                                "partial");
   EXPECT_EQ(partial.exit_code, 1);
   EXPECT_NE(partial.err.find("missing.log"), std::string::npos) << partial.err;
-  EXPECT_EQ(split(read_text(csv_path), '\n').size(), 1u + 60u * 2u * 6u);
+  EXPECT_EQ(split(partial.out, '\n').size(), 1u + 60u * 2u * 6u);
+  // Into a file, a failed run leaves the file of an earlier run as it was: a missing log, and a
+  // file that is not a log.
+  const auto csv_path = dir / "good.csv";
+  const auto good = predict({"--from-log", (dir / "test.log").string(), "--table", table.string(),
+                             "-o", csv_path.string()},
+                            "good");
+  ASSERT_EQ(good.exit_code, 0) << good.err;
+  const std::string good_csv = read_text(csv_path);
+  ASSERT_EQ(split(good_csv, '\n').size(), 1u + 60u * 2u * 6u);
+  for (const auto& input : {dir / "missing.log", table}) {
+    const auto failed =
+        predict({"--from-log", input.string(), "--table", table.string(), "-o", csv_path.string()},
+                "failed-into-file");
+    EXPECT_EQ(failed.exit_code, 1) << failed.err;
+    EXPECT_NE(failed.err.find("left as it was"), std::string::npos) << failed.err;
+    EXPECT_EQ(read_text(csv_path), good_csv) << input;
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << "left behind: " << entry;
+  }
 
   const auto bad_horizon = predict(
       {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--horizon", "0"},
@@ -195,28 +213,29 @@ TEST(StepSampling, ReproducesTheTableAndPredictionsOfBeforeByteForByte) {
     SCOPED_TRACE(sampling.size() == 2 ? "--model paper" : "--model paper --sampling step");
     const auto table = dir / "table.bin";
     std::filesystem::remove(table);
-    std::vector<std::string> train{"--from-log", log.string(), "--table", table.string(),
-                                   "--grid", "6x4"};
+    std::vector<std::string> train{"--from-log",   log.string(), "--table",
+                                   table.string(), "--grid",     "6x4"};
     train.insert(train.end(), sampling.begin(), sampling.end());
     const auto trained = testing::run_to_end(trainer_program, train, dir.path(), "train", 30s);
     ASSERT_EQ(trained.exit_code, 0) << trained.err;
     EXPECT_EQ(read_text(table), read_text(data / "step-golden-6x4.bin"));
 
-    std::vector<std::string> predict{"--from-log", log.string(), "--table",
-                                     (data / "step-golden-6x4.bin").string(), "--grid", "6x4"};
+    std::vector<std::string> predict{"--from-log", log.string(),
+                                     "--table",    (data / "step-golden-6x4.bin").string(),
+                                     "--grid",     "6x4"};
     predict.insert(predict.end(), sampling.begin(), sampling.end());
-    const auto predicted = testing::run_to_end(predictor_program, predict, dir.path(), "predict", 30s);
+    const auto predicted =
+        testing::run_to_end(predictor_program, predict, dir.path(), "predict", 30s);
     ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
     EXPECT_EQ(predicted.out, read_text(data / "step-golden-6x4.csv"));
   }
   // The motion model learns from every frame: step sampling is a usage error for it (the
   // default model), in both programs, and writes nothing.
   for (const auto& program : {trainer_program, predictor_program}) {
-    const auto refused = testing::run_to_end(
-        program,
-        {"--from-log", log.string(), "--table", (dir / "refused.bin").string(), "--sampling",
-         "step"},
-        dir.path(), "refused", 30s);
+    const auto refused = testing::run_to_end(program,
+                                             {"--from-log", log.string(), "--table",
+                                              (dir / "refused.bin").string(), "--sampling", "step"},
+                                             dir.path(), "refused", 30s);
     EXPECT_EQ(refused.exit_code, 2) << program << refused.err;
     EXPECT_NE(refused.err.find("--model paper"), std::string::npos) << refused.err;
     EXPECT_EQ(refused.out, "");

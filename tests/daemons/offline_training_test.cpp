@@ -9,9 +9,9 @@
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation {
@@ -149,7 +149,7 @@ TEST(OfflineTraining, MergeRefusesDifferentGridsClearly) {
   EXPECT_EQ(trainer(dir, {"merge", "-o", (dir / "out.bin").string()}, "none").exit_code, 2);
 }
 
-TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
+TEST(OfflineTraining, ADamagedLogSaysWhereAndFailsTheRunWhichWritesNothing) {
   TempDir dir;
   write_simulated_log(dir / "a.log", 1, 200);
   const auto size = std::filesystem::file_size(dir / "a.log");
@@ -161,6 +161,14 @@ TEST(OfflineTraining, ADamagedLogKeepsWhatCameBeforeAndSaysWhere) {
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("truncated message at byte"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("missing.log: cannot open"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("no table written"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "t.bin"));
+  // The missing log left out, the cut log's packets before the cut are learned (a cut in the
+  // last message is a warning without --strict).
+  const auto rest =
+      trainer(dir, {"--from-log", (dir / "a.log").string(), "--table", (dir / "t.bin").string()},
+              "cut-alone");
+  EXPECT_EQ(rest.exit_code, 0) << rest.err;
   const auto loaded = load_table(dir / "t.bin", Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.error().message;
   EXPECT_EQ(entries(loaded->table), entries(library_table({dir / "a.log"})));

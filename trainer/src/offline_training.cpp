@@ -1,8 +1,9 @@
 // ssl-trainer --from-log: official log files through the same Training the live mode runs, then
 // one atomic save per table. Each log is trained apart, on every core at once (a log is its own
 // stream: nothing spans two files), and the logs' tables are added up in the order the files
-// were given, so the result is the same as training them one after the other. Everything read
-// before a damaged part of a file is kept.
+// were given, so the result is the same as training them one after the other. A log that cannot
+// be read whole (damaged, or cut off under --strict) fails the run, and a failed run writes no
+// table.
 //
 // Scouting: with --opponent-team NAME (or --our-team) only that team's robots are learned, found
 // by the referee's names in each log, through changes of colour and of ends; a log where the team
@@ -317,6 +318,14 @@ int run_offline(const TrainerOptions& options) {
     spdlog::warn("no table written: {}",
                  any_read ? "no log taught anything of the opponent" : "no log could be read");
     return every_file_whole ? 0 : 1;
+  }
+  // A run that fails writes nothing: every table stays as it was, and the logs can be fixed or
+  // left out and the run made again.
+  if (!every_file_whole) {
+    spdlog::error(
+        "no table written (every table is as it was): not every log was read whole{}",
+        options.strict ? " (--strict)" : "; leave the damaged ones out to train on the rest");
+    return 1;
   }
   for (auto& [path, training] : tables) {
     if (!taught.contains(path)) continue;

@@ -8,6 +8,7 @@
 #include <span>
 #include <utility>
 
+#include "ssl_formation/files/replacing_file.hpp"
 #include "zlib_errors.hpp"
 
 namespace ssl_formation {
@@ -387,17 +388,30 @@ bool LogReader::next_match_input(MatchInput& kind, SSL_WrapperPacket& packet,
 // ---------------------------------------------------------------------------------------------
 // LogWriter
 
-LogWriter::LogWriter(std::filesystem::path path, detail::GzFilePtr file)
-    : path_(std::move(path)), file_(std::move(file)) {}
+void LogWriter::Temporary::remove() noexcept {
+  if (path.empty()) return;
+  std::error_code ignored;
+  std::filesystem::remove(path, ignored);
+  path.clear();
+}
+
+LogWriter::LogWriter(std::filesystem::path path, Temporary temporary, detail::GzFilePtr file)
+    : path_(std::move(path)), temporary_(std::move(temporary)), file_(std::move(file)) {}
 
 Result<LogWriter> LogWriter::create(const std::filesystem::path& path) {
   errno = 0;
+  // A device or a pipe (/dev/null) is written to as it is.
+  const bool in_place = written_in_place(path);
+  Temporary temporary(in_place ? std::filesystem::path() : temporary_beside(path));
   // "T": zlib writes the bytes through uncompressed, so both kinds share one code path.
-  gzFile file = gzopen(path.c_str(), ends_with_gz(path) ? "wb6" : "wbT");
-  if (file == nullptr)
+  gzFile file =
+      gzopen((in_place ? path : temporary.path).c_str(), ends_with_gz(path) ? "wb6" : "wbT");
+  if (file == nullptr) {
+    temporary.path.clear();  // nothing was created
     return fail(path.string() + ": cannot create: " + detail::zlib_errno_text(errno));
+  }
   gzbuffer(file, kGzBufferSize);
-  LogWriter writer(path, detail::GzFilePtr(file));
+  LogWriter writer(path, std::move(temporary), detail::GzFilePtr(file));
   char header[kLogFileHeaderSize];
   std::memcpy(header, kLogFileMagic.data(), kLogFileMagic.size());
   store_be32(header + kLogFileMagic.size(), kLogFileVersion);
@@ -491,6 +505,17 @@ bool LogWriter::close(bool indexed) {
              (result == Z_ERRNO ? detail::zlib_errno_text(errno) : std::string(zError(result)));
     ok = false;
   }
+  if (ok && !temporary_.path.empty()) {
+    std::error_code error;
+    std::filesystem::rename(temporary_.path, path_, error);
+    if (error) {
+      error_ = path_.string() + ": cannot replace: " + error.message();
+      ok = false;
+    } else {
+      temporary_.path.clear();
+    }
+  }
+  temporary_.remove();  // a log that failed leaves the path as it was
   failed_ = failed_ || !ok;
   return ok;
 }

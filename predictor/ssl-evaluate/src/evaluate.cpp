@@ -8,8 +8,10 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <random>
 
 #include "ssl_formation/evaluate/html_report.hpp"
@@ -17,6 +19,7 @@
 #include "ssl_formation/evaluation/evaluation.hpp"
 #include "ssl_formation/evaluation/position_evaluation.hpp"
 #include "ssl_formation/files/real_log_shape.hpp"
+#include "ssl_formation/files/replacing_file.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/simulation/playbook.hpp"
@@ -79,25 +82,37 @@ RecordedMatch match_simulation(const EvaluateOptions& options, std::uint64_t see
   return sim::record_match_simulation(std::move(config), seconds);
 }
 
-// A CSV file in --output-dir, or nowhere without one: tables are printed either way.
+// A CSV file in --output-dir, or nowhere without one: tables are printed either way. It replaces
+// an earlier file of the name only when the run gets to its end: leaving its scope while an
+// exception unwinds (a failed run) leaves the earlier file as it was.
 class CsvFile {
  public:
   CsvFile(const EvaluateOptions& options, const std::string& name) {
     if (options.output_dir.empty()) return;
     const std::filesystem::path path = std::filesystem::path(options.output_dir) / name;
     std::filesystem::create_directories(path.parent_path());
-    out_.open(path);
-    if (!out_) throw std::runtime_error("cannot write " + path.string());
+    file_.emplace(path);
     spdlog::info("writing {}", path.string());
+  }
+  CsvFile(const CsvFile&) = delete;
+  CsvFile& operator=(const CsvFile&) = delete;
+  ~CsvFile() {
+    if (!file_ || std::uncaught_exceptions() > unwinding_) return;  // discarded by file_
+    try {
+      file_->commit();
+    } catch (const std::exception& error) {
+      spdlog::error("{}", error.what());
+    }
   }
   template <typename T>
   CsvFile& operator<<(const T& value) {
-    if (out_.is_open()) out_ << value;
+    if (file_) file_->stream() << value;
     return *this;
   }
 
  private:
-  std::ofstream out_;
+  std::optional<ReplacingFile> file_;
+  int unwinding_ = std::uncaught_exceptions();
 };
 
 // --write-samples: every robot as it was scored (ev::ScoredSample), a line each, for cutting the
@@ -110,27 +125,27 @@ class SampleFile {
   // pooled_ablation with the motion model), after the baselines.
   SampleFile(const std::string& path, bool pooled) : path_(path), pooled_(pooled) {
     if (path_.empty()) return;
-    out_.open(path_);
-    if (!out_) throw std::runtime_error("cannot write " + path_);
+    file_.emplace(path_);
     spdlog::info("writing every scored robot to {}", path_);
-    out_ << "grid,chain,step_s,horizon_steps,horizon_s,stream,time_s,robot_id,game_state,x_mm,y_mm,"
-            "truth_x_mm,truth_y_mm,model_x_mm,model_y_mm";
+    out()
+        << "grid,chain,step_s,horizon_steps,horizon_s,stream,time_s,robot_id,game_state,x_mm,y_mm,"
+           "truth_x_mm,truth_y_mm,model_x_mm,model_y_mm";
     // The baselines every section scores (PositionEvaluationConfig's default), in their order.
     for (const ModelKind baseline : baseline_kinds) {
-      out_ << ',' << describe(baseline).name << "_x_mm," << describe(baseline).name << "_y_mm";
+      out() << ',' << describe(baseline).name << "_x_mm," << describe(baseline).name << "_y_mm";
     }
-    if (pooled_) out_ << ",model_pooled_x_mm,model_pooled_y_mm";
-    out_ << ",model_radius50_mm,model_radius90_mm,model_stays\n";
+    if (pooled_) out() << ",model_pooled_x_mm,model_pooled_y_mm";
+    out() << ",model_radius50_mm,model_radius90_mm,model_stays\n";
   }
-  bool enabled() const { return out_.is_open(); }
+  bool enabled() const { return file_.has_value(); }
   void write(const std::string& grid, bool chain, const ev::ScoredSample& sample) {
     if (sample.forecasts->size() != 1 + baseline_kinds.size() + (pooled_ ? 1 : 0)) {
       throw std::logic_error("--write-samples: a section scored other methods than the header's");
     }
-    out_ << grid << (chain ? ",1" : ",0");
+    out() << grid << (chain ? ",1" : ",0");
     put(",%g,%d,%g,%zu,%.3f,%u,", sample.step_s, sample.steps, sample.steps * sample.step_s,
         sample.stream, sample.time_s, sample.robot_id);
-    out_ << ev::state_row_name(ev::state_row_of(sample.phase));
+    out() << ev::state_row_name(ev::state_row_of(sample.phase));
     put(",%.1f,%.1f,%.1f,%.1f", sample.position.x, sample.position.y, sample.truth.x,
         sample.truth.y);
     for (const RobotPrediction* forecast : *sample.forecasts) {
@@ -142,15 +157,15 @@ class SampleFile {
   // Throws if anything failed to be written so far (a full disk): checked after each grid, so a
   // failed file stops the run rather than its end.
   void check() const {
-    if (enabled() && !out_) throw std::runtime_error("cannot write " + path_);
+    if (enabled() && !file_->good()) throw std::runtime_error("cannot write " + path_);
   }
+  // The file in place of any earlier one: the run got to its end.
   void close() {
-    if (!enabled()) return;
-    out_.close();
-    if (!out_) throw std::runtime_error("cannot write " + path_);
+    if (enabled()) file_->commit();
   }
 
  private:
+  std::ostream& out() { return file_->stream(); }
   // One field or a few, formatted in place (a stream's formatting of doubles was most of the
   // writing time). A line cut short would run into the next: that throws instead. (The format
   // attribute has the compiler check each call's values against its format.)
@@ -163,12 +178,12 @@ class SampleFile {
     if (written < 0 || written >= static_cast<int>(sizeof buffer)) {
       throw std::runtime_error("--write-samples: a field too long to write");
     }
-    out_.write(buffer, written);
+    out().write(buffer, written);
   }
 
   std::string path_;
   bool pooled_ = false;
-  std::ofstream out_;
+  std::optional<ReplacingFile> file_;
 };
 
 }  // namespace

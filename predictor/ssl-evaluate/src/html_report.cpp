@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ssl_formation/files/replacing_file.hpp"
+
 namespace ssl_formation::evaluate {
 
 namespace ev = ssl_formation::evaluation;
@@ -42,11 +44,20 @@ std::string escaped(const std::string& text) {
   std::string out;
   for (const char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -85,17 +96,17 @@ struct Plot {
   double y(double value) const {
     return height - bottom - (value - y0) / (y1 - y0) * (height - top - bottom);
   }
-  std::string axes(const std::string& x_label, const std::string& y_label, int x_ticks,
-                   int y_ticks, int x_decimals, int y_decimals) const {
+  std::string axes(const std::string& x_label, const std::string& y_label, int x_ticks, int y_ticks,
+                   int x_decimals, int y_decimals) const {
     std::ostringstream svg;
     svg << "<line class='axis' x1='" << left << "' y1='" << y(y0) << "' x2='" << width - right
         << "' y2='" << y(y0) << "'/>";
-    svg << "<line class='axis' x1='" << left << "' y1='" << y(y0) << "' x2='" << left
-        << "' y2='" << top << "'/>";
+    svg << "<line class='axis' x1='" << left << "' y1='" << y(y0) << "' x2='" << left << "' y2='"
+        << top << "'/>";
     for (int i = 0; x_ticks > 0 && i <= x_ticks; ++i) {
       const double v = x0 + (x1 - x0) * i / x_ticks;
-      svg << "<text class='tick' x='" << x(v) << "' y='" << y(y0) + 16
-          << "' text-anchor='middle'>" << fixed(v, x_decimals) << "</text>";
+      svg << "<text class='tick' x='" << x(v) << "' y='" << y(y0) + 16 << "' text-anchor='middle'>"
+          << fixed(v, x_decimals) << "</text>";
     }
     for (int i = 0; i <= y_ticks; ++i) {
       const double v = y0 + (y1 - y0) * i / y_ticks;
@@ -142,8 +153,8 @@ std::size_t shown_step(const ev::PositionEvaluation& evaluation) {
 std::string interval_cell(const ev::HorizonScore& score, std::size_t m) {
   if (score.intervals.mean.size() != score.methods.size()) return "";
   const ev::Interval& i = score.intervals.mean[m];
-  return "<span class='ci' data-low='" + csv_number(i.low) + "' data-high='" +
-         csv_number(i.high) + "'>[" + fixed(i.low, 1) + ", " + fixed(i.high, 1) + "]</span>";
+  return "<span class='ci' data-low='" + csv_number(i.low) + "' data-high='" + csv_number(i.high) +
+         "'>[" + fixed(i.low, 1) + ", " + fixed(i.high, 1) + "]</span>";
 }
 
 // The table by game state: every row and step, each method's mean error with its interval, and
@@ -179,8 +190,8 @@ std::string state_table(const ev::PositionEvaluation& evaluation) {
                      fixed(100.0 * (1.0 - i.low), 1) + "]";
         }
         html << "<td>" << escaped(short_label(evaluation.labels[*best])) << "</td><td class='margin"
-             << (ratio <= 1.0 ? " win" : " loss") << "' data-value='" << csv_number(ratio)
-             << "'>" << fixed(100.0 * (1.0 - ratio), 1) << "%" << interval << "</td>";
+             << (ratio <= 1.0 ? " win" : " loss") << "' data-value='" << csv_number(ratio) << "'>"
+             << fixed(100.0 * (1.0 - ratio), 1) << "%" << interval << "</td>";
       } else {
         html << "<td></td><td></td>";
       }
@@ -211,8 +222,8 @@ std::string error_by_horizon(const ev::PositionEvaluation& evaluation) {
   svg << plot.open("error-by-horizon")
       << plot.axes("horizon (s)", "mean error (mm)", static_cast<int>(all.size()), 5, 1, 0);
   for (std::size_t m = 0; m < evaluation.methods.size(); ++m) {
-    svg << "<polyline class='method' data-method='" << escaped(evaluation.labels[m])
-        << "' stroke='" << method_colour(m) << "' points='";
+    svg << "<polyline class='method' data-method='" << escaped(evaluation.labels[m]) << "' stroke='"
+        << method_colour(m) << "' points='";
     for (const ev::HorizonScore& score : all) {
       svg << plot.x(score.horizon_s) << ',' << plot.y(score.methods[m].error.mean()) << ' ';
     }
@@ -251,8 +262,9 @@ std::string reliability(const ev::Calibration& calibration, const std::string& i
     if (n == 0) continue;
     const double confidence = calibration.bin_confidence[b] / static_cast<double>(n);
     const double observed = static_cast<double>(calibration.bin_hits[b]) / static_cast<double>(n);
-    const double r = 2.5 + 6.0 * std::sqrt(static_cast<double>(n) /
-                                           static_cast<double>(std::max<std::uint64_t>(1, calibration.n)));
+    const double r =
+        2.5 + 6.0 * std::sqrt(static_cast<double>(n) /
+                              static_cast<double>(std::max<std::uint64_t>(1, calibration.n)));
     svg << "<circle class='bin' cx='" << plot.x(confidence) << "' cy='" << plot.y(observed)
         << "' r='" << r << "' data-count='" << n << "'/>";
   }
@@ -274,8 +286,7 @@ std::string radii_table(const ev::PositionEvaluation& evaluation) {
            << " s</td><td>" << score.radii.robots << "</td><td data-value='"
            << csv_number(score.radii.share50()) << "'>" << fixed(100.0 * score.radii.share50(), 1)
            << "%</td><td class='" << (r90 >= 0.85 && r90 <= 0.95 ? "win" : "loss")
-           << "' data-value='" << csv_number(r90) << "'>" << fixed(100.0 * r90, 1)
-           << "%</td></tr>";
+           << "' data-value='" << csv_number(r90) << "'>" << fixed(100.0 * r90, 1) << "%</td></tr>";
     }
   }
   html << "</tbody></table>";
@@ -311,8 +322,8 @@ std::string robot_errors(const ev::PositionEvaluation& evaluation, const ReportS
       const double mean = sums->errors[m] / static_cast<double>(sums->robots);
       const double x = plot.x(static_cast<double>(r)) + slot * 0.1 + bar * static_cast<double>(m);
       svg << "<rect class='bar' data-robot='" << id << "' data-method='"
-          << escaped(evaluation.labels[m]) << "' data-value='" << csv_number(mean) << "' x='"
-          << x << "' y='" << plot.y(mean) << "' width='" << bar << "' height='"
+          << escaped(evaluation.labels[m]) << "' data-value='" << csv_number(mean) << "' x='" << x
+          << "' y='" << plot.y(mean) << "' width='" << bar << "' height='"
           << plot.y(0) - plot.y(mean) << "' fill='" << method_colour(m) << "'/>";
     }
   }
@@ -335,7 +346,8 @@ std::string heat_map(const ev::PositionEvaluation& evaluation, const ReportSampl
     min_x = std::min(min_x, cx), max_x = std::max(max_x, cx);
     min_y = std::min(min_y, cy), max_y = std::max(max_y, cy);
     any = true;
-    const double difference = (sums.errors[0] - sums.errors[best]) / static_cast<double>(sums.robots);
+    const double difference =
+        (sums.errors[0] - sums.errors[best]) / static_cast<double>(sums.robots);
     extreme = std::max(extreme, std::abs(difference));
   }
   const double cell_px = 48.0;
@@ -347,7 +359,8 @@ std::string heat_map(const ev::PositionEvaluation& evaluation, const ReportSampl
   for (const auto& [key, sums] : samples.by_cell()) {
     if (std::get<0>(key) != steps || sums.robots < min_robots) continue;
     const int cx = std::get<1>(key), cy = std::get<2>(key);
-    const double difference = (sums.errors[0] - sums.errors[best]) / static_cast<double>(sums.robots);
+    const double difference =
+        (sums.errors[0] - sums.errors[best]) / static_cast<double>(sums.robots);
     // Blue where the model is nearer, red where the baseline is; white for a tie.
     const double t = std::clamp(difference / extreme, -1.0, 1.0);
     const int fade = static_cast<int>(255.0 * (1.0 - std::abs(t)));
@@ -359,11 +372,11 @@ std::string heat_map(const ev::PositionEvaluation& evaluation, const ReportSampl
     }
     // y grows upwards on the field, downwards in SVG.
     svg << "<rect class='cell' data-x-mm='" << cx * ReportSamples::heat_cell_mm << "' data-y-mm='"
-        << cy * ReportSamples::heat_cell_mm << "' data-robots='" << sums.robots
-        << "' data-value='" << csv_number(difference) << "' x='" << (cx - min_x) * cell_px
-        << "' y='" << (max_y - cy) * cell_px << "' width='" << cell_px << "' height='" << cell_px
-        << "' fill='" << colour << "'><title>" << fixed(difference, 1) << " mm, "
-        << sums.robots << " robots</title></rect>";
+        << cy * ReportSamples::heat_cell_mm << "' data-robots='" << sums.robots << "' data-value='"
+        << csv_number(difference) << "' x='" << (cx - min_x) * cell_px << "' y='"
+        << (max_y - cy) * cell_px << "' width='" << cell_px << "' height='" << cell_px << "' fill='"
+        << colour << "'><title>" << fixed(difference, 1) << " mm, " << sums.robots
+        << " robots</title></rect>";
   }
   svg << "</svg>";
   std::ostringstream html;
@@ -405,8 +418,8 @@ void write_html_report(const std::string& path, const ReportInput& input) {
   html << "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>"
        << escaped(input.title) << "</title><style>" << style << "</style></head><body>";
   html << "<h1>" << escaped(input.title) << "</h1>";
-  html << "<p>Grid " << escaped(input.grid) << ", steps of " << fixed(input.step_s, 2)
-       << " s; " << evaluation.test_formations << " test formations. Mean errors in mm per robot, "
+  html << "<p>Grid " << escaped(input.grid) << ", steps of " << fixed(input.step_s, 2) << " s; "
+       << evaluation.test_formations << " test formations. Mean errors in mm per robot, "
        << "every method scored on the same robots at the same instants";
   if (input.bootstrap > 0) {
     html << "; 95% intervals from " << input.bootstrap << " resamples of "
@@ -446,17 +459,15 @@ void write_html_report(const std::string& path, const ReportInput& input) {
     html << "<h2>Mean error per robot id at " << horizon << "</h2>"
          << robot_errors(evaluation, *input.samples, steps);
     if (const auto best = evaluation.best_baseline(evaluation.all()[h])) {
-      html << "<h2>Where " << escaped(evaluation.labels.front()) << " wins and loses at "
-           << horizon << ", against " << escaped(evaluation.labels[*best]) << "</h2>"
+      html << "<h2>Where " << escaped(evaluation.labels.front()) << " wins and loses at " << horizon
+           << ", against " << escaped(evaluation.labels[*best]) << "</h2>"
            << heat_map(evaluation, *input.samples, steps, *best);
     }
   }
   html << "</body></html>\n";
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error("cannot write the report " + path);
-  out << html.str();
-  out.close();
-  if (!out) throw std::runtime_error("cannot write the report " + path);
+  ReplacingFile out(path, true);
+  out.stream() << html.str();
+  out.commit();
 }
 
 }  // namespace ssl_formation::evaluate

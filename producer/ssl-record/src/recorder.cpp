@@ -12,8 +12,8 @@
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_gc_referee_message.pb.h"
-#include "ssl_vision_wrapper_tracked.pb.h"
 #include "ssl_vision_wrapper.pb.h"
+#include "ssl_vision_wrapper_tracked.pb.h"
 
 namespace ssl_formation::recorder {
 
@@ -79,9 +79,10 @@ class Recorder {
                  LogMessageType type, const char* where, const char* what, OtherCounts& counts) {
     if (!scratch.ParsePartialFromArray(data.data(), static_cast<int>(data.size()))) {
       if (counts.skipped++ == 0) {
-        spdlog::warn("a datagram of {} bytes on {} is not a {}: not recorded (the status lines "
-                     "count them)",
-                     data.size(), where, what);
+        spdlog::warn(
+            "a datagram of {} bytes on {} is not a {}: not recorded (the status lines "
+            "count them)",
+            data.size(), where, what);
       }
       return true;
     }
@@ -96,9 +97,9 @@ class Recorder {
 
   LogWriter& writer_;
   const RecordOptions& options_;
-  SSL_WrapperPacket packet_;  // reused
-  Referee referee_message_;               // reused
-  TrackerWrapperPacket tracked_packet_;   // reused
+  SSL_WrapperPacket packet_;             // reused
+  Referee referee_message_;              // reused
+  TrackerWrapperPacket tracked_packet_;  // reused
   std::uint64_t recorded_ = 0;
   std::uint64_t skipped_ = 0;
   OtherCounts referee_;
@@ -169,13 +170,14 @@ int run_record(const RecordOptions& options) {
       if (!recorder.add_tracked(data)) stop();
     });
   }
-  spdlog::info("recording {}, the referee on {} and trackers on {} (interface {}, receive buffer {} "
-               "bytes) to {}{}{}",
-               group.to_string(), referee_group ? referee_group->to_string() : "none",
-               tracker_group ? tracker_group->to_string() : "none",
-               interface.to_string(), receiver.granted_receive_buffer(), options.output,
-               options.duration_s > 0.0 ? fmt::format(" for {} s", options.duration_s) : "",
-               options.count ? fmt::format(", at most {} packets", options.count) : "");
+  spdlog::info(
+      "recording {}, the referee on {} and trackers on {} (interface {}, receive buffer {} "
+      "bytes) to {}{}{}",
+      group.to_string(), referee_group ? referee_group->to_string() : "none",
+      tracker_group ? tracker_group->to_string() : "none", interface.to_string(),
+      receiver.granted_receive_buffer(), options.output,
+      options.duration_s > 0.0 ? fmt::format(" for {} s", options.duration_s) : "",
+      options.count ? fmt::format(", at most {} packets", options.count) : "");
 
   app::RepeatingTimer status(io, status_period, [&] { log_status("status"); });
   boost::asio::steady_timer deadline(io);
@@ -203,9 +205,8 @@ int run_record(const RecordOptions& options) {
   if (tracker) tracker->stop();
 
   if (recorder.failed()) {
-    spdlog::error("{}; the {} packets before it are in the file", writer->error(),
-                  recorder.recorded());
-    writer->close(options.index);
+    spdlog::error("{}; {} not written (an earlier file there is as it was)", writer->error(),
+                  options.output);
     return 1;
   }
   if (!writer->close(options.index)) {

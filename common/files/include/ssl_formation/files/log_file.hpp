@@ -9,10 +9,11 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
-#include "ssl_formation/files/compressed_input.hpp"
 #include "ssl_formation/base/result.hpp"
+#include "ssl_formation/files/compressed_input.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -167,10 +168,12 @@ class LogReader {
   std::uint64_t offset_ = 0;
 };
 
-// Writes a log, gzip-compressed when the path ends in ".gz". Failed writes are sticky.
+// Writes a log, gzip-compressed when the path ends in ".gz". Failed writes are sticky. The log is
+// written to a temporary file beside the path and takes the path's place only when close()
+// succeeds: a writer that fails or is never closed leaves an earlier file there as it was.
 class LogWriter {
  public:
-  // Creates (or truncates) the file and writes the header; the error names the path and cause.
+  // Creates the temporary file and writes the header; the error names the path and cause.
   static Result<LogWriter> create(const std::filesystem::path& path);
 
   // Refuses (false, error()) payloads over kLogMaxMessageSize, which no reader would accept.
@@ -178,19 +181,36 @@ class LogWriter {
   bool write_vision(const SSL_WrapperPacket& packet, std::int64_t receive_time_ns);
   // indexed: append an index message (payload: the big-endian int64 offset of every message
   // header), its own offset as int64 and "INDEXED". false + error() on any failure. The
-  // destructor closes an unclosed writer without an index, silently.
+  // file then replaces the path. The destructor of an unclosed writer removes what it wrote.
   bool close(bool indexed = false);
 
   const std::string& error() const { return error_; }
   std::uint64_t offset() const { return offset_; }  // uncompressed bytes written so far
 
  private:
-  explicit LogWriter(std::filesystem::path path, detail::GzFilePtr file);
+  // The temporary file until close() renames it: removed with the writer otherwise.
+  struct Temporary {
+    std::filesystem::path path;
+    Temporary() = default;
+    explicit Temporary(std::filesystem::path p) : path(std::move(p)) {}
+    Temporary(Temporary&& other) noexcept : path(std::exchange(other.path, {})) {}
+    Temporary& operator=(Temporary&& other) noexcept {
+      if (this != &other) {
+        remove();
+        path = std::exchange(other.path, {});
+      }
+      return *this;
+    }
+    ~Temporary() { remove(); }
+    void remove() noexcept;
+  };
+  LogWriter(std::filesystem::path path, Temporary temporary, detail::GzFilePtr file);
   bool put(const void* data, std::size_t size);
   bool put_message(std::int32_t type, std::int64_t receive_time_ns, std::string_view payload);
 
   std::filesystem::path path_;
-  detail::GzFilePtr file_;
+  Temporary temporary_;
+  detail::GzFilePtr file_;  // closed before temporary_ goes
   std::string error_;
   std::uint64_t offset_ = 0;
   std::int64_t last_time_ns_ = 0;
