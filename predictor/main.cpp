@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
     }
     if (o.list_states) return sf::predictor::list_states(o.model.parsed_grid());
     sf::app::init_logging("ssl-predictor", o.verbose);
+    sf::app::take_table_settings(o.model, o.table);
     if (!o.from_logs.empty()) return sf::predictor::run_from_log(o);
     return sf::predictor::run_daemon(o);
   });

@@ -37,7 +37,7 @@ CSV_HEADER = [
     "predicted_cell_y", "predicted_x_mm", "predicted_y_mm", "probability", "unseen",
     "centroid_cell_x", "centroid_cell_y", "centroid_probability", "formation_probability",
     "confidence", "model", "predicted_feed_x_mm", "predicted_feed_y_mm", "radius_50_mm",
-    "radius_90_mm",
+    "radius_90_mm", "grid", "step_s",
 ]
 
 
@@ -170,6 +170,8 @@ def csv_rows(message):
                 field(message, "model", ""), shortest_float(feed.x), shortest_float(feed.y),
                 shortest_float(radius_50) if radius_50 is not None else "0",
                 shortest_float(radius_90) if radius_90 is not None else "0",
+                "%dx%d" % (field(message, "grid_length", 0), field(message, "grid_width", 0)),
+                shortest_double(step_seconds),
             ])
     return rows
 

@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
     sf::trainer::TrainerOptions o;
     if (!sf::trainer::parse_trainer_options(argc, argv, o)) return 0;
     sf::app::init_logging("ssl-trainer", o.verbose);
+    if (o.table_dir.empty()) sf::app::take_table_settings(o.model, o.table);
     if (!o.from_logs.empty()) return sf::trainer::run_offline(o);
     return sf::trainer::run_live(o);
   });

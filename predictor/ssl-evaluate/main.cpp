@@ -140,7 +140,9 @@ int main(int argc, char** argv) {
     }
     for (int i = 0; i < argc; ++i) o.command_line += (i ? " " : "") + std::string(argv[i]);
     if (o.mode == "paper") return sf::evaluate::run_paper(o);
-    if (o.mode == "holdout") return sf::evaluate::run_holdout(o, {o.model.grid});
+    if (o.mode == "holdout") {
+      return sf::evaluate::run_holdout(o, {o.model.parsed_grid().to_string()});
+    }
     if (o.mode == "grid-sweep") return sf::evaluate::run_holdout(o, o.grids);
     if (o.mode == "as-real-log") return sf::evaluate::run_as_real_log(o);
     if (o.mode == "score") return sf::evaluate::run_score(o);

@@ -15,11 +15,11 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation {
@@ -57,16 +57,16 @@ const auto entries = testing::table_entries;
 
 std::vector<std::string> trainer_args(const std::string& group,
                                       const std::filesystem::path& table) {
-  return {"--vision-address",  group, "--table",          table.string(),
-          "--status-interval", "0.1", "--flush-interval", "60", "--model", "paper"};
+  return {"--vision-address", group, "--table", table.string(), "--status-interval", "0.1",
+          "--flush-interval", "60",  "--model", "paper"};
 }
 
 // Runs the producer to the end on `group`.
 void produce(const TempDir& dir, const std::string& group, std::uint64_t seed, int count,
              std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{"--simulation", "paper", "--vision-address", group, "--seed", std::to_string(seed),
-                                "--count", std::to_string(count), "--period", "0.002",
-                                "--status-interval", "100",
+  std::vector<std::string> args{"--simulation", "paper", "--vision-address", group, "--seed",
+                                std::to_string(seed), "--count", std::to_string(count), "--period",
+                                "0.002", "--status-interval", "100",
                                 // The paper's protocol: vision only, as reference_table() trains.
                                 "--referee", "off"};
   args.insert(args.end(), extra.begin(), extra.end());
@@ -167,10 +167,11 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
 TEST(Daemons, ProducerSendsNinetyPercentPlaysOverTenThousandCycles) {
   TempDir dir;
   // 10,000 cycles are about 25,000 formations; nobody needs to listen for the proportions.
-  const auto result = testing::run_to_end(producer_program,
-                                          {"--simulation", "paper", "--referee", "off", "--vision-address", new_group(),
-                                           "--period", "0", "--count", "25000", "--seed", "99"},
-                                          dir.path(), "producer");
+  const auto result =
+      testing::run_to_end(producer_program,
+                          {"--simulation", "paper", "--referee", "off", "--vision-address",
+                           new_group(), "--period", "0", "--count", "25000", "--seed", "99"},
+                          dir.path(), "producer");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   std::smatch match;
   const std::regex summary(
@@ -290,12 +291,11 @@ TEST(Daemons, PredictorWaitsForTheTableAndPicksUpReplacements) {
   const auto table_path = dir / "table.bin";
   const std::string vision = new_group();
   const std::string predictions = new_group();
-  ChildProcess predictor(
-      predictor_program,
-      {"--vision-address", vision, "--prediction-address", predictions, "--table",
-       table_path.string(), "--reload-interval", "0.05", "--quiet", "--status-interval", "0.05",
-       "--model", "paper"},
-      dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess predictor(predictor_program,
+                         {"--vision-address", vision, "--prediction-address", predictions,
+                          "--table", table_path.string(), "--reload-interval", "0.05", "--quiet",
+                          "--status-interval", "0.05", "--model", "paper"},
+                         dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "0") << predictor.stderr_text();
   PredictionListener listener(predictions);
@@ -333,16 +333,16 @@ TEST(Daemons, TwoPipelinesOnDifferentPortsDoNotInterfere) {
                          "trainer-a", Readiness::ready_file);
   ChildProcess trainer_b(trainer_program, trainer_args(vision_b, dir / "b.bin"), dir.path(),
                          "trainer-b", Readiness::ready_file);
-  ChildProcess predictor_a(predictor_program,
-                           {"--vision-address", vision_a, "--prediction-address", predictions_a,
-                            "--table", (dir / "predict.bin").string(), "--quiet", "--model",
-                            "paper"},
-                           dir.path(), "predictor-a", Readiness::ready_file);
-  ChildProcess predictor_b(predictor_program,
-                           {"--vision-address", vision_b, "--prediction-address", predictions_b,
-                            "--table", (dir / "predict.bin").string(), "--quiet", "--model",
-                            "paper"},
-                           dir.path(), "predictor-b", Readiness::ready_file);
+  ChildProcess predictor_a(
+      predictor_program,
+      {"--vision-address", vision_a, "--prediction-address", predictions_a, "--table",
+       (dir / "predict.bin").string(), "--quiet", "--model", "paper"},
+      dir.path(), "predictor-a", Readiness::ready_file);
+  ChildProcess predictor_b(
+      predictor_program,
+      {"--vision-address", vision_b, "--prediction-address", predictions_b, "--table",
+       (dir / "predict.bin").string(), "--quiet", "--model", "paper"},
+      dir.path(), "predictor-b", Readiness::ready_file);
   for (ChildProcess* p : {&trainer_a, &trainer_b, &predictor_a, &predictor_b}) {
     ASSERT_TRUE(p->wait_until_ready(10s)) << p->stderr_text();
   }
@@ -382,9 +382,9 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
   for (const auto& program : {producer_program, trainer_program, predictor_program}) {
     const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
     EXPECT_EQ(help.exit_code, 0) << program;
-    for (const std::string option : {"--vision-address", "--interface arg (=127.0.0.1)", "--step",
-                                     "--opponent-color arg (=", "--opponent-attacks arg (=",
-                                     "--field-length arg (=9000)", "--field-width arg (=6000)"}) {
+    for (const std::string option :
+         {"--vision-address", "--interface arg (=127.0.0.1)", "--step", "--opponent-color arg (=",
+          "--opponent-attacks arg (=", "--field-length arg (=9000)", "--field-width arg (=6000)"}) {
       EXPECT_NE(help.out.find(option), std::string::npos) << program << " lacks " << option;
     }
     const auto bad = testing::run_to_end(program, {"--no-such-option"}, dir.path(), "bad", 5s);
@@ -397,14 +397,15 @@ TEST(Daemons, SharedOptionsHelpAndErrors) {
   for (const auto& program : {trainer_program, predictor_program}) {
     const auto help = testing::run_to_end(program, {"--help"}, dir.path(), "help", 5s);
     EXPECT_NE(help.out.find("--table arg (=formation-table.bin)"), std::string::npos);
-    EXPECT_NE(help.out.find("--grid arg (=3x2)"), std::string::npos);
+    // The grid, the model and the step of the table when one is there.
+    EXPECT_NE(help.out.find("--grid arg (=auto)"), std::string::npos) << program;
     // The opponent from the referee's names and sides unless given.
     EXPECT_NE(help.out.find("--opponent-color arg (=referee)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--opponent-attacks arg (=referee)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--our-team"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--opponent-team"), std::string::npos) << program;
-    // The motion model by default, on the sampling it needs.
-    EXPECT_NE(help.out.find("--model arg (=motion)"), std::string::npos) << program;
+    // The table's model, else the motion model, on the sampling it needs.
+    EXPECT_NE(help.out.find("--model arg (=auto)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--sampling arg (=auto)"), std::string::npos) << program;
     EXPECT_NE(help.out.find("--step arg (=auto)"), std::string::npos) << program;
     // Only the predictor predicts.
@@ -442,7 +443,8 @@ TEST(Daemons, EachDaemonStopsWithinOneSecondOfASignal) {
         dir.path(), "predictor", Readiness::ready_file));
     daemons.push_back(std::make_unique<ChildProcess>(
         producer_program,
-        std::vector<std::string>{"--simulation", "paper", "--referee", "off", "--vision-address", group, "--period", "0.05"},
+        std::vector<std::string>{"--simulation", "paper", "--referee", "off", "--vision-address",
+                                 group, "--period", "0.05"},
         dir.path(), "producer", Readiness::ready_file));
     for (auto& d : daemons) {
       ASSERT_TRUE(d->wait_until_ready(10s)) << d->stderr_text();

@@ -641,6 +641,31 @@ TEST(Evaluate, ScoresThePredictorsOwnCsvAsHoldoutScoresItsChains) {
   EXPECT_NEAR(mean_error_of(team_rows, "predictions", "1"),
               mean_error_of(score_rows, "predictions", "1"), 15.0);
 
+  // The file says its grid: another --grid is refused with the one to give, and cells that
+  // almost never hold their robot are warned about.
+  const auto other_grid = evaluate(
+      dir, {"score", "--log", test_log.string(), "--predictions", csv.string(), "--grid", "12x9"},
+      "other-grid");
+  EXPECT_EQ(other_grid.exit_code, 2);
+  EXPECT_NE(other_grid.err.find("give --grid 3x2"), std::string::npos) << other_grid.err;
+  {
+    std::string text = read(csv);
+    ASSERT_NE(text.find(",3x2,"), std::string::npos);
+    for (std::size_t at = text.find(",3x2,"); at != std::string::npos;
+         at = text.find(",3x2,", at)) {
+      text.replace(at, 5, ",12x9,");
+    }
+    std::ofstream(dir / "relabelled.csv") << text;
+  }
+  const auto relabelled = evaluate(
+      dir,
+      {"score", "--log", test_log.string(), "--predictions", (dir / "relabelled.csv").string()},
+      "relabelled");
+  EXPECT_EQ(relabelled.exit_code, 0) << relabelled.err;
+  EXPECT_NE(relabelled.err.find("were the predictions made with --grid 12x9"), std::string::npos)
+      << relabelled.err;
+  EXPECT_EQ(scored.err.find("were the predictions made with"), std::string::npos) << scored.err;
+
   // Predictions of another log score nothing, and say so; a file that is not there, likewise.
   const auto other_log = dir / "other.log";
   ASSERT_EQ(testing::write_vision_log(other_log,

@@ -77,13 +77,13 @@ TEST_F(PredictFromLog, TheDaemonFedTheSameLogByReplayMulticastsExactlyTheCsv) {
             "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,"
             "predicted_cell_y,predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,"
             "centroid_cell_y,centroid_probability,formation_probability,confidence,model,"
-            "predicted_feed_x_mm,predicted_feed_y_mm,radius_50_mm,radius_90_mm");
+            "predicted_feed_x_mm,predicted_feed_y_mm,radius_50_mm,radius_90_mm,grid,step_s");
   EXPECT_EQ(lines.front(), testing::prediction_csv_header);
   lines.erase(lines.begin());
   std::set<std::string> instants;
   for (const std::string& line : lines) {
     const std::vector<std::string> fields = split(line, ',');
-    ASSERT_EQ(fields.size(), 22u) << line;
+    ASSERT_EQ(fields.size(), 24u) << line;
     instants.insert(fields.front());
     // The paper's model: its cell centre (columns 9-10) again, and no radii.
     EXPECT_EQ(fields[17], "paper") << line;
@@ -141,6 +141,30 @@ TEST_F(PredictFromLog, WritesToStandardOutputAndKeepsEachFileItsOwnStream) {
   }
 }
 
+// The grid, the step and the model of a table need not be given again: the predictor takes them
+// from the table and says so; given otherwise, the refusal names the option that fixes it.
+TEST_F(PredictFromLog, TakesTheTablesGridStepAndModelUnlessTold) {
+  const auto grid_table = dir / "g6x4.bin";
+  const auto trained =
+      testing::run_to_end(trainer_program,
+                          {"--from-log", (dir / "train.log.gz").string(), "--table",
+                           grid_table.string(), "--model", "paper", "--grid", "6x4"},
+                          dir.path(), "train-6x4", 30s);
+  ASSERT_EQ(trained.exit_code, 0) << trained.err;
+  const auto taken = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "test.log").string(), "--table", grid_table.string()}, dir.path(),
+      "taken");
+  EXPECT_EQ(taken.exit_code, 0) << taken.err;
+  EXPECT_NE(taken.err.find("--grid 6x4, --model paper, --step 2 from the table"), std::string::npos)
+      << taken.err;
+  const auto told = predict(
+      {"--from-log", (dir / "test.log").string(), "--table", grid_table.string(), "--grid", "3x2"},
+      "told-otherwise");
+  EXPECT_EQ(told.exit_code, 1);
+  EXPECT_NE(told.err.find("give --grid 6x4"), std::string::npos) << told.err;
+}
+
 TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
   const auto no_table =
       predict({"--from-log", (dir / "test.log").string(), "--table", (dir / "none.bin").string()},
@@ -189,9 +213,17 @@ TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
       "bad-horizon");
   EXPECT_EQ(bad_horizon.exit_code, 2);
 
-  // The paper's table (version 1) for the default motion model: it says which model it serves.
-  const auto wrong_model = testing::run_to_end(
+  // The paper's table (version 1) without --model: the paper's model, said once.
+  const auto table_model = testing::run_to_end(
       predictor_program, {"--from-log", (dir / "test.log").string(), "--table", table.string()},
+      dir.path(), "table-model");
+  EXPECT_EQ(table_model.exit_code, 0) << table_model.err;
+  EXPECT_NE(table_model.err.find("--model paper"), std::string::npos) << table_model.err;
+  EXPECT_NE(table_model.out.find(",paper,"), std::string::npos);
+  // Told --model motion: it says which model the table serves.
+  const auto wrong_model = testing::run_to_end(
+      predictor_program,
+      {"--from-log", (dir / "test.log").string(), "--table", table.string(), "--model", "motion"},
       dir.path(), "wrong-model");
   EXPECT_EQ(wrong_model.exit_code, 1);
   EXPECT_NE(wrong_model.err.find("version-1"), std::string::npos) << wrong_model.err;
@@ -202,7 +234,8 @@ TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
 // --model paper is the paper's protocol as it was: its sampling (auto: step) and --sampling step
 // give the same table file (version 1) and the same predictions, byte for byte, as the code before
 // rolling sampling made of the same log (tests/data/README.md; the CSV's first 17 columns, the 5
-// appended since say "paper", the cell centre again and radii 0).
+// appended since say "paper", the cell centre again and radii 0; the grid and step appended
+// after those are checked apart).
 TEST(StepSampling, ReproducesTheTableAndPredictionsOfBeforeByteForByte) {
   TempDir dir;
   const std::filesystem::path data = SSLF_TEST_DATA_DIR;
@@ -227,7 +260,18 @@ TEST(StepSampling, ReproducesTheTableAndPredictionsOfBeforeByteForByte) {
     const auto predicted =
         testing::run_to_end(predictor_program, predict, dir.path(), "predict", 30s);
     ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
-    EXPECT_EQ(predicted.out, read_text(data / "step-golden-6x4.csv"));
+    // The golden file is of before the grid and step_s columns: each line holds them at its
+    // end, and is the golden line without them.
+    std::string before_columns;
+    for (const std::string& line : split(predicted.out, '\n')) {
+      const std::size_t step_at = line.rfind(',');
+      const std::size_t grid_at = line.rfind(',', step_at - 1);
+      ASSERT_NE(grid_at, std::string::npos) << line;
+      const std::string appended = line.substr(grid_at);
+      EXPECT_TRUE(appended == ",grid,step_s" || appended == ",6x4,2") << line;
+      before_columns += line.substr(0, grid_at) + '\n';
+    }
+    EXPECT_EQ(before_columns, read_text(data / "step-golden-6x4.csv"));
   }
   // The motion model learns from every frame: step sampling is a usage error for it (the
   // default model), in both programs, and writes nothing.

@@ -240,13 +240,13 @@ TEST_F(MotionDaemons, PredictorRefusesAVersionOneTableKeepsRunningAndTakesAVersi
 
   const std::string vision = new_group();
   const std::string predictions = new_group();
-  ChildProcess daemon(
-      predictor_program,
-      {"--vision-address", vision, "--prediction-address", predictions, "--table", live.string(),
-       "--horizon", "3", "--quiet", "--reload-interval", "0.05", "--status-interval", "0.05"},
-      dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess daemon(predictor_program,
+                      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+                       live.string(), "--horizon", "3", "--quiet", "--reload-interval", "0.05",
+                       "--status-interval", "0.05", "--model", "motion"},
+                      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(daemon.wait_until_ready(10s)) << daemon.stderr_text();
-  // One error line that names the file and the model the table serves.
+  // Told --model motion: one error line that names the file and the model the table serves.
   ASSERT_TRUE(daemon.wait_for_stderr("--model paper", 5s)) << daemon.stderr_text();
   {
     const std::string text = daemon.stderr_text();

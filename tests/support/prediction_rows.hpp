@@ -41,7 +41,7 @@ inline constexpr const char* prediction_csv_header =
     "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,predicted_cell_y,"
     "predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,centroid_cell_y,"
     "centroid_probability,formation_probability,confidence,model,predicted_feed_x_mm,"
-    "predicted_feed_y_mm,radius_50_mm,radius_90_mm";
+    "predicted_feed_y_mm,radius_50_mm,radius_90_mm,grid,step_s";
 enum PredictionColumn : std::size_t {
   column_t_capture = 0,
   column_horizon_s = 4,
@@ -52,12 +52,15 @@ enum PredictionColumn : std::size_t {
   column_feed_y = 19,
   column_radius_50 = 20,
   column_radius_90 = 21,
-  prediction_columns = 22,
+  column_grid = 22,
+  column_step_s = 23,
+  prediction_columns = 24,
 };
 
 // The CSV rows of one multicast prediction: the paper's 17 columns, then the model, where the
 // robot is predicted to be in the feed's coordinates (the motion model's position, or the cell
-// centre again for the paper's model, which states none) and the 50%/90% radii (0 for the paper).
+// centre again for the paper's model, which states none), the 50%/90% radii (0 for the paper),
+// and the grid and step that made them.
 inline std::vector<std::string> rows_of(const proto::FormationPrediction& message) {
   std::vector<std::string> rows;
   for (const proto::PredictedStep& step : message.steps()) {
@@ -76,7 +79,9 @@ inline std::vector<std::string> rows_of(const proto::FormationPrediction& messag
                      ',' +
                      exact(robot.has_position() ? robot.position().y() : robot.cell_centre().y()) +
                      ',' + exact(robot.has_radius_50_mm() ? robot.radius_50_mm() : 0.0F) + ',' +
-                     exact(robot.has_radius_90_mm() ? robot.radius_90_mm() : 0.0F));
+                     exact(robot.has_radius_90_mm() ? robot.radius_90_mm() : 0.0F) + ',' +
+                     exact(message.grid_length()) + 'x' + exact(message.grid_width()) + ',' +
+                     exact(message.step_seconds()));
     }
   }
   return rows;

@@ -1,20 +1,25 @@
 #include "ssl_formation/app/options.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include "ssl_formation/files/table_file.hpp"
 
 namespace ssl_formation::app {
 
 Grid ModelOptions::parsed_grid() const {
-  const auto parsed = Grid::parse(grid);
+  const auto parsed = Grid::parse(grid == "auto" ? default_grid : grid);
   if (!parsed) throw UsageError("--grid: " + parsed.error().message);
   return *parsed;
 }
 
 ModelKind ModelOptions::parsed_model() const {
+  if (model == "auto") return default_model;
   const auto parsed = parse_model(model);
   if (!parsed)
     throw UsageError("--model must be one of " + model_names() + ", not '" + model + "'");
@@ -109,6 +114,38 @@ TableBudget table_budget_option(double max_table_mb) {
   return table_budget_mb(max_table_mb);
 }
 
+void take_table_settings(ModelOptions& model, const std::string& table_path) {
+  if (table_path.empty() ||
+      (model.grid != "auto" && model.step_s != 0.0 && model.model != "auto")) {
+    return;
+  }
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(table_path, error)) return;
+  const auto loaded = load_table(table_path);
+  if (!loaded) return;  // the program's own load says why
+  std::vector<std::string> taken;
+  if (model.grid == "auto") {
+    model.grid = loaded->table.grid().to_string();
+    taken.push_back("--grid " + model.grid);
+  }
+  const ModelKind table_model = loaded->motion ? ModelKind::motion : ModelKind::paper;
+  if (model.model == "auto") {
+    model.model = std::string(to_string(table_model));
+    taken.push_back("--model " + model.model);
+  }
+  // The step of a table of another model than the one asked for means nothing to it.
+  if (model.step_s == 0.0 && loaded->metadata.step_s > 0.0 && model.parsed_model() == table_model) {
+    model.step_s = loaded->metadata.step_s;
+    std::ostringstream step;
+    step << "--step " << model.step_s;
+    taken.push_back(step.str());
+  }
+  if (taken.empty()) return;
+  std::string said;
+  for (const std::string& option : taken) said += (said.empty() ? "" : ", ") + option;
+  spdlog::info("{} from the table {} (give them to choose otherwise)", said, table_path);
+}
+
 std::shared_ptr<const MotionTable> loaded_prior_table(const std::string& path, double step_s) {
   if (path.empty()) return nullptr;
   auto loaded = load_table(path);
@@ -146,7 +183,8 @@ LearnDuring parsed_learn_during(const std::string& learn_during) {
 
 void add_model_options(po::options_description& options, ModelOptions& model) {
   options.add_options()("grid", po::value(&model.grid)->default_value(model.grid),
-                        "grid LxW: L cells along the field length, W along its width")(
+                        "grid LxW: L cells along the field length, W along its width; auto: the "
+                        "table's where one is read, else 3x2")(
       "step", po::value(&model.step_s)->default_value(model.step_s, "auto"),
       "seconds of data time (t_capture) between two formations, the unit of --horizon; auto: "
       "0.5 for --model motion, 2 (the paper's) for --model paper")(
@@ -163,7 +201,9 @@ void add_model_options(po::options_description& options, ModelOptions& model) {
               po::value(&model.opponent_team)->default_value(model.opponent_team, "none"),
               "the opponent's name as the game controller spells it (case aside)")(
       "model", po::value(&model.model)->default_value(model.model),
-      "motion: positions in mm with calibrated radii, learned from every frame (needs a "
+      "auto: the table's where one is read (motion, or paper for a table of the paper's counts "
+      "only), else motion; motion: positions in mm with calibrated radii, learned from every frame "
+      "(needs a "
       "version-3 table); paper: the paper's Markov model on cells; the baselines, which need no "
       "table: persistence, constant-velocity, constant-acceleration (and, in ssl-evaluate, "
       "damped-constant-velocity and damped-constant-acceleration, fitted on the training part)")(

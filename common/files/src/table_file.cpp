@@ -219,7 +219,8 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
   if (expected_grid && *expected_grid != grid) {
     return fail(TableLoadError{TableFileError::wrong_grid,
                                path.string() + " holds a " + grid.to_string() + " grid, expected " +
-                                   expected_grid->to_string()});
+                                   expected_grid->to_string() + " (give --grid " +
+                                   grid.to_string() + " to use it)"});
   }
 
   // Length.

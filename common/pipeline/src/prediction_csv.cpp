@@ -25,7 +25,7 @@ std::string_view prediction_csv_header() {
   return "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,predicted_cell_y,"
          "predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,centroid_cell_y,"
          "centroid_probability,formation_probability,confidence,model,predicted_feed_x_mm,"
-         "predicted_feed_y_mm,radius_50_mm,radius_90_mm\n";
+         "predicted_feed_y_mm,radius_50_mm,radius_90_mm,grid,step_s\n";
 }
 
 void append_prediction_csv(const PredictedFormation& predicted, std::string& out) {
@@ -33,6 +33,7 @@ void append_prediction_csv(const PredictedFormation& predicted, std::string& out
   const PredictionContext& context = predicted.context;
   const Grid& grid = context.codec->grid();
   const std::string_view model = to_string(context.model);
+  const std::string grid_text = grid.to_string();
   for (std::size_t k = 0; k < predicted.prediction.steps.size(); ++k) {
     const PredictedStep& step = predicted.prediction.steps[k];
     for (const RobotPrediction& robot : step.robots) {
@@ -85,6 +86,11 @@ void append_prediction_csv(const PredictedFormation& predicted, std::string& out
       append_number(out, stated ? static_cast<float>(robot.radius50_mm) : 0.0F);
       out += ',';
       append_number(out, stated ? static_cast<float>(robot.radius90_mm) : 0.0F);
+      // What made it, so that a score of the file can check the grid and step it is given.
+      out += ',';
+      out += grid_text;
+      out += ',';
+      append_number(out, context.step_s);
       out += '\n';
     }
   }
@@ -144,7 +150,8 @@ Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::str
   const auto step_column = column("step"), r50 = column("radius_50_mm"),
              r90 = column("radius_90_mm"), cell_x = column("predicted_cell_x"),
              cell_y = column("predicted_cell_y"), probability = column("probability"),
-             state = column("state_index"), formation = column("formation_probability");
+             state = column("state_index"), formation = column("formation_probability"),
+             grid_column = column("grid");
   RecordedPredictions out;
   out.has_radii = r50 && r90;
   out.has_cells = cell_x && cell_y;
@@ -164,7 +171,8 @@ Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::str
   while (line_end != std::string_view::npos) {
     const std::size_t begin = line_end + 1;
     line_end = text.find('\n', begin);
-    std::string_view line = text.substr(begin, line_end == std::string_view::npos ? line_end : line_end - begin);
+    std::string_view line =
+        text.substr(begin, line_end == std::string_view::npos ? line_end : line_end - begin);
     ++number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty()) continue;
@@ -198,6 +206,18 @@ Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::str
     if (probability && !number_at(*probability, l.robot.probability)) return bad(*probability);
     if (state && !number_at(*state, l.robot.state)) return bad(*state);
     if (formation && !number_at(*formation, l.formation_probability)) return bad(*formation);
+    if (grid_column) {
+      const auto grid = Grid::parse(std::string(fields[*grid_column]));
+      if (!grid) {
+        return fail(where + ":" + std::to_string(number) + ": column 'grid' holds '" +
+                    std::string(fields[*grid_column]) + "', not a grid such as 3x2");
+      }
+      if (out.grid && *out.grid != *grid) {
+        return fail(where + ":" + std::to_string(number) + ": grid " + grid->to_string() +
+                    " where the lines before say " + out.grid->to_string());
+      }
+      out.grid = *grid;
+    }
     smallest_horizon = std::min(smallest_horizon, l.horizon_s);
     lines.push_back(l);
   }

@@ -911,6 +911,10 @@ int run_holdout(const EvaluateOptions& options, const std::vector<std::string>& 
 
 // ---- score
 
+// A predictor's first step puts most robots in their cell (the paper's 3x2 grid: above 90% at
+// 0.5 s; persistence alone does as well): below this share the cells are not the log's.
+constexpr double low_cell_share = 0.05;
+
 int run_score(const EvaluateOptions& options) {
   if (options.log.empty() || options.predictions.empty()) {
     throw app::UsageError(
@@ -925,6 +929,18 @@ int run_score(const EvaluateOptions& options) {
   if (!read) throw std::runtime_error(read.error().message);
   auto recorded = std::make_shared<const RecordedPredictions>(std::move(*read));
   app::ModelOptions model = options.model;
+  // The file says its grid (a predictor's since the grid column): taken when --grid is left on
+  // auto, and a --grid that disagrees is refused rather than scored as cells of another grid.
+  if (recorded->grid) {
+    if (model.grid == "auto") {
+      model.grid = recorded->grid->to_string();
+    } else if (model.parsed_grid() != *recorded->grid) {
+      throw app::UsageError("the predictions were made on a " + recorded->grid->to_string() +
+                            " grid (their grid column), not --grid " +
+                            model.parsed_grid().to_string() + ": give --grid " +
+                            recorded->grid->to_string() + " or leave --grid out");
+    }
+  }
   SamplerConfig sampler = model.sampler_config();
   if (recorded->has_cells) {
     for (const RecordedPrediction& instant : recorded->instants) {
@@ -989,6 +1005,19 @@ int run_score(const EvaluateOptions& options) {
                              options.log +
                              " with its robots there at every horizon: is it that "
                              "log's CSV?");
+  }
+  // Almost no robot in its predicted cell a step later: cells of another grid, field or frame
+  // than the predictor's, which the numbers alone would not show.
+  if (recorded->has_cells) {
+    const ev::HorizonScore& first = evaluation.all().front();
+    const double in_cell = first.methods.front().cells.cell_accuracy();
+    if (first.methods.front().cells.robots > 0 && in_cell < low_cell_share) {
+      spdlog::warn(
+          "only {:.1f}% of the robots are in their predicted cell {} s later (persistence: "
+          "{:.1f}%): were the predictions made with --grid {}, this field size and this log?",
+          100.0 * in_cell, first.horizon_s, 100.0 * first.methods[1].cells.cell_accuracy(),
+          sampler.grid.to_string());
+    }
   }
   ReportFiles files(options, "score-");
   print_holdout(report, sampler, options);

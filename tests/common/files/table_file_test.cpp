@@ -289,7 +289,8 @@ TEST_F(TableFile, WrongGridNamesBothGrids) {
   const LoadResult result = load_table(path, Grid(3, 2));
   EXPECT_FALSE(result);
   EXPECT_EQ(kind_of(result), TableFileError::wrong_grid);
-  EXPECT_EQ(message_of(result), path.string() + " holds a 6x4 grid, expected 3x2");
+  EXPECT_EQ(message_of(result),
+            path.string() + " holds a 6x4 grid, expected 3x2 (give --grid 6x4 to use it)");
   EXPECT_EQ(read_bytes(path), before);
   EXPECT_TRUE(load_table(path, Grid(6, 4)));
   EXPECT_TRUE(load_table(path));  // no expectation: any grid

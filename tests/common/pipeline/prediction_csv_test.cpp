@@ -19,7 +19,7 @@
 namespace ssl_formation {
 namespace {
 
-constexpr std::size_t kColumns = 22;
+constexpr std::size_t kColumns = 24;
 
 std::vector<std::string> split(std::string_view text, char separator) {
   std::vector<std::string> parts;
@@ -117,7 +117,7 @@ TEST(PredictionCsv, Header) {
             "t_capture,frame,robot_id,step,horizon_s,state_index,predicted_cell_x,"
             "predicted_cell_y,predicted_x_mm,predicted_y_mm,probability,unseen,centroid_cell_x,"
             "centroid_cell_y,centroid_probability,formation_probability,confidence,model,"
-            "predicted_feed_x_mm,predicted_feed_y_mm,radius_50_mm,radius_90_mm\n");
+            "predicted_feed_x_mm,predicted_feed_y_mm,radius_50_mm,radius_90_mm,grid,step_s\n");
   ASSERT_FALSE(header.empty());
   EXPECT_EQ(header.back(), '\n');
   EXPECT_EQ(split(header.substr(0, header.size() - 1), ',').size(), kColumns);

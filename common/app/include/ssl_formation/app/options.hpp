@@ -36,7 +36,8 @@ inline constexpr const char* default_table = "formation-table.bin";
 
 // The model's options: what the sampler and the table need to agree on.
 struct ModelOptions {
-  std::string grid = "3x2";
+  // "auto": the table's grid where a table is read (take_table_settings), else 3x2.
+  std::string grid = "auto";
   // 0: the model's own (ModelDescription::default_step_s): 0.5 s, the paper's 2 s for paper.
   double step_s = 0.0;
   double step() const;  // the effective step; throws UsageError
@@ -49,7 +50,8 @@ struct ModelOptions {
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   bool ignore_geometry = false;
-  std::string model = std::string(to_string(default_model));
+  // "auto": the table's model where a table is read (take_table_settings), else the default.
+  std::string model = "auto";
   // "auto": what the model needs, frame for motion and step (the paper's protocol) for paper.
   std::string sampling = "auto";
 
@@ -59,6 +61,13 @@ struct ModelOptions {
   // Who the opponent is by these options (the referee fills in what they leave open).
   OpponentChoice opponent_choice() const;  // throws UsageError
 };
+// The grid and the model without a table to take them from.
+inline constexpr const char* default_grid = "3x2";
+// Fills the grid, the step and the model that the options leave on auto from the table at
+// `table_path` (its grid, its step, and the motion model or the paper's by what it holds), and
+// says so once. Options given keep their values: a table that disagrees is refused where it is
+// loaded, with the option to give. Nothing happens without a readable table there.
+void take_table_settings(ModelOptions& model, const std::string& table_path);
 void add_model_options(po::options_description& options, ModelOptions& model);
 
 // --recalibration-half-life, for the programs that predict (ssl-predictor, ssl-evaluate): how

@@ -28,10 +28,12 @@
 //                          probability; 0 for the paper's model, which states none
 // The millimetres and radii are written as the message's floats.
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/result.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 
@@ -53,18 +55,21 @@ struct RecordedPredictions {
   std::vector<RecordedPrediction> instants;  // in time order
   double step_s = 0.0;                       // horizon_s of step 1
   int steps = 0;                             // the most steps of any instant
-  bool has_radii = false;                  // radius_50_mm and radius_90_mm were given
-  bool has_cells = false;                  // predicted_cell_x/_y
-  bool has_states = false;                 // state_index
-  bool has_probabilities = false;          // probability (of the robot's cell)
-  bool has_formation_probability = false;  // formation_probability
+  bool has_radii = false;                    // radius_50_mm and radius_90_mm were given
+  bool has_cells = false;                    // predicted_cell_x/_y
+  bool has_states = false;                   // state_index
+  bool has_probabilities = false;            // probability (of the robot's cell)
+  bool has_formation_probability = false;    // formation_probability
+  // The grid the predictions' cells are on (the grid column, written since it was added; the same
+  // on every line), none in a file without it.
+  std::optional<Grid> grid;
 };
 
 // Reads predictions from CSV text with a header naming its columns, in any order: at least
 // t_capture, robot_id, horizon_s, predicted_feed_x_mm and predicted_feed_y_mm; optionally step
 // (else horizon_s over the smallest horizon), radius_50_mm, radius_90_mm, predicted_cell_x,
-// predicted_cell_y, probability, state_index and formation_probability. Every horizon must be a
-// whole number of the smallest. The error names `source`, the line and the column.
+// predicted_cell_y, probability, state_index, formation_probability and grid (LxW). Every horizon
+// must be a whole number of the smallest. The error names `source`, the line and the column.
 Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::string_view source);
 Result<RecordedPredictions> read_prediction_csv(const std::string& path);
 
