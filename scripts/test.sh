@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the project and runs every test (ctest), then runs the unit tests and the daemon tests
 # again under AddressSanitizer and UndefinedBehaviorSanitizer in a second build folder (the daemon
-# tests then start the sanitizer-built programs). Installs missing Debian packages first. Exit
+# tests then start the sanitizer-built programs), and checks the installed programs, package and
+# client library (scripts/test-install.sh). Installs missing Debian packages first. Exit
 # status is non-zero if anything fails.
 #   SSLF_BUILD_DIR        build folder (default: build)
 #   SSLF_SKIP_SANITIZERS  set to 1 to skip the sanitizer pass
@@ -26,6 +27,8 @@ fi
 mkdir -p "$(dirname "$build_dir")"
 sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600
+echo "== Installed: cmake --install, find_package(ssl_formation), cpack -G DEB"
+SSLF_BUILD_DIR="$build_dir" "$SSLF_ROOT/scripts/test-install.sh"
 
 if [ "${SSLF_SKIP_SANITIZERS:-0}" != 1 ]; then
   sanitize_dir="$build_dir-sanitize"
