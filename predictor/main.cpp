@@ -35,6 +35,8 @@ int main(int argc, char** argv) {
         "receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
         "socket receive buffer (SO_RCVBUF) to request, bytes")("quiet", po::bool_switch(&o.quiet),
                                                                "no prediction lines on stdout")(
+        "print-predictions", po::bool_switch(&o.print_predictions),
+        "every prediction's full line on stdout (default: one short line a second)")(
         "warm-up-lead", po::value(&o.warm_up_lead_ms)->default_value(o.warm_up_lead_ms),
         "milliseconds before the next frame is due at which the last prediction is rehearsed "
         "(nothing sent) to bring the model back into the CPU caches; 0 = off")(
@@ -61,7 +63,9 @@ int main(int argc, char** argv) {
     sf::app::add_recalibration_option(general, o.recalibration_half_life_s);
     sf::app::add_prior_table_option(general, o.prior_table);
     sf::app::add_daemon_options(general, o.daemon);
-    if (!sf::app::parse_command_line(argc, argv, general, "ssl-predictor [options]\n       ssl-predictor --from-log FILE... [--output PATH] [options]",
+    if (!sf::app::parse_command_line(argc, argv, general,
+                                     "ssl-predictor [options]\n       ssl-predictor --from-log "
+                                     "FILE... [--output PATH] [options]",
                                      "Predicts the opponent's next formations from the table "
                                      "ssl-trainer writes, and multicasts them.")) {
       return 0;

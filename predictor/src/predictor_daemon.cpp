@@ -104,13 +104,14 @@ void PredictorDaemon::start() {
     spdlog::info("field view: open {}", web_->url());
   }
   match_log_.update(pipeline_.front_end());
-  spdlog::info("predicting {} steps ahead with --model {}; grid {}, step {} s, {} sampling; "
-               "vision {}; referee {}",
-               options_.horizon, to_string(pipeline_.config().model), config_.grid.to_string(),
-               config_.step_s, to_string(config_.sampling),
-               options_.network.tracked() ? "tracked " + options_.network.tracker_address
-                                          : options_.network.vision_address,
-               options_.network.referee_address);
+  spdlog::info(
+      "predicting {} steps ahead with --model {}; grid {}, step {} s, {} sampling; "
+      "vision {}; referee {}",
+      options_.horizon, to_string(pipeline_.config().model), config_.grid.to_string(),
+      config_.step_s, to_string(config_.sampling),
+      options_.network.tracked() ? "tracked " + options_.network.tracker_address
+                                 : options_.network.vision_address,
+      options_.network.referee_address);
   if (!pipeline_.needs_table()) {
     spdlog::info("--model {} needs no table: predicting from the first formation",
                  to_string(pipeline_.config().model));
@@ -193,8 +194,9 @@ void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
   web::FieldViewStatus status;
   status.setup = view_setup();
   // The socket the vision comes in on: raw, or the tracker's.
-  const net::ReceiverCounters* counters =
-      !live ? nullptr : live->tracker() ? &live->tracker()->counters() : &live->vision().counters();
+  const net::ReceiverCounters* counters = !live             ? nullptr
+                                          : live->tracker() ? &live->tracker()->counters()
+                                                            : &live->vision().counters();
   const std::uint64_t packets =
       counters ? counters->datagrams.load() : pipeline_.sampler().counters().packets;
   status.packets = packets;
@@ -202,8 +204,7 @@ void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
   // page joining) says the last rate rather than one of a few milliseconds' packets.
   if (!last_rate_s_ || now - *last_rate_s_ >= 0.25) {
     if (last_rate_s_ && now > *last_rate_s_) {
-      packets_per_s_ =
-          static_cast<double>(packets - last_rate_packets_) / (now - *last_rate_s_);
+      packets_per_s_ = static_cast<double>(packets - last_rate_packets_) / (now - *last_rate_s_);
     }
     last_rate_s_ = now;
     last_rate_packets_ = packets;
@@ -389,9 +390,17 @@ void PredictorDaemon::on_prediction(const PredictedFormation& predicted) {
   encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram_);
   output_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
   schedule_warm_up();
-  if (!options_.quiet) {
+  if (options_.print_predictions) {
     output_.print(
         describe_prediction(predicted.formation(), predicted.prediction, predicted.context));
+  } else if (!options_.quiet) {
+    // One short line a second for a person watching; the full lines are --print-predictions'.
+    const double now = clock_.steady_s();
+    if (!(now - last_summary_s_ < 1.0)) {
+      last_summary_s_ = now;
+      output_.print(
+          summarize_prediction(predicted.formation(), predicted.prediction, predicted.context));
+    }
   }
   // After the multicast: the view never delays the predictions.
   if (web_) {
@@ -428,8 +437,7 @@ void PredictorDaemon::schedule_warm_up() {
   warm_up_timer_.async_wait([this](const boost::system::error_code& error) {
     if (error) return;  // cancelled: a frame came first, or the daemon stops
     pipeline_.rehearse([this](const PredictedFormation& predicted) {
-      encode_prediction(predicted.formation(), predicted.prediction, predicted.context,
-                        datagram_);
+      encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram_);
     });
     ++warm_ups_;
   });

@@ -124,10 +124,11 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   ASSERT_TRUE(save_table(table_path, table, TableMetadata{}));
   const std::string vision = new_group();
   const std::string predictions = new_group();
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--horizon", "3", "--model", "paper"},
-                         dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+       table_path.string(), "--horizon", "3", "--model", "paper", "--print-predictions"},
+      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
   PredictionListener listener(predictions);

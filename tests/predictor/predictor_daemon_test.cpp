@@ -350,13 +350,15 @@ TEST(PredictorDaemon, BaselinesPredictFromTheFirstFormationWithoutATable) {
   PredictorOptions options;
   options.table = (dir.path() / "never-written.bin").string();
   options.model.model = "constant-velocity";
+  options.print_predictions = true;
   InProcess predictor(options);
   predictor.frames(0, 30);
   ASSERT_EQ(predictor.output.sent(), 30u);
   ASSERT_EQ(predictor.output.lines.size(), 30u);
   const auto messages = predictor.output.messages();
   EXPECT_EQ(messages.back().model(), "constant-velocity");
-  EXPECT_EQ(predictor.daemon->ready_facts().at(4), (std::pair<std::string, std::string>{"model", "constant-velocity"}));
+  EXPECT_EQ(predictor.daemon->ready_facts().at(4),
+            (std::pair<std::string, std::string>{"model", "constant-velocity"}));
 }
 
 TEST(PredictorDaemon, AFeedItCannotPredictFromIsNamedOnceWithTheOptionThatFixesIt) {

@@ -1,5 +1,6 @@
 #include "ssl_formation/pipeline/prediction_message.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -19,9 +20,7 @@ void set_cell(proto::GridCell& out, Cell cell) {
 bool states_position(const RobotPrediction& robot) { return robot.radius90_mm > 0.0; }
 
 // How far ahead step k (0 = the next) is, in seconds: the same double everywhere.
-double horizon_seconds(std::size_t k, double step_s) {
-  return static_cast<double>(k + 1) * step_s;
-}
+double horizon_seconds(std::size_t k, double step_s) { return static_cast<double>(k + 1) * step_s; }
 
 void append_cell(std::string& out, Cell cell) {
   out += '(';
@@ -100,8 +99,8 @@ std::size_t current_robot_size(const FormationRobot& r) {
 }
 std::size_t predicted_robot_size(const RobotPrediction& r) {
   const std::size_t size = 1 + varint_size(r.robot_id) + 1 + varint_size(r.state) + 2 +
-                           cell_size(r.position) + 2 + cell_size(r.previous) + 2 + point_size +
-                           9 + 2;
+                           cell_size(r.position) + 2 + cell_size(r.previous) + 2 + point_size + 9 +
+                           2;
   // position (8), radius_50_mm (9), radius_90_mm (10)
   return states_position(r) ? size + 2 + point_size + 5 + 5 : size;
 }
@@ -296,10 +295,9 @@ std::string describe(const Formation& current, const Prediction& prediction,
       if (motion) {
         // "r3 (1234,-567) r90=420mm p=0.62": where in the feed's mm, the 90% radius and the
         // probability of the predicted cell; '?' after the position when no counts backed it.
-        std::snprintf(number, sizeof number, "%sr%u (%.0f,%.0f)%s r90=%.0fmm p=%.2f",
-                      i ? ", " : "", robot.robot_id, whole(robot.feed_position.x),
-                      whole(robot.feed_position.y), robot.unseen ? "?" : "", robot.radius90_mm,
-                      robot.probability);
+        std::snprintf(number, sizeof number, "%sr%u (%.0f,%.0f)%s r90=%.0fmm p=%.2f", i ? ", " : "",
+                      robot.robot_id, whole(robot.feed_position.x), whole(robot.feed_position.y),
+                      robot.unseen ? "?" : "", robot.radius90_mm, robot.probability);
         line += number;
         continue;
       }
@@ -319,6 +317,33 @@ std::string describe(const Formation& current, const Prediction& prediction,
 
 std::string describe_prediction(const Formation& current, const Prediction& prediction) {
   return describe(current, prediction, nullptr);
+}
+
+std::string summarize_prediction(const Formation& current, const Prediction& prediction,
+                                 const PredictionContext& context) {
+  char text[256];
+  int used = std::snprintf(text, sizeof text, "t=%.2f frame %u, %s, %zu robots:", current.time_s,
+                           current.frame_number, std::string(to_string(context.model)).c_str(),
+                           current.robots.size());
+  for (std::size_t k = 0; k < prediction.steps.size() && k < 4 && used > 0 &&
+                          used < static_cast<int>(sizeof text) - 48;
+       ++k) {
+    const PredictedStep& step = prediction.steps[k];
+    double radius = 0.0;
+    for (const RobotPrediction& robot : step.robots) radius += robot.radius90_mm;
+    if (!step.robots.empty()) radius /= static_cast<double>(step.robots.size());
+    used += radius > 0.0
+                ? std::snprintf(text + used, sizeof text - static_cast<std::size_t>(used),
+                                " +%.1fs r90 %.0f mm p %.2f",
+                                static_cast<double>(k + 1) * context.step_s, radius,
+                                step.formation_probability)
+                : std::snprintf(text + used, sizeof text - static_cast<std::size_t>(used),
+                                " +%.1fs p %.2f", static_cast<double>(k + 1) * context.step_s,
+                                step.formation_probability);
+  }
+  return used > 0 ? std::string(text, std::min<std::size_t>(static_cast<std::size_t>(used),
+                                                            sizeof text - 1))
+                  : std::string();
 }
 
 std::string describe_prediction(const Formation& current, const Prediction& prediction,

@@ -153,6 +153,7 @@ class PredictorDaemon final : public MatchEventSink {
   std::optional<FieldMarkings> stated_markings_;  // the last geometry packet's
   std::optional<web::FieldViewServer> web_;
   std::optional<double> last_packet_s_;  // on the clock
+  double last_summary_s_ = -1e300;       // when the last once-a-second summary line was printed
   std::optional<double> last_rate_s_;
   std::uint64_t last_rate_packets_ = 0;
   double packets_per_s_ = 0.0;

@@ -28,7 +28,8 @@ struct PredictorOptions {
   double reload_interval_s = 0.5;
   double status_interval_s = 5.0;
   int receive_buffer_bytes = net::kDefaultReceiveBufferBytes;
-  bool quiet = false;
+  bool quiet = false;              // no prediction lines on stdout at all
+  bool print_predictions = false;  // every prediction's full line, not one summary a second
   // Milliseconds before the next frame is due (from the last frames' pace) at which the
   // predictor rehearses its last prediction to warm its caches; 0 = never.
   double warm_up_lead_ms = 1.5;
@@ -52,6 +53,6 @@ PredictionConfig prediction_config(const PredictorOptions& options);
 int run_daemon(const PredictorOptions& options);    // predictor_daemon.cpp
 int run_from_log(const PredictorOptions& options);  // log_predictions.cpp
 // Prints every state of `grid`, one per line (the paper's statesList).
-int list_states(const Grid& grid);                  // predictor_daemon.cpp
+int list_states(const Grid& grid);  // predictor_daemon.cpp
 
 }  // namespace ssl_formation::predictor

@@ -42,6 +42,11 @@ void encode_prediction(const Formation& current, const Prediction& prediction,
 // "t=12.00 frame=6 now C(1,1) [0:(0,1) 1:(1,0) ...] | +1 C(2,1) p=0.82 [0:(1,1) ...] conf=0.412 |
 // +2 ..."
 std::string describe_prediction(const Formation& current, const Prediction& prediction);
+// A short line for a person watching (under 200 characters): the instant, the game state, the
+// model, how many robots, and per step how far ahead, the mean 90% radius (motion model) and the
+// formation's probability.
+std::string summarize_prediction(const Formation& current, const Prediction& prediction,
+                                 const PredictionContext& context);
 // The same with what the context knows. For the paper's model the line above; for the motion
 // model each step is labelled with its horizon and each robot gives its predicted position in the
 // feed's coordinates (mm, '?' when no counts backed it), the radius holding it with 90%
