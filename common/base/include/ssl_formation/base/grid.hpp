@@ -1,6 +1,7 @@
 #pragma once
 // The field grid of the paper (§3.1): L columns along the field length and W rows along its
-// width, with the attack-direction normalisation of §7.1 (docs/models.md).
+// width, with the attack-direction normalisation the paper proposes as further work
+// (docs/models.md).
 
 #include <algorithm>
 #include <cmath>
