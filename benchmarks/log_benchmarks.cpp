@@ -202,7 +202,7 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
   state.SetLabel(path.filename().string() + ", frame sampling + motion model");
 }
 
-// The recording reshaped as recorded Division A matches come (DESIGN.md section 7,
+// The recording reshaped as recorded Division A matches come (docs/simulation.md,
 // common/files/include/ssl_formation/files/real_log_shape.hpp): every packet with camera id 0, 90 packets a
 // second, each holding the robots of one half of the field. Each such packet completes an
 // instant with every opponent robot, so this is the costliest shape per packet. Written once per

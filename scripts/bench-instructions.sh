@@ -6,9 +6,12 @@
 # proxy: it does not see cache misses or branch mispredictions, so a speed claim still needs
 # log_benchmarks' times (scripts/bench.sh).
 #
-# Logs: the shared grSim recording A (4 cameras) and the same recording reshaped as real
-# Division A logs come (camera id 0, half the field a packet; see benchmarks/log_benchmarks.cpp).
+# Logs: recording A and the same recording reshaped as real Division A logs come (camera id 0,
+# half the field a packet; see benchmarks/log_benchmarks.cpp). Recording A is $SSLF_RECORDING
+# when set, else a simulated match that ssl-producer writes (600 s, 4 cameras, seed 1).
 #   SSLF_BUILD_DIR       build folder (default: build)
+#   SSLF_RECORDING       a recorded match of your own (.log or .log.gz, e.g. grSim's or a real
+#                        match's) to count on instead of the simulated one
 #   SSLF_BENCH_BASELINE  another build folder (for example of an older commit, built in a git
 #                        worktree) to count too, and the change against it
 # Takes about a minute per build after the build.
@@ -17,9 +20,8 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 baseline_dir="${SSLF_BENCH_BASELINE:-}"
-recording="$SSLF_ROOT/../shared/data/grsim-match-A-600s.log.gz"
-if [ ! -f "$recording" ]; then
-  echo "error: $recording not found (the shared grSim recordings sit next to the checkout)" >&2
+if [ -n "${SSLF_RECORDING:-}" ] && [ ! -f "$SSLF_RECORDING" ]; then
+  echo "error: SSLF_RECORDING=$SSLF_RECORDING not found" >&2
   exit 1
 fi
 if [ -n "$baseline_dir" ] && [ ! -x "$baseline_dir/benchmarks/log_benchmarks" ]; then
@@ -31,14 +33,14 @@ sslf_install_packages
 sslf_build_quietly "$build_dir" || exit 1
 work="$(mktemp -d "${TMPDIR:-/tmp}/sslf-instructions.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
-gzip -dc "$recording" >"$work/grsim-match-A-600s.log"
+sslf_recording "$build_dir" "${SSLF_RECORDING:-}" 1 "$work/recording-A.log" || exit 1
 
 # count BUILD_DIR BENCHMARK_REGEX: "INSTRUCTIONS ITERATIONS FRAMES_PER_PASS", callgrind's count
 # inside the benchmark function over the iterations it ran (FRAMES_PER_PASS is empty for builds
 # older than the benchmark's counter).
 count() {
   local dir="$1" filter="$2"
-  SSLF_BENCH_RECORDING="$work/grsim-match-A-600s.log" valgrind --tool=callgrind \
+  SSLF_BENCH_RECORDING="$work/recording-A.log" valgrind --tool=callgrind \
     --callgrind-out-file="$work/callgrind.out" --toggle-collect='*BM_OfflineTrainingRecorded(*' \
     "$dir/benchmarks/log_benchmarks" --benchmark_filter="$filter" --benchmark_min_time=0 \
     --benchmark_format=csv >"$work/run.csv" 2>"$work/valgrind.log"
@@ -55,7 +57,7 @@ per_frame() { awk -v n="$1" -v iterations="$2" -v frames="$3" 'BEGIN { printf "%
 echo "offline training, instructions per frame (callgrind), $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo
 printf '%-58s %12s %12s %8s\n' "log (frames)" "this build" "baseline" "change"
-for case in "grSim recording A, 4 cameras|BM_OfflineTrainingRecorded\$" \
+for case in "recording A, as recorded|BM_OfflineTrainingRecorded\$" \
   "recording A as real logs come, half fields|BM_OfflineTrainingRecordedAsOneCameraHalves"; do
   name="${case%%|*}"
   filter="${case#*|}"

@@ -2,17 +2,19 @@
 # Scouting throughput: ssl-trainer --from-log over 8 .log.gz files on one core (--jobs 1) and on
 # every core (--jobs 0), wall time, alternating three times in one run so both see the same
 # machine. Prints frames per second of each and their ratio (target on 2 cores: >= 1.6).
-# The logs are the shared grSim recordings A and B (../shared/data), four copies of each.
+# The logs are two recorded matches A and B, four copies of each: $SSLF_RECORDING and
+# $SSLF_RECORDING_B when set (.log.gz or .log of your own, e.g. grSim's or a real match's; a .log
+# is compressed), else simulated matches that ssl-producer writes (600 s, 4 cameras, seeds 1 and 2).
 #   SSLF_BUILD_DIR   build folder (default: build)
+#   SSLF_RECORDING, SSLF_RECORDING_B   the recordings A and B (default: simulated, as above)
 # Takes about a minute after the build. Exit status 1 if the target is missed on 2+ cores.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
-data="$SSLF_ROOT/../shared/data"
-for recording in A B; do
-  if [ ! -f "$data/grsim-match-$recording-600s.log.gz" ]; then
-    echo "bench-scouting: $data/grsim-match-$recording-600s.log.gz not found" >&2
+for recording in "${SSLF_RECORDING:-}" "${SSLF_RECORDING_B:-}"; do
+  if [ -n "$recording" ] && [ ! -f "$recording" ]; then
+    echo "bench-scouting: $recording not found" >&2
     exit 1
   fi
 done
@@ -22,10 +24,12 @@ trainer="$build_dir/trainer/ssl-trainer"
 work="$(mktemp -d "${TMPDIR:-/tmp}/sslf-scouting.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 
+sslf_recording "$build_dir" "${SSLF_RECORDING:-}" 1 "$work/A.log.gz" || exit 1
+sslf_recording "$build_dir" "${SSLF_RECORDING_B:-}" 2 "$work/B.log.gz" || exit 1
 logs=()
 for copy in 1 2 3 4; do
   for recording in A B; do
-    cp "$data/grsim-match-$recording-600s.log.gz" "$work/$recording-$copy.log.gz"
+    cp "$work/$recording.log.gz" "$work/$recording-$copy.log.gz"
     logs+=("$work/$recording-$copy.log.gz")
   done
 done

@@ -6,6 +6,9 @@
 #   end-to-end latency against the loopback floor  (scripts/bench-e2e.sh: real daemons)
 # Everything stays on 127.0.0.1. Takes about 3 minutes after the build.
 #   SSLF_BUILD_DIR   build folder (default: build)
+#   SSLF_RECORDING   a recorded match (.log or .log.gz, e.g. grSim's or a real match's) for the
+#                    recorded-match rows; default: a simulated match ssl-producer writes (600 s,
+#                    4 cameras, seed 1)
 #   SSLF_BENCH_SKIP_E2E=1  skip the end-to-end part
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -22,13 +25,10 @@ echo
 # Google Benchmark medians over 5 repetitions, CPU time (less disturbed by other processes).
 "$build_dir/benchmarks/core_benchmarks" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
   --benchmark_format=csv 2>/dev/null >"$work/core.csv"
-# Offline training is also measured on a recorded match (4 cameras), uncompressed into $work,
-# when the shared grSim recordings are next to the checkout.
-recording="$SSLF_ROOT/../shared/data/grsim-match-A-600s.log.gz"
-if [ -f "$recording" ]; then
-  gzip -dc "$recording" >"$work/grsim-match-A-600s.log"
-  export SSLF_BENCH_RECORDING="$work/grsim-match-A-600s.log"
-fi
+# Offline training is also measured on a recorded match, uncompressed into $work: $SSLF_RECORDING,
+# or a simulated match of 4 cameras written there by ssl-producer.
+sslf_recording "$build_dir" "${SSLF_RECORDING:-}" 1 "$work/recording-A.log" || exit 1
+export SSLF_BENCH_RECORDING="$work/recording-A.log"
 # The recorded-match benchmarks report a counter the others lack, and Google Benchmark's CSV
 # output aborts on a counter its first row did not have: they run on their own, after the rest.
 recorded='^BM_OfflineTrainingRecorded'
@@ -83,7 +83,7 @@ for variant in 0 1; do
 done
 
 if [ -n "${SSLF_BENCH_RECORDING:-}" ]; then
-  row "offline training, grSim recording A (4 cameras), frame + motion, frames/s" \
+  row "offline training, recording A, frame + motion, frames/s" \
     "$(items BM_OfflineTrainingRecorded "$work/log.csv")" ">= 1000000"
   row "offline training, recording A as real logs come (camera 0, half fields), frames/s" \
     "$(items BM_OfflineTrainingRecordedAsOneCameraHalves "$work/log.csv")" ">= 1000000"

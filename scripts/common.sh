@@ -48,3 +48,27 @@ sslf_build_quietly() {
     return 1
   }
 }
+
+# sslf_recording BUILD_DIR USER_FILE SEED DEST: makes DEST a recorded match for the benchmarks.
+# USER_FILE, when given (a .log or .log.gz of your own: grSim's, a real match's), is copied as it
+# is; else ssl-producer writes a simulated match there (600 s, Division A, 4 cameras, SEED).
+# DEST's name says the format (.log or .log.gz): USER_FILE is converted when it differs.
+sslf_recording() {
+  local build_dir="$1" user_file="$2" seed="$3" dest="$4"
+  if [ -n "$user_file" ]; then
+    [ -f "$user_file" ] || { echo "error: recording $user_file not found" >&2; return 1; }
+    case "$user_file:$dest" in
+      *.gz:*.gz) cp "$user_file" "$dest" ;;
+      *.gz:*) gzip -dc "$user_file" >"$dest" ;;
+      *:*.gz) gzip -c "$user_file" >"$dest" ;;
+      *) cp "$user_file" "$dest" ;;
+    esac
+    return
+  fi
+  "$build_dir/producer/ssl-producer" --simulation match --write-log "$dest" --duration 600 \
+    --cameras 4 --seed "$seed" 2>"$dest.producer.log" || {
+    cat "$dest.producer.log" >&2
+    return 1
+  }
+  rm -f "$dest.producer.log"
+}

@@ -21,8 +21,9 @@
 # daemons' default.
 # --simulation paper sends the paper's simulated opponent instead, jumping from formation to
 # formation every 2 s of data time (one every --period s of wall time), with the paper's model.
-# --replay LOG (an official log of a real or simulated match, e.g.
-# ../shared/data/grsim-match-A-600s.log.gz, yellow attacking +x) loops the recording instead.
+# --replay LOG (an official log of a real or simulated match, e.g. one you make with
+# `build/producer/ssl-producer --write-log match.log.gz --duration 120`; without a referee in
+# the log the opponent is yellow attacking +x) loops the recording instead.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -157,7 +158,7 @@ rm -f "$run_dir"/*.ready
 : >"$predictions_file"
 for log in producer trainer predictor; do : >"$run_dir/$log.log"; done
 # The simulation's game controller names our team; a recorded match may carry no referee at all,
-# and then the opponent is the default one (yellow attacking +x, as the shared recordings play).
+# and then the opponent is the default one (yellow attacking +x, as ssl-producer's matches start).
 match_options=()
 [ -n "$replay" ] || match_options=(--our-team ssl-formation)
 "$build_dir/trainer/ssl-trainer" --vision-address "$vision" --table "$table" --grid "$grid" \

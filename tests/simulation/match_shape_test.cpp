@@ -1,7 +1,8 @@
-// A simulated match shaped like a real one (issue 29, DESIGN.md §7): over 20 simulated minutes
-// of the default game, the share of data time in each referee state and the typical lengths are
-// near what recorded Division A matches show, nobody moves in HALT and timeouts, and in STOP and
-// ball placement the opponent keeps to the rules' 1.5 m/s and 0.5 m from the ball.
+// A simulated match shaped like a real one (issue 29; docs/simulation.md has the real figures):
+// over 20 simulated minutes of the default game, the share of data time in each referee state and
+// the typical lengths are near what recorded Division A matches show, nobody moves in HALT and
+// timeouts, and in STOP and ball placement the opponent keeps to the rules' 1.5 m/s and 0.5 m from
+// the ball.
 
 #include <gtest/gtest.h>
 
@@ -30,7 +31,8 @@ double quantile(std::vector<double> values, double q) {
 }
 
 // What a state's share is measured by: the referee's command, a free kick counting as a free
-// kick until the kick (the ball leaves its spot) and as running play after it, as in §7.
+// kick until the kick (the ball leaves its spot) and as running play after it, as the real
+// matches' shares count it.
 enum class Shaped { running, free_kick, halt, timeout, stop, ball_placement, kickoff, other };
 const char* name(Shaped s) {
   switch (s) {
@@ -218,8 +220,9 @@ TEST(MatchShape, TwentyMinutesSpendTheirTimeAsRealMatchesDo) {
     std::printf("  %-24s %5.1f%%\n", std::string(to_string(phase)).c_str(), 100 * share);
   }
   const auto share = [&](Shaped s) { return m.share.contains(s) ? m.share.at(s) : 0.0; };
-  // §7: running play 32-43%, halt 13-20%, timeout 0-4%, ball placement 26-29%, stop 11-14%, free
-  // kicks 2-3%, kick-offs under 1%. Broad bands: 20 minutes are a handful of long stretches.
+  // Real matches: running play 32-43%, halt 13-20%, timeout 0-4%, ball placement 26-29%, stop
+  // 11-14%, free kicks 2-3%, kick-offs under 1%. Broad bands: 20 minutes are a handful of long
+  // stretches.
   EXPECT_GT(share(Shaped::running), 0.28);
   EXPECT_LT(share(Shaped::running), 0.50);
   EXPECT_GT(share(Shaped::halt), 0.09);
@@ -246,8 +249,8 @@ TEST(MatchShape, StretchesLastAsLongAsInRealMatches) {
   show("ball placement", m.placements_s);
   show("halt (outside the breaks)", m.halts_s);
   show("free kick taken after", m.kick_delays_s);
-  // §7: running play a median 1-3 s before the next command (90th percentile 10-14 s), a ball
-  // placement 4-6 s, a halt 5-6 s, a free kick taken about 0.7 s after its command.
+  // Real matches: running play a median 1-3 s before the next command (90th percentile 10-14 s),
+  // a ball placement 4-6 s, a halt 5-6 s, a free kick taken about 0.7 s after its command.
   ASSERT_GT(m.running_stretches_s.size(), 40u);
   EXPECT_GT(quantile(m.running_stretches_s, 0.5), 1.0);
   EXPECT_LT(quantile(m.running_stretches_s, 0.5), 6.0);

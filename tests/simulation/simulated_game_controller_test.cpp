@@ -248,8 +248,8 @@ TEST(SimulatedGameController, ShapedStretchesAreMostlyShortWithALongTail) {
   std::vector<double> running = lasted[GameState::running];
   running.insert(running.end(), lasted[GameState::free_kick].begin(),
                  lasted[GameState::free_kick].end());
-  // DESIGN.md §7: running play a median 1-3 s (90th percentile 10-14 s), placements 4-6 s,
-  // halts 5-6 s (and here and there a long one).
+  // Real matches (docs/simulation.md): running play a median 1-3 s (90th percentile 10-14 s),
+  // placements 4-6 s, halts 5-6 s (and here and there a long one).
   EXPECT_GT(quantile(running, 0.5), 1.0);
   EXPECT_LT(quantile(running, 0.5), 4.0);
   EXPECT_GT(quantile(running, 0.9), 10.0);

@@ -1,5 +1,5 @@
 #pragma once
-// Replacing a file so that a reader or a crash never sees half of it (DESIGN.md section 4): the
+// Replacing a file so that a reader or a crash never sees half of it (docs/models.md): the
 // new content goes to a temporary file beside the target (`path` + ".tmp-<pid>-<n>", in the same
 // folder so that the rename stays within one file system), is written whole, fsynced and
 // closed, then renamed over the target, and the folder is fsynced. The one place that knows

@@ -455,7 +455,7 @@ TEST(RealLogMess, ParsesNamesAllAndNone) {
   ASSERT_TRUE(all);
   EXPECT_TRUE(all->ghosts && all->substitutions && all->stoppages && all->cuts &&
               all->change_of_ends);
-  EXPECT_DOUBLE_EQ(all->noise_mm, 0.3);  // the real logs' (DESIGN.md section 7)
+  EXPECT_DOUBLE_EQ(all->noise_mm, 0.3);  // the real logs' (docs/simulation.md)
   EXPECT_DOUBLE_EQ(sf::parse_real_log_mess("noise")->noise_mm, 0.3);
   EXPECT_DOUBLE_EQ(sf::parse_real_log_mess("cuts,noise=3")->noise_mm, 3.0);
   EXPECT_FALSE(sf::parse_real_log_mess("noise=-1"));

@@ -180,7 +180,7 @@ TEST(MotionHistory, LaterHorizonsAreLearnedAtEverySecondLearningInstant) {
   EXPECT_NEAR(static_cast<double>(per_horizon[2]), 5 * (10.0 - 1.6), 2.0);
 }
 
-// A vision ghost carrying a robot's id (real logs have them, DESIGN.md section 7): robot 0 drives
+// A vision ghost carrying a robot's id (real logs have them, docs/simulation.md): robot 0 drives
 // along x at 1 m/s and for 5 frames is reported 3 m away.
 TEST(MotionHistory, ARobotThatJumpsStartsItsTrackAgainAndNothingIsLearnedAcrossTheJump) {
   sf::MotionConfig config;

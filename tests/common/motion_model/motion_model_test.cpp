@@ -677,7 +677,7 @@ TEST(MotionPipeline, AVersionOneTableServesOnlyThePapersModelAndSaysSo) {
 }
 
 TEST(MotionPipeline, ARobotTheLastPacketDidNotSeeIsPredictedMovingAsItWasLastSeen) {
-  // Real logs (DESIGN.md §7): one camera id, each packet half the field, 90 packets a second.
+  // Real logs (docs/simulation.md): one camera id, each packet half the field, 90 packets a second.
   // Robots 0-4 drive along +x at 1 m/s on the left half, 5-9 along -y on the right half.
   const auto half_field_packet = [](int i) {
     const double t = i / 90.0;

@@ -355,7 +355,7 @@ TEST(OnlineCalibration, EachPhasesRadiiComeToHoldTheRobotHalfAndNineTenthsOfTheT
 }
 
 TEST(OnlineCalibration, RobotsStandingWithinAMillimetreInALongHaltGetRadiiOfAMillimetre) {
-  // The real logs' halts: every robot within a millimetre of where it was (DESIGN.md section 7),
+  // The real logs' halts: every robot within a millimetre of where it was (docs/simulation.md),
   // where the table states radii of 100 and 300 mm. A running quantile that moved the radius a
   // small step per check was still far too wide at the end of such a halt.
   sf::OnlineCalibration calibration(quick);

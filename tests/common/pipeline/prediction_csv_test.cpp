@@ -51,7 +51,7 @@ T parse(const std::string& field) {
   return value;
 }
 
-// A cell's centre in the feed's coordinates, computed here from DESIGN.md §3 rather than by the
+// A cell's centre in the feed's coordinates, computed here from docs/models.md rather than by the
 // library: the normalised centre, rotated by 180 degrees for an opponent attacking -x.
 Point feed_centre(Cell cell, const Grid& grid, const FieldSize& field, AttackDirection attacks) {
   const double x = (cell.x + 0.5) * field.length_mm / grid.length() - field.length_mm / 2.0;

@@ -1,5 +1,5 @@
 #pragma once
-// How a replay times a log's packets (DESIGN.md §5): which clock the file's timing comes from,
+// How a replay times a log's packets: which clock the file's timing comes from,
 // and the replay timeline built on it. Pure: no sockets, files or wall clock.
 //
 // The official format stores receive times in nanoseconds, but older recorders wrote

@@ -1,6 +1,7 @@
 #pragma once
 // The field grid of the paper (§3.1): L columns along the field length and W rows along its
-// width, with the attack-direction normalisation of §7.1 (DESIGN.md §3).
+// width, with the attack-direction normalisation the paper proposes as further work
+// (docs/models.md).
 
 #include <algorithm>
 #include <cmath>
@@ -98,7 +99,7 @@ class Grid {
                  (cell.y + 0.5) * field.width_mm / width_ - field.width_mm / 2.0};
   }
 
-  // Cells numbered x*W + y, the digit order of the state index (DESIGN.md §3).
+  // Cells numbered x*W + y, the digit order of the state index.
   int cell_id(Cell cell) const { return cell.x * width_ + cell.y; }
   Cell cell_from_id(int id) const { return Cell{id / width_, id % width_}; }
   bool contains(Cell cell) const {

@@ -1,6 +1,6 @@
 #pragma once
 // A robot's state (paper §3.1): the team centroid cell, its own cell and its previous cell,
-// and the state index of DESIGN.md §3, a mixed-radix number whose digits are
+// and the state index (docs/models.md), a mixed-radix number whose digits are
 // (tx, ty, px, py, vx, vy), so index = (t*C + p)*C + v with C = L*W cells numbered x*W + y.
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// The official SSL log file (DESIGN.md §5): "SSL_LOG_FILE", a big-endian int32 version (1), then
+// The official SSL log file: "SSL_LOG_FILE", a big-endian int32 version (1), then
 // messages of big-endian int64 receive time (ns), int32 type, int32 size and size payload bytes.
 // `.log.gz` is the same stream gzip-compressed; the reader takes either, whatever the name.
 

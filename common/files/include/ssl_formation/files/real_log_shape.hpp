@@ -1,5 +1,5 @@
 #pragma once
-// A clean recording rewritten the way recorded Division A matches come (DESIGN.md section 7), to
+// A clean recording rewritten the way recorded Division A matches come (docs/simulation.md), to
 // measure training and prediction on what users will feed rather than on grSim's tidy frames:
 // every packet with camera id 0 holding the robots of one half of the field (as last seen in the
 // recording), 90 packets a second, no geometry packets; and, each on request, the mess of real
@@ -37,7 +37,7 @@ struct RealLogMess {
   // Gaussian noise on every reported position (each axis' standard deviation), mm.
   double noise_mm = 0.0;
   // The noise of the real logs: in their halts a robot's 1 s displacement has a median of 0 mm
-  // and a 90th percentile of 1 mm (DESIGN.md section 7). The displacement between two sightings
+  // and a 90th percentile of 1 mm (docs/simulation.md). The displacement between two sightings
   // with noise s per axis has its 90th percentile at 3.03 s and its median at 1.67 s: s = 0.3 mm
   // gives 0.9 and 0.5 mm. (3 mm, a guess before those figures, made halts ten times as restless
   // as the logs' and every velocity noisier than a real tracker's.)

@@ -1,5 +1,5 @@
 #pragma once
-// The referee feed (the game controller's Referee messages, DESIGN.md §6): the game state the
+// The referee feed (the game controller's Referee messages): the game state the
 // last command left the match in, the teams' names and which half each defends, followed from
 // one game controller. Pure: the daemons feed it from the referee multicast group, the offline
 // tools from a log's type-3 messages, each with its own receive clock (time is an input).

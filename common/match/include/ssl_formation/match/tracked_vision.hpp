@@ -1,5 +1,5 @@
 #pragma once
-// Tracked vision (TrackerWrapperPacket, DESIGN.md §6) as what sampling reads: the frames of one
+// Tracked vision (TrackerWrapperPacket) as what sampling reads: the frames of one
 // tracker, followed by its uuid as the game controller does (the first heard becomes the one
 // followed; one silent for source_timeout_s gives way to the next heard), turned into
 // VisionFrames in millimetres with camera 0, so that sampling and everything after it run as on

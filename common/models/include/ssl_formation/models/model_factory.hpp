@@ -2,7 +2,7 @@
 // The models by name, behind --model in every program: what each needs and states, and the
 // learner and forecaster of each. The only place that tells the models apart.
 //
-//   paper                         the paper's Markov model on cells (DESIGN.md §3), from a table
+//   paper                         the paper's Markov model on cells (docs/models.md), from a table
 //   motion                        positions in mm with calibrated radii, from a table (the default)
 //   persistence                   every robot stays where it is
 //   constant-velocity             every robot goes on at its tracker's velocity

@@ -103,7 +103,7 @@ struct MotionFeatures {
   // and how long its command has held: running play is one context; HALT and timeouts one
   // (nobody may move); each other phase three, by the seconds since its command in
   // `since_command_limits_s`, because a set play unfolds with time (a free kick is taken about
-  // 0.7 s after its command, DESIGN.md section 7; a halt's robots have 2 s to brake). The game
+  // 0.7 s after its command in real matches; a halt's robots have 2 s to brake). The game
   // context is part of the key rather than a regressor: the phases differ in which regressors
   // matter (in HALT none does, in STOP the speed is capped), not by an offset a regressor adds.
   static constexpr std::array<double, 2> since_command_limits_s{1.0, 3.0};
@@ -164,7 +164,7 @@ struct MotionFeatures {
 
   // A robot seen further from where it last was than it can have moved is a jump, not motion:
   // a vision ghost carrying its id, two ids swapped, a robot put down elsewhere, or a change of
-  // ends not yet noticed. Real logs have them (DESIGN.md section 7), and one jump of metres
+  // ends not yet noticed. Real logs have them (docs/simulation.md), and one jump of metres
   // counts in a row's sums of squares as thousands of ordinary instances. The limit is above any
   // SSL robot's top speed (about 4 m/s), with room for the vision's noise and for the offset
   // between two cameras' views of one robot at their seam.

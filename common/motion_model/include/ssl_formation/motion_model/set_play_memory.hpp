@@ -2,7 +2,7 @@
 // The opponent's kick-offs as it played them, and a kick-off now forecast from the nearest of
 // them (issue 29). A team's kick-off is its most repeated set play: the ball on the centre spot,
 // every robot at a place of its own, the same routine after NORMAL_START match after match
-// (DESIGN.md section 7: "restarts are where a team's set plays repeat"). The motion model's
+// (restarts are where a team's set plays repeat, docs/simulation.md). The motion model's
 // rows file a robot by its 0.5 m cell and velocity, so a routine's few runs are split among
 // many rows and held towards what every robot does; here a run is kept whole.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Byte-level UDP multicast (DESIGN.md §2, STYLE.md "Networking"): endpoint and interface
+// Byte-level UDP multicast (docs/architecture.md, "On the wire"): endpoint and interface
 // parsing, a receiver and a sender on Boost.Asio's io_context. The typed protobuf layer lives in
 // proto_multicast.hpp, on top of this one (like Thunderbots' ProtoUdpListener<T> over
 // UdpListener).
@@ -52,7 +52,7 @@ inline constexpr std::size_t kMaxUdpPayload = 65507;
 // Default SO_RCVBUF request: 4 MiB holds several seconds of an 8-camera SSL-Vision feed.
 inline constexpr int kDefaultReceiveBufferBytes = 4 << 20;
 
-// Default multicast TTL: 1 keeps packets on the local link (DESIGN.md §2).
+// Default multicast TTL: 1 keeps packets on the local link.
 inline constexpr int kDefaultMulticastTtl = 1;
 
 // Thrown by MulticastReceiver::start() and MulticastSender::open() when a socket cannot be set
@@ -78,7 +78,8 @@ std::ostream& operator<<(std::ostream& out, const MulticastEndpoint& endpoint);
 Result<MulticastEndpoint> parse_multicast_endpoint(std::string_view text);
 
 // The interface to join on or send from: one IPv4 address of this machine, or (receivers only)
-// every IPv4 interface of the machine. The default is the loopback address (DESIGN.md §2).
+// every IPv4 interface of the machine. The default is the loopback address: nothing leaves the
+// machine unless asked.
 struct InterfaceChoice {
   bool all = false;
   address_v4 address = address_v4::loopback();

@@ -12,7 +12,7 @@
 // A datagram that does not decode (ParseFromArray fails: garbage, truncation, a missing proto2
 // `required` field) is counted in counters().parse_errors, logged (rate-limited) and skipped; the
 // receive loop goes on. Checking that a decoded packet makes sense (NaN coordinates, absurd ids)
-// is the caller's job (DESIGN.md §2).
+// is the caller's job.
 
 #include <google/protobuf/message_lite.h>
 

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's evaluation measures (§6.1), robots matched by id (DESIGN.md §3).
+// The paper's evaluation measures (§6.1), robots matched by id.
 
 #include <vector>
 

@@ -1,5 +1,5 @@
 #pragma once
-// The prediction algorithm of the paper (§5) as DESIGN.md §3 makes it precise: the most likely
+// The prediction algorithm of the paper (§5), made precise in docs/models.md: the most likely
 // next centroid from the centroid-block matrix, then for each robot the most likely
 // velocity-consistent state within that block, P(formation) and the confidence chain.
 

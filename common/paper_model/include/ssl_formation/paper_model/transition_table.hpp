@@ -63,7 +63,7 @@ class TransitionTable {
   std::size_t memory_bytes() const;
 
   // The most counted TO state among those with centroid `to_centroid` and previous cell
-  // `previous` (cell ids) in row `from`: the velocity-consistent candidates of DESIGN.md §3.
+  // `previous` (cell ids) in row `from`: the velocity-consistent candidates.
   // Ties go to the lowest index. best_count == 0 means no candidate was ever counted.
   struct BestSuccessor {
     StateIndex state = 0;

@@ -62,7 +62,7 @@ struct MatchSimulationConfig {
   double loose_play_min_s = 1.5;
   double loose_play_max_s = 4.0;
   // The match's game controller, its stoppages called by the play (a goal, the ball out of the
-  // field) and, with its shape (the default: a game shaped like real ones, DESIGN.md §7), by
+  // field) and, with its shape (the default: a game shaped like real ones, docs/simulation.md), by
   // the referee; its colour, side and start time are the match's. None: no referee, and restarts
   // happen at once.
   std::optional<GameControllerConfig> game;

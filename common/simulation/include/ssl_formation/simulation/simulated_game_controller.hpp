@@ -1,15 +1,15 @@
 #pragma once
-// The game controller of a simulation: the referee messages (DESIGN.md §6) that go with the
-// paper's simulated opponent or a simulated match, so the daemons, the demo and the tests run
-// with a referee as they do at a tournament. It names the teams, runs two halves with the ends
+// The game controller of a simulation: the referee messages that go with the paper's simulated
+// opponent or a simulated match, so the daemons, the demo and the tests run with a referee as
+// they do at a tournament. It names the teams, runs two halves with the ends
 // changed at half time, and stops the play as a real match does: a ball out of the field (STOP,
 // ball placement, a free kick), a foul (STOP, a free kick) and a goal (STOP, a kick-off). For
 // the paper's opponent, which has no ball, it stops the play at random; a match calls the
 // stoppages its ball makes.
 //
 // With a GameShape (the default for a match) the game spends its time as recorded Division A
-// matches do (DESIGN.md §7): running play in stretches mostly of a few seconds with a long tail,
-// and each stoppage a STOP, now and then a HALT or a team's timeout (then STOP again), most
+// matches do (docs/simulation.md): running play in stretches mostly of a few seconds with a long
+// tail, and each stoppage a STOP, now and then a HALT or a team's timeout (then STOP again), most
 // restarts after a ball placement of a few seconds, a few with FORCE_START. The referee then also
 // stops the play for what a match does not play out (a foul, a robot to take off): the match
 // asks stoppage_due() and calls the stoppage with where the ball is to be placed.
@@ -50,7 +50,7 @@ struct DurationBands {
   double draw(std::mt19937_64& random) const;
 };
 
-// How a game spends its time, shaped like recorded Division A matches (DESIGN.md §7: running
+// How a game spends its time, shaped like recorded Division A matches (docs/simulation.md: running
 // play 32-43% of the time, halt 13-20%, timeout 0-4%, ball placement 26-29%, stop 11-14%, free
 // kicks 2-3%, kick-offs under 1%; running stretches of a median 1-3 s, 90th percentile 10-14 s;
 // placements of 4-6 s, halts of 5-6 s; a free kick taken 0.7 s after its command). The defaults

@@ -1,8 +1,8 @@
 #pragma once
-// The data clock (DESIGN.md §3): places every detection frame on the sample instants of the data's
-// own t_capture (instant k at anchor + k * step), decides when an instant is complete, and tells
-// the current clock's frames from late, duplicate and another clock's frames (a restarted sender,
-// a feed resuming after a gap, a second sender on the same group).
+// The data clock (docs/models.md): places every detection frame on the sample instants of the
+// data's own t_capture (instant k at anchor + k * step), decides when an instant is complete, and
+// tells the current clock's frames from late, duplicate and another clock's frames (a restarted
+// sender, a feed resuming after a gap, a second sender on the same group).
 //
 // Pure: no sockets, clocks or threads. FormationSampler drives it; tests drive it alone.
 

@@ -1,5 +1,5 @@
 #pragma once
-// Turns a stream of SSL-Vision packets into formations on the data's own clock (DESIGN.md §3):
+// Turns a stream of SSL-Vision packets into formations on the data's own clock (docs/models.md):
 // one sample every `step` seconds of t_capture (the paper's sampling), or one at every frame
 // instant with each robot's previous cell taken from `step` seconds earlier (rolling sampling);
 // robots merged across cameras, geometry packets updating the field size, and the
