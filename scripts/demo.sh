@@ -167,7 +167,7 @@ match_options=()
 pids+=($!)
 "$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
   --table "$table" --grid "$grid" --model "$model" --horizon "$horizon" --sampling frame \
-  --reload-interval 0.5 \
+  --reload-interval 0.5 --print-predictions \
   --http-port "$http_port" --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
   "${match_options[@]}" >"$predictions_file" 2>"$run_dir/predictor.log" &
 pids+=($!)
