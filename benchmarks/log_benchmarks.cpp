@@ -203,8 +203,8 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
 }
 
 // The recording reshaped as recorded Division A matches come (docs/simulation.md,
-// common/files/include/ssl_formation/files/real_log_shape.hpp): every packet with camera id 0, 90 packets a
-// second, each holding the robots of one half of the field. Each such packet completes an
+// common/files/include/ssl_formation/files/real_log_shape.hpp): every packet with camera id 0, 90
+// packets a second, each holding the robots of one half of the field. Each such packet completes an
 // instant with every opponent robot, so this is the costliest shape per packet. Written once per
 // process, when first asked for, in the temp folder.
 const std::filesystem::path& one_camera_halves_log(const std::filesystem::path& recording) {

@@ -24,8 +24,8 @@ const std::array<ModelDescription, all_model_kinds.size()> descriptions{{
     {"constant-velocity", "constant velocity", true, false, false, false, true, 0.5},
     {"damped-constant-velocity", "damped constant velocity", true, false, false, true, true, 0.5},
     {"constant-acceleration", "constant acceleration", true, false, false, false, true, 0.5},
-    {"damped-constant-acceleration", "damped constant acceleration", true, false, false, true,
-     true, 0.5},
+    {"damped-constant-acceleration", "damped constant acceleration", true, false, false, true, true,
+     0.5},
 }};
 
 }  // namespace
@@ -110,11 +110,11 @@ std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& setti
       return std::make_unique<models::PaperLearner>(TransitionTable(settings.grid));
     case ModelKind::motion: {
       const MotionConfig config = settings.motion_config();
-      if (!config.valid()) throw std::invalid_argument("invalid step or horizon for the motion model");
-      return std::make_unique<models::MotionLearner>(TransitionTable(settings.grid),
-                                                     MotionTable(config), settings.recalibration,
-                                                     settings.pooled_motion,
-                                                     settings.motion_rows_in_memory);
+      if (!config.valid())
+        throw std::invalid_argument("invalid step or horizon for the motion model");
+      return std::make_unique<models::MotionLearner>(
+          TransitionTable(settings.grid), MotionTable(config), settings.recalibration,
+          settings.pooled_motion, settings.motion_rows_in_memory);
     }
     case ModelKind::persistence:
     case ModelKind::constant_velocity:

@@ -15,10 +15,14 @@ int main(int argc, char** argv) {
   double timeout_s = 10.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string option = argv[i];
-    if (option == "--group") group = argv[i + 1];
-    else if (option == "--interface") interface = argv[i + 1];
-    else if (option == "--count") count = std::atoi(argv[i + 1]);
-    else if (option == "--timeout-s") timeout_s = std::atof(argv[i + 1]);
+    if (option == "--group")
+      group = argv[i + 1];
+    else if (option == "--interface")
+      interface = argv[i + 1];
+    else if (option == "--count")
+      count = std::atoi(argv[i + 1]);
+    else if (option == "--timeout-s")
+      timeout_s = std::atof(argv[i + 1]);
   }
   ssl_formation::client::PredictionReceiver receiver(group, interface);
   const auto timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000));

@@ -1,5 +1,5 @@
-// A clean recording rewritten as real match logs come (common/files/src/real_log_shape.cpp): the shape
-// of every packet, and each part of the mess where it was asked for and nowhere else.
+// A clean recording rewritten as real match logs come (common/files/src/real_log_shape.cpp): the
+// shape of every packet, and each part of the mess where it was asked for and nowhere else.
 
 #include "ssl_formation/files/real_log_shape.hpp"
 
@@ -297,7 +297,8 @@ TEST_F(RealLogShape, StoppagesComeWithTheRefereesHaltAndRunningPlayElsewhere) {
   EXPECT_EQ(counts->referee_messages, log.referee.size());
   // The recording has no referee: nothing says which half a team defends, and the count says so.
   EXPECT_FALSE(counts->sides_given);
-  for (const auto& [message, at_s] : log.referee) EXPECT_FALSE(message.has_blue_team_on_positive_half());
+  for (const auto& [message, at_s] : log.referee)
+    EXPECT_FALSE(message.has_blue_team_on_positive_half());
 
   // About ten messages a second, over the whole log, each whole; the counter counts commands.
   const double log_s = log.packets.back().receive_s - log.packets.front().receive_s;

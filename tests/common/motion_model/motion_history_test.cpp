@@ -1,6 +1,6 @@
-// The training side of the motion model (common/motion_model/src/motion_model.cpp): whole_mm's rounding (one
-// value or a point's two at once), on which every learned row depends, kept bit for bit through
-// its speed-ups.
+// The training side of the motion model (common/motion_model/src/motion_model.cpp): whole_mm's
+// rounding (one value or a point's two at once), on which every learned row depends, kept bit for
+// bit through its speed-ups.
 
 #include <gtest/gtest.h>
 
@@ -242,10 +242,9 @@ TEST(MotionHistory, AnEntrysContextIsItsStandingTimeAndWhereItsTeamIs) {
   // 267 mm/s, on the move. The team's centroid is 2 m into its own half for 1.5 s, then 2 m into
   // the half it attacks.
   const auto at = [](double t, double centroid_x) {
-    sf::Formation formation =
-        formation_at(t, {{{-2000.0, 500.0}, true},
-                         {{-2000.0 + 400.0 * t, -500.0}, true},
-                         {{-2000.0 + 400.0 * t, 1500.0}, true}});
+    sf::Formation formation = formation_at(t, {{{-2000.0, 500.0}, true},
+                                               {{-2000.0 + 400.0 * t, -500.0}, true},
+                                               {{-2000.0 + 400.0 * t, 1500.0}, true}});
     formation.centroid = {centroid_x, 0.0};
     return formation;
   };

@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
-#include <limits>
 #include <set>
 
 #include "ssl_formation/motion_model/motion_predictor.hpp"
@@ -91,8 +91,8 @@ TEST(MotionFeatures, ZonesSplitTheLengthInQuartersAndTheWidthInACentreLaneAndTwo
   };
   // Cells 3 m apart or less in one zone share it; across an edge they do not.
   EXPECT_EQ(zone(250.0, -1250.0), zone(2750.0, 1250.0));
-  EXPECT_NE(zone(-250.0, 0.0), zone(250.0, 0.0));        // the halfway line
-  EXPECT_NE(zone(2750.0, 0.0), zone(3250.0, 0.0));       // a quarter of the length
+  EXPECT_NE(zone(-250.0, 0.0), zone(250.0, 0.0));         // the halfway line
+  EXPECT_NE(zone(2750.0, 0.0), zone(3250.0, 0.0));        // a quarter of the length
   EXPECT_NE(zone(1000.0, 1250.0), zone(1000.0, 1750.0));  // the centre lane and a wing
   EXPECT_NE(zone(1000.0, -1250.0), zone(1000.0, -1750.0));
   // The edge zones reach beyond the field; every zone is numbered below zone_count.
@@ -165,8 +165,7 @@ TEST(MotionFeatures, EveryGamePhaseAndTimeSinceItsCommandHasItsOwnGameContext) {
     EXPECT_EQ(sf::MotionFeatures::game_context(phase, 1.0), early + 1);
     EXPECT_EQ(sf::MotionFeatures::game_context(phase, 2.999), early + 1);
     EXPECT_EQ(sf::MotionFeatures::game_context(phase, 3.0), early + 2);
-    EXPECT_EQ(sf::MotionFeatures::game_context(phase,
-                                               std::numeric_limits<double>::infinity()),
+    EXPECT_EQ(sf::MotionFeatures::game_context(phase, std::numeric_limits<double>::infinity()),
               early + 2);
     for (std::uint32_t g = early; g < early + 3; ++g) {
       EXPECT_TRUE(seen.insert(g).second) << sf::to_string(phase);
@@ -645,8 +644,7 @@ TEST(MotionPipeline, PredictsPositionsWithRadiiFromATrainedTable) {
                              std::abs(robot.feed_position.y - (-3500.0 + 700.0 * robot.robot_id)));
     }
   });
-  pipeline.set_table(std::make_shared<const sf::StoredTable>(
-      training.stored_table(metadata)));
+  pipeline.set_table(std::make_shared<const sf::StoredTable>(training.stored_table(metadata)));
   for (int i = 0; i < 600; ++i) pipeline.add(straight_lines(60 * 200 + i));
   EXPECT_GT(predictions, 500u);
   EXPECT_LT(worst_error, 50.0);
@@ -743,8 +741,7 @@ TEST(MotionPipeline, ATeamStandingStillForAMinuteIsSaidToStayAsOftenAsItDoes) {
   sf::TableMetadata metadata;
   metadata.field = field;
   metadata.step_s = 0.5;
-  const auto stored = std::make_shared<const sf::StoredTable>(
-      training.stored_table(metadata));
+  const auto stored = std::make_shared<const sf::StoredTable>(training.stored_table(metadata));
   const auto standing = [](int i) {
     sf::DetectionFrameSpec spec;
     spec.frame_number = static_cast<std::uint32_t>(i);
@@ -768,13 +765,11 @@ TEST(MotionPipeline, ATeamStandingStillForAMinuteIsSaidToStayAsOftenAsItDoes) {
   // The daemon's warm-up runs the last prediction again between frames: it must not be
   // remembered (checked twice), so a pipeline rehearsing every frame states the same.
   std::vector<sf::Prediction> rehearsing;
-  sf::PredictionPipeline warmed(config, [&](const sf::PredictedFormation& p) {
-    rehearsing.push_back(p.prediction);
-  });
+  sf::PredictionPipeline warmed(
+      config, [&](const sf::PredictedFormation& p) { rehearsing.push_back(p.prediction); });
   config.recalibration.reset();
-  sf::PredictionPipeline off(config, [&](const sf::PredictedFormation& p) {
-    as_stated.push_back(p.prediction);
-  });
+  sf::PredictionPipeline off(
+      config, [&](const sf::PredictedFormation& p) { as_stated.push_back(p.prediction); });
   on.set_table(stored);
   off.set_table(stored);
   warmed.set_table(stored);

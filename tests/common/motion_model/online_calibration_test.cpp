@@ -241,8 +241,7 @@ TEST(OnlineCalibration, AFormationWhoseRobotsMoveTogetherIsStatedAsLikelyAsItTur
   // move together), half the time each way: every robot's 0.5 is right, but the formation's
   // product, 1/16, is far below the 0.5 it hits.
   sf::OnlineCalibration calibration(quick);
-  const std::vector<Stated> robots{
-      {1, home, 0.5}, {2, home, 0.5}, {3, home, 0.5}, {4, home, 0.5}};
+  const std::vector<Stated> robots{{1, home, 0.5}, {2, home, 0.5}, {3, home, 0.5}, {4, home, 0.5}};
   for (int i = 0; i < 8 * 120; ++i) {
     const double t = 0.125 * i;
     sf::Formation formation;
@@ -359,7 +358,7 @@ TEST(OnlineCalibration, RobotsStandingWithinAMillimetreInALongHaltGetRadiiOfAMil
   // where the table states radii of 100 and 300 mm. A running quantile that moved the radius a
   // small step per check was still far too wide at the end of such a halt.
   sf::OnlineCalibration calibration(quick);
-  const std::vector<double> standing = evenly_spread(0.025, 0.05);  // 0.025 to 0.975 mm
+  const std::vector<double> standing = evenly_spread(0.025, 0.05);      // 0.025 to 0.975 mm
   play_radii(calibration, 100.0, 25.0, sf::GamePhase::halt, standing);  // 200 checks
   sf::Prediction prediction = prediction_of({{{1, home, 0.5}}});
   sf::RobotPrediction& robot = prediction.steps[0].robots[0];

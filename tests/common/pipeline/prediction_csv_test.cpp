@@ -340,7 +340,8 @@ TEST(PredictionCsv, TheLinesOfThePipelineMatchWhatItPredicted) {
       training.add(detection(100.0 + 0.7 * k, static_cast<std::uint32_t>(k), walk(k)));
     }
     ASSERT_GT(training.table().transitions(), 0u);
-    const auto table = std::make_shared<const StoredTable>(StoredTable{training.table(), {}, std::nullopt});
+    const auto table =
+        std::make_shared<const StoredTable>(StoredTable{training.table(), {}, std::nullopt});
 
     struct Seen {
       std::string csv;
@@ -349,11 +350,12 @@ TEST(PredictionCsv, TheLinesOfThePipelineMatchWhatItPredicted) {
       PredictionContext context;
     };
     std::vector<Seen> seen;
-    PredictionPipeline pipeline(PredictionConfig{config, 3, ModelKind::paper}, [&](const PredictedFormation& p) {
-      Seen s{std::string(), p.formation(), p.prediction, p.context};
-      append_prediction_csv(p, s.csv);
-      seen.push_back(std::move(s));
-    });
+    PredictionPipeline pipeline(PredictionConfig{config, 3, ModelKind::paper},
+                                [&](const PredictedFormation& p) {
+                                  Seen s{std::string(), p.formation(), p.prediction, p.context};
+                                  append_prediction_csv(p, s.csv);
+                                  seen.push_back(std::move(s));
+                                });
     pipeline.set_table(table);
     for (int k = 0; k < 10; ++k) {
       pipeline.add(detection(1234.56789 + 0.7 * k, static_cast<std::uint32_t>(500 + k), walk(k)));
@@ -389,8 +391,7 @@ TEST(PredictionCsv, TheMotionModelsLinesOfThePipelineCarryItsPositionsAndRadii) 
   }
   ASSERT_NE(training.motion(), nullptr);
   ASSERT_GT(training.motion()->instances(), 0u);
-  const auto table =
-      std::make_shared<const StoredTable>(training.stored_table(TableMetadata{}));
+  const auto table = std::make_shared<const StoredTable>(training.stored_table(TableMetadata{}));
 
   std::vector<std::string> csv;
   std::size_t checked = 0;
@@ -507,8 +508,10 @@ TEST(PredictionCsvReader, BadInputNamesTheFileTheLineAndTheColumn) {
   EXPECT_NE(error("t_capture,robot_id,horizon_s,predicted_feed_x_mm\n1,2,0.5,3\n")
                 .find("no column 'predicted_feed_y_mm'"),
             std::string::npos);
-  const std::string header = "t_capture,robot_id,horizon_s,predicted_feed_x_mm,predicted_feed_y_mm\n";
-  EXPECT_NE(error(header + "1,2,0.5,3,4\n1,2,0.5,x,4\n").find("p.csv:3: column 'predicted_feed_x_mm' holds 'x'"),
+  const std::string header =
+      "t_capture,robot_id,horizon_s,predicted_feed_x_mm,predicted_feed_y_mm\n";
+  EXPECT_NE(error(header + "1,2,0.5,3,4\n1,2,0.5,x,4\n")
+                .find("p.csv:3: column 'predicted_feed_x_mm' holds 'x'"),
             std::string::npos)
       << error(header + "1,2,0.5,3,4\n1,2,0.5,x,4\n");
   EXPECT_NE(error(header + "1,2,0.5,3\n").find("p.csv:2: 4 fields where the header has 5"),

@@ -50,7 +50,7 @@ struct RefereeView {
   GameState state = GameState::unknown;
   int command = -1;  // Referee::Command's number; -1 before the first message
   std::uint32_t command_counter = 0;
-  int stage = -1;  // Referee::Stage's number; -1 before the first message
+  int stage = -1;           // Referee::Stage's number; -1 before the first message
   std::string yellow_name;  // empty: the game controller was not told the name
   std::string blue_name;
   // True when blue's goal is on the +x side of the vision frame; none while the game controller
@@ -65,10 +65,10 @@ struct RefereeView {
 
 // What one message changed in the view.
 struct RefereeChange {
-  bool command = false;  // a new command (or a new game controller's first)
-  bool teams = false;    // a team name changed
-  bool sides = false;    // blue_team_on_positive_half changed (the teams changed ends)
-  bool source = false;   // another game controller is followed from now on
+  bool command = false;   // a new command (or a new game controller's first)
+  bool teams = false;     // a team name changed
+  bool sides = false;     // blue_team_on_positive_half changed (the teams changed ends)
+  bool source = false;    // another game controller is followed from now on
   bool conflict = false;  // this message came from a second game controller, and was not used
   bool stale = false;     // from the followed one, but older than what it said: not used
   bool resync = false;    // used after all: what was followed before was the stale one
@@ -78,10 +78,10 @@ struct RefereeChange {
 // Every referee message by what became of it.
 struct RefereeCounters {
   std::uint64_t messages = 0;
-  std::uint64_t used = 0;           // from the followed game controller
-  std::uint64_t undecodable = 0;    // not a Referee message at all: not used
+  std::uint64_t used = 0;             // from the followed game controller
+  std::uint64_t undecodable = 0;      // not a Referee message at all: not used
   std::uint64_t unknown_command = 0;  // a command number the wire format does not define: not used
-  std::uint64_t other_source = 0;   // from a second game controller while one is followed
+  std::uint64_t other_source = 0;     // from a second game controller while one is followed
   // From the followed game controller but stale or replayed: a command counter that went back,
   // a packet timestamp more than max_timestamp_back_s before its last (or far ahead of it).
   std::uint64_t stale = 0;
@@ -89,12 +89,12 @@ struct RefereeCounters {
   // them: a replay heard first, a log looping back, one forged message that ran ahead.
   std::uint64_t resyncs = 0;
   std::uint64_t source_switches = 0;  // the followed one fell silent and another took over
-  std::uint64_t unnamed_teams = 0;  // messages that name neither team (used all the same)
+  std::uint64_t unnamed_teams = 0;    // messages that name neither team (used all the same)
   // New team names that did not take over: they did not hold for name_hold_s of the followed
   // game controller's messages, or came when max_name_switches teams had already switched within
   // name_switch_window_s (spoofed names on a shared network, a half-configured tool).
   std::uint64_t refused_name_switches = 0;
-  std::uint64_t commands = 0;       // new commands followed
+  std::uint64_t commands = 0;  // new commands followed
 };
 
 class RefereeFollower {
@@ -175,7 +175,7 @@ class RefereeFollower {
     double since_s = 0.0;
   };
   std::optional<NameCandidate> candidate_;
-  bool named_ = false;  // names were taken over since the start or reset()
+  bool named_ = false;                  // names were taken over since the start or reset()
   std::deque<double> name_switches_s_;  // when names took over, within the window
   // The followed game controller's messages within resync_window_s: when each used one came,
   // and each refused one's arrival, timestamp and why.

@@ -24,12 +24,12 @@ namespace ssl_formation {
 
 struct TrackerCounters {
   std::uint64_t packets = 0;
-  std::uint64_t undecodable = 0;    // not a TrackerWrapperPacket
-  std::uint64_t without_frame = 0;  // from the followed tracker, but no tracked_frame
-  std::uint64_t other_source = 0;   // from another tracker while one is followed
-  std::uint64_t source_switches = 0;  // the followed one fell silent, another took over
+  std::uint64_t undecodable = 0;          // not a TrackerWrapperPacket
+  std::uint64_t without_frame = 0;        // from the followed tracker, but no tracked_frame
+  std::uint64_t other_source = 0;         // from another tracker while one is followed
+  std::uint64_t source_switches = 0;      // the followed one fell silent, another took over
   std::uint64_t robots_without_team = 0;  // robots with no id or no team colour: left out
-  std::uint64_t frames = 0;         // handed on
+  std::uint64_t frames = 0;               // handed on
 };
 
 class TrackedVision {

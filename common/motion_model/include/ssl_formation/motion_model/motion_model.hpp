@@ -40,8 +40,8 @@ namespace ssl_formation {
 
 // What a motion table's rows mean; saved with them, and equal for tables that merge.
 struct MotionConfig {
-  double step_s = 2.0;             // the table's step
-  int horizons = 3;                // steps learned: k x step_s ahead for k = 1..horizons
+  double step_s = 2.0;  // the table's step
+  int horizons = 3;     // steps learned: k x step_s ahead for k = 1..horizons
   // A robot has a velocity once its track has gone on for half this window, and its change of
   // velocity is its acceleration over this window (both from its RobotTracker).
   double velocity_window_s = 0.1;
@@ -155,8 +155,7 @@ struct MotionFeatures {
   static constexpr std::array<double, 3> zone_length_edges_mm{-3000.0, 0.0, 3000.0};
   static constexpr std::array<double, 2> zone_width_edges_mm{-1500.0, 1500.0};
   static constexpr int zones_y = static_cast<int>(zone_width_edges_mm.size()) + 1;
-  static constexpr int zone_count =
-      (static_cast<int>(zone_length_edges_mm.size()) + 1) * zones_y;
+  static constexpr int zone_count = (static_cast<int>(zone_length_edges_mm.size()) + 1) * zones_y;
   static int zone_of_cell(int cell);
   static int robot_slot(std::uint32_t robot_id) {
     return robot_id < 16 ? static_cast<int>(robot_id) : 16;

@@ -38,10 +38,10 @@ inline constexpr std::uint32_t set_play_stages = 3;
 
 struct SetPlaySnapshot {
   static constexpr int robot_slots = 16;  // robot ids 0-15 (SSL's ids)
-  std::int32_t offset_ms = 0;  // since the episode's first snapshot
+  std::int32_t offset_ms = 0;             // since the episode's first snapshot
   std::int32_t since_command_ms = 0;
   SetPlayStage stage = SetPlayStage::preparation;
-  std::uint32_t seen = 0;  // a bit per robot id
+  std::uint32_t seen = 0;                                           // a bit per robot id
   std::array<std::array<std::int32_t, 2>, robot_slots> position{};  // normalised, whole mm
   bool has(std::uint32_t robot_id) const { return robot_id < 16 && (seen >> robot_id & 1U) != 0; }
   Point at(std::uint32_t robot_id) const {
@@ -97,8 +97,8 @@ class SetPlayMemory {
   // For the robots of `formation` (normalised) at a kick-off of the opponent's at `stage`,
   // `since_command_s` after its command: where the earlier kick-offs put each `step_s` x
   // 1..steps later. `out` is reused.
-  void recall(const Formation& formation, SetPlayStage stage, double since_command_s,
-              double step_s, int steps, SetPlayAdvice& out) const;
+  void recall(const Formation& formation, SetPlayStage stage, double since_command_s, double step_s,
+              int steps, SetPlayAdvice& out) const;
 
   // Equal episodes (the index follows from them).
   friend bool operator==(const SetPlayMemory& a, const SetPlayMemory& b) {

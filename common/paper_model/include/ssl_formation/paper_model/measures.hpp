@@ -3,8 +3,8 @@
 
 #include <vector>
 
-#include "ssl_formation/paper_model/predictor.hpp"
 #include "ssl_formation/base/state.hpp"
+#include "ssl_formation/paper_model/predictor.hpp"
 
 namespace ssl_formation {
 

@@ -167,10 +167,10 @@ class MatchSimulation {
   // starts); else the robot nearest to the ball (after a foul, it places it) kicks, a pass to
   // the play's first receiver.
   bool taker_kicks_ = true;
-  bool kickoff_by_opponent_ = true;    // whose kick-off is being prepared
-  Point placement_;                    // where the ball is being placed (normalised)
-  Point placement_behind_;             // where the placing robot stands from the ball it carries
-  double kick_at_s_ = 0.0;             // a free kick: its taker waits with the ball until then
+  bool kickoff_by_opponent_ = true;  // whose kick-off is being prepared
+  Point placement_;                  // where the ball is being placed (normalised)
+  Point placement_behind_;           // where the placing robot stands from the ball it carries
+  double kick_at_s_ = 0.0;           // a free kick: its taker waits with the ball until then
   FieldSize field_;
   int team_size_ = 0;
   std::mt19937_64 random_;

@@ -202,7 +202,7 @@ class SimulatedGameController {
   double last_t_s_ = -1e300;
   bool second_half_ = false;
   AttackDirection opponent_attacks_;
-  std::optional<Point> placement_;  // where the queued ball placement puts the ball
+  std::optional<Point> placement_;           // where the queued ball placement puts the ball
   double placement_at_least_until_s_ = 0.0;  // a placement the match carries out lasts this long
   // With a shape and stoppages called by the match: when the referee stops the running play.
   double play_stops_s_ = 1e300;

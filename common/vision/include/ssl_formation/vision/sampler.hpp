@@ -17,11 +17,11 @@
 #include <string_view>
 #include <vector>
 
-#include "ssl_formation/vision/attack_inference.hpp"
-#include "ssl_formation/vision/data_clock.hpp"
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
+#include "ssl_formation/vision/attack_inference.hpp"
+#include "ssl_formation/vision/data_clock.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
 
 class SSL_WrapperPacket;
