@@ -5,11 +5,11 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cerrno>
 #include <utility>
 
 #include "file_descriptor.hpp"
+#include "ssl_formation/files/replacing_file.hpp"
 
 namespace ssl_formation::detail {
 
@@ -72,20 +72,12 @@ class TemporaryFile {
   bool renamed_ = false;
 };
 
-std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
-  // The pid keeps processes apart, the counter keeps concurrent writes of one process apart.
-  static std::atomic<unsigned> counter{0};
-  std::filesystem::path temp = path;
-  temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  return temp;
-}
-
 }  // namespace
 
 Result<DurableFileWritten> write_file_durably(const std::filesystem::path& path,
                                               const WriteContent& write_content,
                                               const DurableFileHooks& hooks) {
-  TemporaryFile temp(temporary_path_for(path));
+  TemporaryFile temp(temporary_beside(path));
   int fd_value = -1;
   do {
     fd_value =

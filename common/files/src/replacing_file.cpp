@@ -9,6 +9,7 @@
 namespace ssl_formation {
 
 std::filesystem::path temporary_beside(const std::filesystem::path& target) {
+  // The pid keeps processes apart, the counter keeps concurrent writes of one process apart.
   static std::atomic<unsigned> next{0};
   std::filesystem::path temporary = target;
   temporary += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(next++);
