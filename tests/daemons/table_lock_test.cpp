@@ -1,9 +1,12 @@
 // One writer per table: a second ssl-trainer on the same --table or --table-dir is refused at
-// start, naming the first; a killed trainer leaves no lock behind that blocks the next one.
+// start, naming the first; a killed trainer leaves no lock behind that blocks the next one, and
+// a trainer that stops cleanly (a signal, the end of its logs, a merge) leaves no lock file at
+// all.
+
+#include "ssl_formation/files/table_lock.hpp"
 
 #include <gtest/gtest.h>
 #include <signal.h>
-
 #include <unistd.h>
 
 #include <chrono>
@@ -13,7 +16,6 @@
 
 #include "child_process.hpp"
 #include "feed_groups.hpp"
-#include "ssl_formation/files/table_lock.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -26,8 +28,11 @@ using testing::TempDir;
 const std::filesystem::path trainer_program = SSLF_TRAINER_PATH;
 
 std::vector<std::string> live_trainer(const std::string& table_option, const std::string& where) {
-  return {"--vision-address", testing::new_group(), "--referee-address", testing::new_group(),
-          table_option, where, "--status-interval", "60", "--model", "paper"};
+  return {"--vision-address",  testing::new_group(),
+          "--referee-address", testing::new_group(),
+          table_option,        where,
+          "--status-interval", "60",
+          "--model",           "paper"};
 }
 
 TEST(TableLock, ASecondTrainerOnTheSameTableIsRefusedAndAKilledOneLeavesNoLock) {
@@ -82,6 +87,57 @@ TEST(TableLock, ATableFolderHasOneWriterLiveOrFromLogs) {
   EXPECT_NE(offline.err.find("is written by another process"), std::string::npos) << offline.err;
   live.signal(SIGTERM);
   EXPECT_EQ(live.wait(5s), 0) << live.stderr_text();
+}
+
+TEST(TableLock, ATrainerStoppedBySignalLeavesNoLockFile) {
+  TempDir dir;
+  const auto table = dir / "table.bin";
+  const auto lock = TableWriterLock::lock_path_for_table(table);
+  ChildProcess by_interrupt(trainer_program, live_trainer("--table", table.string()), dir.path(),
+                            "interrupted", Readiness::ready_file);
+  ASSERT_TRUE(by_interrupt.wait_until_ready(10s)) << by_interrupt.stderr_text();
+  EXPECT_TRUE(std::filesystem::exists(lock));
+  by_interrupt.signal(SIGINT);
+  EXPECT_EQ(by_interrupt.wait(5s), 0) << by_interrupt.stderr_text();
+  EXPECT_FALSE(std::filesystem::exists(lock));
+
+  const auto tables = dir / "tables";
+  ChildProcess by_terminate(trainer_program, live_trainer("--table-dir", tables.string()),
+                            dir.path(), "terminated", Readiness::ready_file);
+  ASSERT_TRUE(by_terminate.wait_until_ready(10s)) << by_terminate.stderr_text();
+  EXPECT_TRUE(std::filesystem::exists(TableWriterLock::lock_path_for_folder(tables)));
+  by_terminate.signal(SIGTERM);
+  EXPECT_EQ(by_terminate.wait(5s), 0) << by_terminate.stderr_text();
+  EXPECT_FALSE(std::filesystem::exists(TableWriterLock::lock_path_for_folder(tables)));
+}
+
+TEST(TableLock, TrainingFromLogsAndMergingLeaveNoLockFile) {
+  TempDir dir;
+  const std::string log = std::string(SSLF_TEST_DATA_DIR) + "/step-golden.log.gz";
+  for (const char* table : {"a.bin", "b.bin"}) {
+    const auto trained = testing::run_to_end(
+        trainer_program, {"--from-log", log, "--table", (dir / table).string(), "--model", "paper"},
+        dir.path(), table, 30s);
+    ASSERT_EQ(trained.exit_code, 0) << trained.err;
+    EXPECT_FALSE(std::filesystem::exists(TableWriterLock::lock_path_for_table(dir / table)));
+  }
+  const auto merged =
+      testing::run_to_end(trainer_program,
+                          {"merge", (dir / "a.bin").string(), (dir / "b.bin").string(), "-o",
+                           (dir / "ab.bin").string()},
+                          dir.path(), "merge", 30s);
+  ASSERT_EQ(merged.exit_code, 0) << merged.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "ab.bin"));
+  EXPECT_FALSE(std::filesystem::exists(TableWriterLock::lock_path_for_table(dir / "ab.bin")));
+
+  const auto tables = dir / "tables";
+  const auto into_folder = testing::run_to_end(
+      trainer_program,
+      {"--from-log", std::string(SSLF_TEST_DATA_DIR) + "/grsim-4cam-11v11-idle.log.gz",
+       "--table-dir", tables.string(), "--opponent-team", "all", "--model", "paper"},
+      dir.path(), "into-folder", 30s);
+  ASSERT_EQ(into_folder.exit_code, 0) << into_folder.err;
+  EXPECT_FALSE(std::filesystem::exists(TableWriterLock::lock_path_for_folder(tables)));
 }
 
 TEST(TableLock, TwoLocksOnOneFileConflictEvenInOneProcessAndTheFileNamesItsHolder) {

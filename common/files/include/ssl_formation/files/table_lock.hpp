@@ -2,9 +2,12 @@
 // One writer per table: two ssl-trainers saving the same file would each overwrite the other's
 // counts at every save, without a word. A writer holds an exclusive flock(2) on a lock file
 // beside its table ("TABLE.lock", or ".ssl-trainer.lock" in a --table-dir) for as long as it
-// runs; a second writer is refused at start, told which process holds it. The kernel releases
-// the lock however the holder ends (killed included), so no stale lock ever blocks a start: the
-// file itself stays, unlocked, and is taken over by the next writer.
+// runs; a second writer is refused at start, told which process holds it. A writer that stops
+// removes the file, still holding the lock, so a clean stop leaves nothing in the user's folder;
+// a writer that starts meanwhile and finds its locked file gone from the path takes the lock
+// again on the path's new file. The kernel releases the lock however the holder ends, so a
+// killed one's file stays, unlocked, and is taken over by the next writer: no stale lock ever
+// blocks a start.
 
 #include <filesystem>
 #include <stdexcept>
@@ -27,6 +30,7 @@ class TableWriterLock {
   // writes this process's id into it. Throws TableLockError when another process holds it
   // ("... is written by another process (pid 1234) ...") or the file cannot be opened.
   TableWriterLock(const std::filesystem::path& lock_path, const std::string& what);
+  // Removes the lock file and releases the lock.
   ~TableWriterLock();
   TableWriterLock(const TableWriterLock&) = delete;
   TableWriterLock& operator=(const TableWriterLock&) = delete;
