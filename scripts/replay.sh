@@ -4,22 +4,31 @@
 # ssl-predictor (or any SSL software) can watch it. Builds the project first if needed.
 #
 #   scripts/replay.sh FILE [--speed X] [--loop] [--start S] [--end S] [--count N]
-#                          [--vision-address GROUP:PORT] [--interface IP] [--ttl N]
+#                          [--vision-address GROUP:PORT] [--referee-address GROUP:PORT|none]
+#                          [--tracker-address GROUP:PORT|none] [--interface IP] [--ttl N]
 #
 #   --speed X          1 = as recorded (default), 10 = ten times faster, 0 = as fast as possible
 #   --loop             start over at the end, until Ctrl-C (or --count packets)
 #   --start S, --end S seconds from the log's first packet to start and stop at (--end 0 = end)
 #   --count N          packets to send, then stop (0 = no limit)
-#   --vision-address   where to send (default 224.5.23.2:10006, SSL-Vision's; 224.5.23.2:10020
-#                      for software set up for grSim)
+#   --vision-address   where the vision goes (default 224.5.23.2:10006, SSL-Vision's;
+#                      224.5.23.2:10020 for software set up for grSim)
+#   --referee-address  where the log's referee messages go (default 224.5.23.1:10003, the game
+#                      controller's); none: not sent
+#   --tracker-address  where the log's tracked vision goes (default 224.5.23.2:10010, the
+#                      trackers'); none: not sent
 #   --interface IP     interface to send from (default 127.0.0.1: this machine only)
 #   --ttl N            multicast TTL (default 1)
 #   --status-interval S seconds between status lines (default 5)
 #
-# Vision packets (types 4 and 2) are sent; referee, tracker and other messages are skipped and
-# counted. Logs whose receive times are in microseconds (older recorders) or zero are timed by
-# the frames' own t_capture. A damaged file is replayed up to the damage, then the script exits
-# with status 1 and names the byte offset. All options: build/producer/ssl-producer --help.
+# Vision packets (types 4 and 2) go to --vision-address, the log's referee messages (type 3) and
+# tracked vision (type 5) to --referee-address and --tracker-address, each in its place in the
+# log: a team replaying a match hears its game controller too. With a real game controller on the
+# network, give --referee-address none. Index and unknown messages are skipped and counted; the
+# last line says how many of each kind were sent. Logs whose receive times are in microseconds
+# (older recorders) or zero are timed by the frames' own t_capture. A damaged file is replayed up
+# to the damage, then the script exits with status 1 and names the byte offset. All options:
+# build/producer/ssl-producer --help.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 

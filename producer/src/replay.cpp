@@ -1,6 +1,7 @@
 // --replay: sends an official SSL log's vision packets onto multicast with the recorded timing
 // (packet i at start + (t_i - t_first) / speed on the clock replay_clock.hpp chooses), as fast as
-// possible with --speed 0, over a window (--start/--end) and in a loop (--loop).
+// possible with --speed 0, over a window (--start/--end) and in a loop (--loop). Its referee
+// messages and tracked vision go to their own groups in their places (none: not sent).
 
 #include <spdlog/spdlog.h>
 
