@@ -50,6 +50,11 @@ int run_write_log(const ProducerOptions& options) {
 
   Result<LogWriter> writer = LogWriter::create(options.write_log);
   if (!writer) throw std::runtime_error(writer.error().message);
+  // The writer removes what it wrote when the run fails: the path keeps what it held.
+  const auto failed = [&] {
+    return std::runtime_error(writer->error() + "; " + options.write_log +
+                              " not written (an earlier file there is as it was)");
+  };
   const sim::SimulatedGameController* game = simulation->game_controller();
   spdlog::info(
       "writing the {} simulation to {}: {}, {} s of data time a step, {} camera(s), "
@@ -95,13 +100,13 @@ int run_write_log(const ProducerOptions& options) {
       if (step.referee) {
         if (!writer->write(static_cast<std::int32_t>(LogMessageType::referee), receive_time_ns,
                            step.referee->SerializeAsString())) {
-          throw std::runtime_error(writer->error());
+          throw failed();
         }
         ++referee_messages;
       }
       for (const SSL_WrapperPacket& packet : step.packets) {
         if (!writer->write_vision(packet, receive_time_ns)) {
-          throw std::runtime_error(writer->error());
+          throw failed();
         }
         ++packets;
       }
@@ -111,7 +116,7 @@ int run_write_log(const ProducerOptions& options) {
     io.poll();
   }
   status.cancel();
-  if (!writer->close()) throw std::runtime_error(writer->error());
+  if (!writer->close()) throw failed();
   log_status(stopped ? "stopped" : "done");
   return 0;
 }
