@@ -10,6 +10,8 @@
 #include <stdexcept>
 
 #include "ssl_formation/files/replacing_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::evaluate {
 
@@ -120,10 +122,11 @@ struct Plot {
         << ") rotate(-90)' text-anchor='middle'>" << escaped(y_label) << "</text>";
     return svg.str();
   }
-  std::string open(const std::string& id) const {
+  // `attributes`: more of the svg element's, each with a space before it.
+  std::string open(const std::string& id, const std::string& attributes = "") const {
     std::ostringstream svg;
     svg << "<svg id='" << id << "' class='plot' viewBox='0 0 " << width << ' ' << height
-        << "' width='" << width << "' height='" << height << "' role='img'>";
+        << "' width='" << width << "' height='" << height << "' role='img'" << attributes << ">";
     return svg.str();
   }
 };
@@ -202,28 +205,119 @@ std::string state_table(const ev::PositionEvaluation& evaluation) {
   return html.str();
 }
 
-// Mean error against the horizon, a line per method, with the intervals as whiskers.
+// A whole number of millimetres with its thousands grouped: "2,630".
+std::string grouped_mm(double value) {
+  const long long whole = std::llround(value);
+  std::string digits = std::to_string(whole < 0 ? -whole : whole);
+  for (auto at = static_cast<std::ptrdiff_t>(digits.size()) - 3; at > 0; at -= 3) {
+    digits.insert(static_cast<std::size_t>(at), 1, ',');
+  }
+  return (whole < 0 ? "-" : "") + digits;
+}
+
+// An axis from 0 to a round value at or above `value`, in at most `max_ticks` steps of 1, 2, 2.5
+// or 5 times a power of ten.
+struct RoundAxis {
+  double top = 1.0;
+  int ticks = 5;
+  int decimals = 0;
+};
+RoundAxis round_axis(double value, int max_ticks) {
+  if (!(value > 0.0) || !std::isfinite(value)) return {};
+  const double power = std::pow(10.0, std::floor(std::log10(value / max_ticks)));
+  for (const double multiple : {1.0, 2.0, 2.5, 5.0, 10.0}) {
+    const double step = multiple * power;
+    const int ticks = static_cast<int>(std::ceil(value / step - 1e-9));
+    if (ticks > max_ticks) continue;
+    // Ticks of 2.5 x a power of ten need one digit more than the power shows.
+    const int decimals = std::max(
+        0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)) + (multiple == 2.5 ? 1 : 0));
+    return {step * ticks, std::max(ticks, 1), decimals};
+  }
+  return {};
+}
+
+// The methods whose errors set the error plot's scale: the model and the two baselines of lowest
+// mean error at the longest horizon. A baseline far worse than those (constant acceleration's
+// error grows with the square of the horizon) would otherwise squeeze them into one line.
+std::vector<std::size_t> scale_setting_methods(const ev::PositionEvaluation& evaluation) {
+  std::vector<std::size_t> methods{0};
+  if (evaluation.all().empty()) return methods;
+  const ev::HorizonScore& longest = evaluation.all().back();
+  std::vector<std::size_t> baselines;
+  for (std::size_t m = 1; m < evaluation.baselines_end && m < longest.methods.size(); ++m) {
+    if (longest.methods[m].error.count() > 0) baselines.push_back(m);
+  }
+  std::sort(baselines.begin(), baselines.end(), [&](std::size_t a, std::size_t b) {
+    return longest.methods[a].error.mean() < longest.methods[b].error.mean();
+  });
+  if (baselines.size() > 2) baselines.resize(2);
+  methods.insert(methods.end(), baselines.begin(), baselines.end());
+  return methods;
+}
+
+// Mean error against the horizon, a line per method, with the intervals as whiskers. The scale
+// goes to half as much again as the largest error of the model and the two best baselines, so
+// those can be told apart; a method beyond it is drawn clipped at the top, where a triangle in its
+// colour marks where it leaves the scale and a line above the plot gives its largest error.
 std::string error_by_horizon(const ev::PositionEvaluation& evaluation) {
-  Plot plot;
+  constexpr double headroom = 1.5;
   const auto& all = evaluation.all();
-  double top = 0.0;
-  for (const ev::HorizonScore& score : all) {
-    for (std::size_t m = 0; m < score.methods.size(); ++m) {
-      top = std::max(top, score.methods[m].error.mean());
-      if (score.intervals.mean.size() == score.methods.size()) {
-        top = std::max(top, score.intervals.mean[m].high);
-      }
+  const std::size_t methods = evaluation.methods.size();
+  double scale = 0.0;
+  const std::vector<std::size_t> scale_setters = scale_setting_methods(evaluation);
+  for (const std::size_t m : scale_setters) {
+    for (const ev::HorizonScore& score : all) {
+      scale = std::max(scale, headroom * score.methods[m].error.mean());
     }
   }
+  const RoundAxis axis = round_axis(scale, 8);
+
+  // Each method's largest mean error and its horizon, to say how far off the scale it went.
+  struct OffScale {
+    std::size_t method;
+    double error_mm;
+    double horizon_s;
+  };
+  std::vector<OffScale> off_scale;
+  for (std::size_t m = 0; m < methods; ++m) {
+    OffScale worst{m, 0.0, 0.0};
+    for (const ev::HorizonScore& score : all) {
+      if (score.methods[m].error.mean() > worst.error_mm) {
+        worst = {m, score.methods[m].error.mean(), score.horizon_s};
+      }
+    }
+    if (worst.error_mm > axis.top) off_scale.push_back(worst);
+  }
+
+  Plot plot;
+  plot.width = 760;
+  plot.height = 420;
+  plot.right = 64;  // the labels at the lines' ends
+  plot.top = 16 + 16.0 * static_cast<double>(off_scale.size());
   plot.x0 = 0.0;
   plot.x1 = all.empty() ? 1.0 : all.back().horizon_s;
-  plot.y1 = nice_ceiling(top);
+  plot.y1 = axis.top;
+  const double area_top = plot.y(plot.y1), area_bottom = plot.y(plot.y0);
   std::ostringstream svg;
-  svg << plot.open("error-by-horizon")
-      << plot.axes("horizon (s)", "mean error (mm)", static_cast<int>(all.size()), 5, 1, 0);
-  for (std::size_t m = 0; m < evaluation.methods.size(); ++m) {
-    svg << "<polyline class='method' data-method='" << escaped(evaluation.labels[m]) << "' stroke='"
-        << method_colour(m) << "' points='";
+  // The scale in data-y-max, for whoever reads the page's numbers.
+  svg << plot.open("error-by-horizon", " data-y-max='" + csv_number(axis.top) + "'");
+  svg << "<defs><clipPath id='error-by-horizon-area'><rect x='" << plot.left << "' y='" << area_top
+      << "' width='" << plot.x(plot.x1) - plot.left << "' height='" << area_bottom - area_top
+      << "'/></clipPath></defs>";
+  svg << plot.axes("horizon (s)", "mean error (mm)", static_cast<int>(all.size()), axis.ticks, 1,
+                   axis.decimals);
+  // The model last, over the others; each method's whiskers a little to the side of the
+  // others', which would hide them.
+  const auto whisker_offset = [methods](std::size_t m) {
+    return 3.0 * (static_cast<double>(m) - static_cast<double>(methods - 1) / 2.0);
+  };
+  for (std::size_t m = methods; m-- > 0;) {
+    const bool off = std::any_of(off_scale.begin(), off_scale.end(),
+                                 [m](const OffScale& o) { return o.method == m; });
+    svg << "<polyline class='method' data-method='" << escaped(evaluation.labels[m])
+        << (off ? "' data-off-scale='true" : "") << "' stroke='" << method_colour(m)
+        << "' clip-path='url(#error-by-horizon-area)' points='";
     for (const ev::HorizonScore& score : all) {
       svg << plot.x(score.horizon_s) << ',' << plot.y(score.methods[m].error.mean()) << ' ';
     }
@@ -231,9 +325,62 @@ std::string error_by_horizon(const ev::PositionEvaluation& evaluation) {
     for (const ev::HorizonScore& score : all) {
       if (score.intervals.mean.size() != score.methods.size()) continue;
       const ev::Interval& i = score.intervals.mean[m];
-      svg << "<line class='whisker' stroke='" << method_colour(m) << "' x1='"
-          << plot.x(score.horizon_s) << "' x2='" << plot.x(score.horizon_s) << "' y1='"
+      const double x = plot.x(score.horizon_s) + whisker_offset(m);
+      svg << "<line class='whisker' stroke='" << method_colour(m)
+          << "' clip-path='url(#error-by-horizon-area)' x1='" << x << "' x2='" << x << "' y1='"
           << plot.y(i.low) << "' y2='" << plot.y(i.high) << "'/>";
+    }
+  }
+
+  // Where each line off the scale leaves it: the first horizon above it, or the crossing before.
+  for (std::size_t o = 0; o < off_scale.size(); ++o) {
+    const std::size_t m = off_scale[o].method;
+    double leaves_x = plot.x(plot.x1);
+    double previous_s = 0.0, previous_mm = 0.0;
+    bool has_previous = false;
+    for (const ev::HorizonScore& score : all) {
+      const double mm = score.methods[m].error.mean();
+      if (mm > axis.top) {
+        const double s = has_previous
+                             ? previous_s + (score.horizon_s - previous_s) *
+                                                (axis.top - previous_mm) / (mm - previous_mm)
+                             : score.horizon_s;
+        leaves_x = plot.x(s);
+        break;
+      }
+      previous_s = score.horizon_s;
+      previous_mm = mm;
+      has_previous = true;
+    }
+    const std::string name = escaped(evaluation.labels[m]);
+    svg << "<polygon class='off-scale-mark' data-method='" << name << "' fill='" << method_colour(m)
+        << "' points='" << leaves_x - 5 << ',' << area_top + 9 << ' ' << leaves_x + 5 << ','
+        << area_top + 9 << ' ' << leaves_x << ',' << area_top << "'/>";
+    svg << "<text class='off-scale' data-method='" << name << "' x='" << plot.left + 4 << "' y='"
+        << 14 + 16.0 * static_cast<double>(o) << "' fill='" << method_colour(m)
+        << "'>&#9650; off scale: " << name << ' ' << grouped_mm(off_scale[o].error_mm) << " mm at "
+        << fixed(off_scale[o].horizon_s, 2) << " s</text>";
+  }
+
+  // The short name of every line still on the scale at the longest horizon, beside its end,
+  // moved apart where lines end close together.
+  if (!all.empty()) {
+    std::vector<std::pair<double, std::size_t>> ends;
+    for (std::size_t m = 0; m < methods; ++m) {
+      const double mm = all.back().methods[m].error.mean();
+      if (mm <= axis.top) ends.emplace_back(plot.y(mm), m);
+    }
+    std::sort(ends.begin(), ends.end());
+    constexpr double line_px = 11.0;
+    for (std::size_t i = 1; i < ends.size(); ++i) {
+      ends[i].first = std::max(ends[i].first, ends[i - 1].first + line_px);
+    }
+    const double overflow = ends.empty() ? 0.0 : ends.back().first - (area_bottom - 2.0);
+    for (auto& [y, m] : ends) {
+      if (overflow > 0.0) y -= overflow;
+      svg << "<text class='end-label' data-method='" << escaped(evaluation.labels[m]) << "' x='"
+          << plot.x(plot.x1) + 6 << "' y='" << y + 4 << "' fill='" << method_colour(m) << "'>"
+          << escaped(short_label(evaluation.labels[m])) << "</text>";
     }
   }
   svg << "</svg>";
@@ -243,6 +390,19 @@ std::string error_by_horizon(const ev::PositionEvaluation& evaluation) {
     legend << "<span><i style='background:" << method_colour(m) << "'></i>"
            << escaped(evaluation.labels[m]) << "</span> ";
   }
+  legend << "<br>The scale goes to " << grouped_mm(axis.top) << " mm, half as much again as the "
+         << "largest error of ";
+  for (std::size_t i = 0; i < scale_setters.size(); ++i) {
+    legend << (i == 0                          ? ""
+               : i + 1 == scale_setters.size() ? " and "
+                                               : ", ")
+           << escaped(evaluation.labels[scale_setters[i]]);
+  }
+  if (scale_setters.size() > 1) {
+    legend << " (the best baselines at the longest horizon), so that these can be told apart";
+  }
+  legend << '.';
+  if (!off_scale.empty()) legend << " Lines beyond it are cut at the top (&#9650;).";
   legend << "</p>";
   return svg.str() + legend.str();
 }
@@ -272,6 +432,73 @@ std::string reliability(const ev::Calibration& calibration, const std::string& i
       << fixed(ev::expected_calibration_error(calibration), 3) << " over " << calibration.n
       << "</figcaption></figure>";
   return svg.str();
+}
+
+// Whether a reliability diagram of `calibration` would show anything: some prediction stated a
+// probability above 0. A method that states none writes 0 (a baseline's file of predictions), and
+// its diagram would be one dot at 0 with an ECE of 0, as if it were perfectly calibrated.
+bool states_probabilities(const ev::Calibration& calibration) {
+  return calibration.n > 0 &&
+         std::any_of(calibration.bin_confidence.begin(), calibration.bin_confidence.end(),
+                     [](double sum) { return sum > 0.0; });
+}
+
+// In a diagram's place, where one horizon has no probabilities of a quantity that others have:
+// a panel of the same size that says so, with no ECE.
+std::string empty_reliability(const ev::Calibration& calibration, const std::string& quantity,
+                              const std::string& horizon) {
+  std::ostringstream html;
+  html << "<figure class='no-data' data-quantity='" << quantity << "'><div class='no-data'>";
+  if (calibration.n == 0) {
+    html << "No probability of " << quantity << " was stated at " << horizon << '.';
+  } else {
+    html << "All " << calibration.n << " probabilities of " << quantity << " stated at " << horizon
+         << " were 0: nothing to calibrate.";
+  }
+  html << "</div><figcaption>" << quantity << " at " << horizon
+       << ", no probabilities</figcaption></figure>";
+  return html.str();
+}
+
+// The reliability diagrams of the robots' and the formations' probabilities, at every horizon.
+std::string reliability_section(const ev::PositionEvaluation& evaluation) {
+  const auto& all = evaluation.all();
+  const auto stated_anywhere = [&](const ev::Calibration ev::HorizonScore::*quantity) {
+    return std::any_of(all.begin(), all.end(), [&](const ev::HorizonScore& score) {
+      return states_probabilities(score.*quantity);
+    });
+  };
+  const bool robots = stated_anywhere(&ev::HorizonScore::robot);
+  const bool formations = stated_anywhere(&ev::HorizonScore::formation);
+  std::ostringstream html;
+  if (!robots && !formations) {
+    html << "<p id='reliability' class='no-data'>The predictions state no probabilities: there "
+            "is nothing to calibrate.</p>";
+    return html.str();
+  }
+  html << "<p>The share of robots (and of whole formations) in their predicted cell against the "
+          "probability stated, in 10 bins; a calibrated model lies on the diagonal.";
+  if (!robots) html << " No probability of a robot's cell was stated.";
+  if (!formations) html << " No probability of a whole formation was stated.";
+  html << "</p><div id='reliability'>";
+  for (std::size_t h = 0; h < all.size(); ++h) {
+    const ev::HorizonScore& score = all[h];
+    const std::string horizon = fixed(score.horizon_s, 2) + " s";
+    const std::string number = std::to_string(h + 1);
+    if (robots) {
+      html << (states_probabilities(score.robot)
+                   ? reliability(score.robot, "reliability-robot-" + number, "robots at " + horizon)
+                   : empty_reliability(score.robot, "robots", horizon));
+    }
+    if (formations) {
+      html << (states_probabilities(score.formation)
+                   ? reliability(score.formation, "reliability-formation-" + number,
+                                 "formations at " + horizon)
+                   : empty_reliability(score.formation, "formations", horizon));
+    }
+  }
+  html << "</div>";
+  return html.str();
 }
 
 std::string radii_table(const ev::PositionEvaluation& evaluation) {
@@ -331,31 +558,104 @@ std::string robot_errors(const ev::PositionEvaluation& evaluation, const ReportS
   return svg.str();
 }
 
+// The field the heat map is drawn on: the size the evaluation read (its table's, from the logs'
+// geometry or the simulation), else (score keeps no table) the smaller division whose walls hold
+// every robot scored.
+struct MapField {
+  FieldSize size;
+  bool read = false;  // the evaluation's, not inferred from where the robots were
+};
+MapField map_field(const ev::PositionEvaluation& evaluation, const ReportSamples& samples) {
+  if (evaluation.table && evaluation.table->metadata.field.valid()) {
+    return {evaluation.table->metadata.field, true};
+  }
+  const FieldSize division_b{9000.0, 6000.0};
+  const double boundary = rules_markings(division_b).boundary_width;
+  const double wall_x = division_b.length_mm / 2.0 + boundary;
+  const double wall_y = division_b.width_mm / 2.0 + boundary;
+  constexpr double cell = ReportSamples::heat_cell_mm;
+  for (const auto& [key, sums] : samples.by_cell()) {
+    const double x = std::get<1>(key) * cell, y = std::get<2>(key) * cell;
+    if (x >= wall_x || x + cell <= -wall_x || y >= wall_y || y + cell <= -wall_y) {
+      return {FieldSize{12000.0, 9000.0}, false};
+    }
+  }
+  return {division_b, false};
+}
+
+// The field's markings in millimetres, in a drawing whose y grows downwards (y is the field's -y):
+// the outer lines, the halfway line, the centre circle, both defence areas and both goals, with
+// the sizes the rules give the field's division (rules_markings: the numbers the live field view
+// draws when the feed's geometry states none; the evaluation keeps only the field's size).
+std::string field_markings(const FieldSize& field, const FieldMarkings& marks) {
+  const double half_length = field.length_mm / 2.0, half_width = field.width_mm / 2.0;
+  const double area_depth = marks.penalty_area_depth, area_width = marks.penalty_area_width;
+  const double goal_depth = marks.goal_depth, goal_width = marks.goal_width;
+  const auto rect = [](const std::string& what, const std::string& side, double x, double y,
+                       double width, double height) {
+    std::ostringstream svg;
+    svg << "<rect class='" << what << "'" << (side.empty() ? "" : " data-side='" + side + "'")
+        << " x='" << csv_number(x) << "' y='" << csv_number(y) << "' width='" << csv_number(width)
+        << "' height='" << csv_number(height) << "'/>";
+    return svg.str();
+  };
+  std::ostringstream svg;
+  svg << "<g class='field-markings'>"
+      << rect("marking outer-lines", "", -half_length, -half_width, field.length_mm, field.width_mm)
+      << "<line class='marking halfway-line' x1='0' y1='" << csv_number(-half_width)
+      << "' x2='0' y2='" << csv_number(half_width) << "'/><circle class='marking centre-circle' "
+      << "cx='0' cy='0' r='" << marks.center_circle_radius << "'/>"
+      << rect("marking defence-area", "-x", -half_length, -area_width / 2.0, area_depth, area_width)
+      << rect("marking defence-area", "+x", half_length - area_depth, -area_width / 2.0, area_depth,
+              area_width)
+      << rect("goal", "-x", -half_length - goal_depth, -goal_width / 2.0, goal_depth, goal_width)
+      << rect("goal", "+x", half_length, -goal_width / 2.0, goal_depth, goal_width) << "</g>";
+  return svg.str();
+}
+
 // Where on the field the model wins and loses against the best baseline of all states at one
-// step: per 1 m cell of where the robot was, the model's mean error minus the baseline's.
+// step: per 1 m cell of where the robot was, the model's mean error minus the baseline's, on the
+// field with its lines.
 std::string heat_map(const ev::PositionEvaluation& evaluation, const ReportSamples& samples,
                      int steps, std::size_t best) {
   constexpr std::uint64_t min_robots = 30;
-  int min_x = 0, max_x = -1, min_y = 0, max_y = -1;
+  constexpr double cell = ReportSamples::heat_cell_mm;
+  const MapField field = map_field(evaluation, samples);
+  const FieldMarkings marks = rules_markings(field.size);
+  const double wall_x = field.size.length_mm / 2.0 + marks.boundary_width;
+  const double wall_y = field.size.width_mm / 2.0 + marks.boundary_width;
+  // The drawing spans the walls and any cell wholly outside them (robots off a field of another
+  // size). A cell that crosses the walls is cut at them: its robots were inside.
+  double min_x = -wall_x, max_x = wall_x, min_y = -wall_y, max_y = wall_y;
   double extreme = 1.0;
-  bool any = false;
   for (const auto& [key, sums] : samples.by_cell()) {
     if (std::get<0>(key) != steps || sums.robots < min_robots) continue;
-    const int cx = std::get<1>(key), cy = std::get<2>(key);
-    if (!any) min_x = max_x = cx, min_y = max_y = cy;
-    min_x = std::min(min_x, cx), max_x = std::max(max_x, cx);
-    min_y = std::min(min_y, cy), max_y = std::max(max_y, cy);
-    any = true;
+    const double x = std::get<1>(key) * cell, y = std::get<2>(key) * cell;
+    if (x >= wall_x || x + cell <= -wall_x || y >= wall_y || y + cell <= -wall_y) {
+      min_x = std::min(min_x, x), max_x = std::max(max_x, x + cell);
+      min_y = std::min(min_y, y), max_y = std::max(max_y, y + cell);
+    }
     const double difference =
         (sums.errors[0] - sums.errors[best]) / static_cast<double>(sums.robots);
     extreme = std::max(extreme, std::abs(difference));
   }
-  const double cell_px = 48.0;
-  const double width = any ? (max_x - min_x + 1) * cell_px : cell_px;
-  const double height = any ? (max_y - min_y + 1) * cell_px : cell_px;
+  // In the drawing, millimetres of the field with y flipped: the field's +y is up.
+  const double view_x = min_x, view_y = -max_y, view_width = max_x - min_x,
+               view_height = max_y - min_y;
+  const double width_px = 760.0;
+  const double height_px = std::round(width_px * view_height / view_width);
   std::ostringstream svg;
-  svg << "<svg id='heat-map' class='plot' viewBox='0 0 " << width << ' ' << height << "' width='"
-      << width << "' height='" << height << "' role='img'>";
+  svg << "<svg id='heat-map' class='plot' viewBox='" << csv_number(view_x) << ' '
+      << csv_number(view_y) << ' ' << csv_number(view_width) << ' ' << csv_number(view_height)
+      << "' width='" << width_px << "' height='" << height_px << "' role='img' "
+      << "data-field-length-mm='" << csv_number(field.size.length_mm) << "' data-field-width-mm='"
+      << csv_number(field.size.width_mm) << "'>";
+  svg << "<defs><clipPath id='heat-map-area'><rect x='" << csv_number(view_x) << "' y='"
+      << csv_number(view_y) << "' width='" << csv_number(view_width) << "' height='"
+      << csv_number(view_height) << "'/></clipPath></defs>";
+  svg << "<rect class='field-area' x='" << csv_number(-wall_x) << "' y='" << csv_number(-wall_y)
+      << "' width='" << csv_number(2.0 * wall_x) << "' height='" << csv_number(2.0 * wall_y)
+      << "'/><g clip-path='url(#heat-map-area)'>";
   for (const auto& [key, sums] : samples.by_cell()) {
     if (std::get<0>(key) != steps || sums.robots < min_robots) continue;
     const int cx = std::get<1>(key), cy = std::get<2>(key);
@@ -370,22 +670,29 @@ std::string heat_map(const ev::PositionEvaluation& evaluation, const ReportSampl
     } else {
       std::snprintf(colour, sizeof colour, "#ff%02x%02x", fade, fade);
     }
-    // y grows upwards on the field, downwards in SVG.
-    svg << "<rect class='cell' data-x-mm='" << cx * ReportSamples::heat_cell_mm << "' data-y-mm='"
-        << cy * ReportSamples::heat_cell_mm << "' data-robots='" << sums.robots << "' data-value='"
-        << csv_number(difference) << "' x='" << (cx - min_x) * cell_px << "' y='"
-        << (max_y - cy) * cell_px << "' width='" << cell_px << "' height='" << cell_px << "' fill='"
-        << colour << "'><title>" << fixed(difference, 1) << " mm, " << sums.robots
-        << " robots</title></rect>";
+    svg << "<rect class='cell' data-x-mm='" << cx * cell << "' data-y-mm='" << cy * cell
+        << "' data-robots='" << sums.robots << "' data-value='" << csv_number(difference) << "' x='"
+        << csv_number(cx * cell) << "' y='" << csv_number(-(cy + 1) * cell) << "' width='" << cell
+        << "' height='" << cell << "' fill='" << colour << "'><title>" << fixed(difference, 1)
+        << " mm, " << sums.robots << " robots</title></rect>";
   }
-  svg << "</svg>";
+  svg << "</g>" << field_markings(field.size, marks) << "</svg>";
+  const auto metres = [](double mm) { return fixed(mm / 1000.0, 1); };
   std::ostringstream html;
   html << svg.str() << "<p class='legend'>Each square is 1 m of the field (the vision's "
        << "coordinates, +x to the right) where the robot was when predicted, with at least "
-       << min_robots << " robots: <b style='color:#2040ff'>blue</b> where "
+       << min_robots << " robots (grey: fewer): <b style='color:#2040ff'>blue</b> where "
        << escaped(evaluation.labels.front()) << " was nearer than "
        << escaped(evaluation.labels[best]) << ", <b style='color:#e02020'>red</b> where it was "
-       << "further, by up to " << fixed(extreme, 0) << " mm.</p>";
+       << "further, by up to " << fixed(extreme, 0)
+       << " mm. The lines: " << (field.read ? "the field of the evaluated data, " : "a field of ")
+       << describe(field.size)
+       << (field.read ? ""
+                      : ", the smaller division's, which holds every robot (this evaluation "
+                        "keeps no field size)")
+       << ", with the rules' defence areas of " << metres(marks.penalty_area_width) << " x "
+       << metres(marks.penalty_area_depth) << " m and goals " << metres(marks.goal_width)
+       << " m wide.</p>";
   return html.str();
 }
 
@@ -404,7 +711,15 @@ svg.plot { background: #fff; border: 1px solid #e4e4e4; }
 .tick { font-size: 10px; fill: #555; } .label { font-size: 11px; fill: #333; }
 polyline.method { fill: none; stroke-width: 2; } line.whisker { stroke-width: 1.5; }
 circle.bin { fill: #1b6ac9; fill-opacity: 0.75; }
-figure { display: inline-block; margin: 0 12px 12px 0; } figcaption { font-size: 12px; }
+#heat-map .field-area { fill: #dfe5df; }
+#heat-map .marking, #heat-map .goal { fill: none; stroke: #2b2b2b; stroke-opacity: 0.8;
+  stroke-width: 1.5; vector-effect: non-scaling-stroke; }
+#heat-map .goal { fill: #2b2b2b; fill-opacity: 0.35; stroke-width: 2.5; }
+.off-scale { font-size: 11px; } .end-label { font-size: 10px; }
+figure { display: inline-block; margin: 0 12px 12px 0; vertical-align: top; }
+figcaption { font-size: 12px; }
+div.no-data { width: 300px; height: 260px; box-sizing: border-box; padding: 100px 24px 0;
+              border: 1px dashed #ccc; color: #666; text-align: center; }
 .legend span { margin-right: 14px; } .legend i { display: inline-block; width: 12px;
   height: 12px; margin-right: 4px; vertical-align: -1px; }
 )";
@@ -435,22 +750,7 @@ void write_html_report(const std::string& path, const ReportInput& input) {
           "every robot and state (an ablation). In bold, each row's best baseline.</p>"
        << state_table(evaluation);
   html << "<h2>Error against the horizon</h2>" << error_by_horizon(evaluation);
-  html << "<h2>Reliability of the probabilities</h2><p>The share of robots (and of whole "
-          "formations) in their predicted cell against the probability stated, in 10 bins; "
-          "a calibrated model lies on the diagonal.</p><div id='reliability'>";
-  for (std::size_t h = 0; h < evaluation.all().size(); ++h) {
-    const ev::HorizonScore& score = evaluation.all()[h];
-    const std::string horizon = fixed(score.horizon_s, 2) + " s";
-    if (score.robot.n > 0) {
-      html << reliability(score.robot, "reliability-robot-" + std::to_string(h + 1),
-                          "robots at " + horizon);
-    }
-    if (score.formation.n > 0) {
-      html << reliability(score.formation, "reliability-formation-" + std::to_string(h + 1),
-                          "formations at " + horizon);
-    }
-  }
-  html << "</div>";
+  html << "<h2>Reliability of the probabilities</h2>" << reliability_section(evaluation);
   html << "<h2>The radii's coverage</h2>" << radii_table(evaluation);
   if (input.samples && !evaluation.all().empty()) {
     const std::size_t h = shown_step(evaluation);
