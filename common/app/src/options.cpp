@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -245,20 +246,39 @@ void add_vision_source_option(po::options_description& options, NetworkOptions& 
       "--tracker-address, or a log's type-5 messages) instead, one tracker followed by its uuid");
 }
 
+void add_network_options(po::options_description& options, NetworkOptions& network, FeedUse use) {
+  const bool send = use == FeedUse::send;
+  const char* vision = send                     ? "SSL-Vision multicast group:port to send to"
+                       : use == FeedUse::record ? "SSL-Vision multicast group:port to record"
+                                                : "SSL-Vision multicast group:port to listen on "
+                                                  "(grSim: 224.5.23.2:10020)";
+  const char* referee =
+      send ? "where the simulated game controller's referee messages go, or with --replay the "
+             "log's; none: not sent"
+      : use == FeedUse::record
+          ? "the game controller's referee group, recorded too; none: not recorded"
+          : "the game controller's referee multicast group:port, joined on --interface too: the "
+            "opponent's name, colour and side and the game state follow it; none: no referee feed";
+  const char* tracker = send ? "--replay: where the log's tracked vision goes; none: not sent"
+                        : use == FeedUse::record
+                            ? "the trackers' group, recorded too; none: not recorded"
+                            : "the trackers' multicast group:port (auto-referees such as TIGERs' "
+                              "publish there)";
+  const char* interface = send ? "IPv4 address of the interface to send from"
+                               : "IPv4 address of the interface to join on, or 'all' for every "
+                                 "interface";
+  options.add_options()(
+      "vision-address", po::value(&network.vision_address)->default_value(network.vision_address),
+      vision)("referee-address",
+              po::value(&network.referee_address)->default_value(network.referee_address), referee)(
+      "tracker-address",
+      po::value(&network.tracker_address)->default_value(network.tracker_address), tracker)(
+      "interface", po::value(&network.interface)->default_value(network.interface), interface);
+}
+
 void add_vision_options(po::options_description& options, NetworkOptions& network) {
   add_vision_source_option(options, network);
-  options.add_options()("vision-address",
-                        po::value(&network.vision_address)->default_value(network.vision_address),
-                        "SSL-Vision multicast group:port to listen on (grSim: 224.5.23.2:10020)")(
-      "referee-address",
-      po::value(&network.referee_address)->default_value(network.referee_address),
-      "the game controller's referee multicast group:port, joined on --interface too: the "
-      "opponent's name, colour and side and the game state follow it; none: no referee feed")(
-      "tracker-address",
-      po::value(&network.tracker_address)->default_value(network.tracker_address),
-      "the trackers' multicast group:port (auto-referees such as TIGERs' publish there)")(
-      "interface", po::value(&network.interface)->default_value(network.interface),
-      "IPv4 address of the interface to join on, or 'all' for every interface");
+  add_network_options(options, network, FeedUse::listen);
 }
 
 bool NetworkOptions::tracked() const {
@@ -274,15 +294,104 @@ void add_daemon_options(po::options_description& options, DaemonOptions& daemon)
       "(program, pid, ...); removed at exit. For scripts and tests that wait for the daemon");
 }
 
+void add_output_options(po::options_description& options, OutputOptions& output,
+                        const std::string& what) {
+  options.add_options()("output,o", po::value(&output.path)->value_name("PATH"), what.c_str())(
+      "overwrite", po::bool_switch(&output.overwrite),
+      "replace --output if it exists (it is replaced only when the run succeeds)");
+}
+
+namespace {
+bool is_written_in_place(const std::string& path) {
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  return !error && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status) &&
+         !std::filesystem::is_directory(status);
+}
+}  // namespace
+
+void check_outputs_free(const std::vector<std::string>& paths, bool overwrite) {
+  if (overwrite) return;
+  for (const std::string& path : paths) {
+    if (path.empty() || path == "-" || is_written_in_place(path)) continue;
+    std::error_code error;
+    if (std::filesystem::exists(path, error)) {
+      throw UsageError(path + " exists: give --overwrite to replace it");
+    }
+  }
+}
+
+void check_output_free(const OutputOptions& output) {
+  check_outputs_free({output.path}, output.overwrite);
+}
+
+void add_horizons_option(po::options_description& options, std::string& horizons,
+                         const std::string& what) {
+  options.add_options()("horizons", po::value(&horizons)->default_value(horizons),
+                        ("seconds ahead, a whole number of --step: the longest horizon (of a "
+                         "comma-separated list, the longest); " +
+                         what)
+                            .c_str());
+}
+
+int horizon_steps(const std::string& horizons, double step_s, int auto_steps) {
+  if (horizons == "auto") return auto_steps;
+  double longest = 0.0;
+  std::stringstream list(horizons);
+  std::string item;
+  while (std::getline(list, item, ',')) {
+    std::size_t used = 0;
+    double seconds = 0.0;
+    try {
+      seconds = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(seconds) || seconds <= 0.0) {
+      throw UsageError("--horizons takes positive seconds (0.5,1 or 1.5) or auto, not '" +
+                       horizons + "'");
+    }
+    longest = std::max(longest, seconds);
+  }
+  if (longest <= 0.0) throw UsageError("--horizons takes positive seconds or auto");
+  const double steps = longest / step_s;
+  const double whole = std::round(steps);
+  if (whole < 1.0 || std::abs(steps - whole) > 1e-6) {
+    std::ostringstream text;
+    text << "--horizons " << horizons << ": " << longest << " s is not a whole number of --step "
+         << step_s << " s";
+    throw UsageError(text.str());
+  }
+  return static_cast<int>(whole);
+}
+
+void OldSpellings::add(const std::string& old_name, const std::string& new_name,
+                       po::value_semantic* value, const std::string& hint) {
+  options_.add_options()(old_name.c_str(), value, "");
+  renamed_.push_back({old_name, new_name, hint});
+}
+
+void OldSpellings::note_used(const std::string& program, const po::variables_map& values) const {
+  for (const Renamed& renamed : renamed_) {
+    if (values.count(renamed.old_name) == 0 || values[renamed.old_name].defaulted()) continue;
+    std::cerr << program << ": note: --" << renamed.old_name << " is now " << renamed.new_name
+              << (renamed.hint.empty() ? "" : " (" + renamed.hint + ")")
+              << "; the old name works until the next release\n";
+  }
+}
+
 bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,
                         const std::string& usage_line, const std::string& description,
-                        const po::positional_options_description* positional) {
+                        const po::positional_options_description* positional,
+                        const OldSpellings* old_spellings) {
   po::options_description all(options);
   all.add_options()("help,h", "show this help with the defaults and exit");
+  po::options_description parsed(all);
+  if (old_spellings) parsed.add(old_spellings->options());
   po::variables_map values;
   try {
     po::command_line_parser parser(argc, argv);
-    parser.options(all);
+    parser.options(parsed);
     if (positional) parser.positional(*positional);
     po::store(parser.run(), values);
     if (values.count("help")) {
@@ -292,6 +401,10 @@ bool parse_command_line(int argc, const char* const argv[], const po::options_de
     po::notify(values);
   } catch (const po::error& e) {
     throw UsageError(e.what());
+  }
+  if (old_spellings) {
+    // The program's name is the usage line's first word.
+    old_spellings->note_used(usage_line.substr(0, usage_line.find(' ')), values);
   }
   return true;
 }
@@ -303,7 +416,7 @@ int run_main(const char* program, const std::function<int()>& body) {
     std::cerr << program << ": error: " << e.what() << " (see " << program << " --help)\n";
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << program << ": " << e.what() << "\n";
+    std::cerr << program << ": error: " << e.what() << "\n";
     return 1;
   }
 }

@@ -4,8 +4,11 @@
 // --opponent-attacks, --field-length, --field-width.
 
 #include <boost/program_options.hpp>
+#include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -106,6 +109,16 @@ struct NetworkOptions {
   std::string interface = default_interface;
   bool tracked() const;  // throws UsageError for a --vision-source other than raw or tracked
 };
+// What a program does with the feeds' groups, which words their --help uses.
+enum class FeedUse {
+  listen,  // ssl-trainer, ssl-predictor: join and read
+  record,  // ssl-record: join and write to a log
+  send,    // ssl-producer: send (the simulation or a replayed log)
+};
+// --vision-address, --referee-address, --tracker-address and --interface: one declaration for
+// every program, so that the names and defaults cannot drift apart.
+void add_network_options(po::options_description& options, NetworkOptions& network, FeedUse use);
+// The network options of a program that listens, and --vision-source.
 void add_vision_options(po::options_description& options, NetworkOptions& network);
 // --vision-source alone, for the programs that read logs only (ssl-evaluate).
 void add_vision_source_option(po::options_description& options, NetworkOptions& network);
@@ -117,14 +130,59 @@ struct DaemonOptions {
 };
 void add_daemon_options(po::options_description& options, DaemonOptions& daemon);
 
+// -o/--output and --overwrite, for every program that writes a file or a folder of them.
+struct OutputOptions {
+  std::string path;  // empty: not given; "-": standard output, where the program allows it
+  bool overwrite = false;
+};
+// `what` ends the option's help: "the CSV file to write; - = standard output".
+void add_output_options(po::options_description& options, OutputOptions& output,
+                        const std::string& what);
+// Refuses a file that exists (with the option that allows it) unless --overwrite: checked before
+// any work, so that a long run does not end by refusing its own output. Standard output ("-")
+// and devices (/dev/null) are always written.
+void check_output_free(const OutputOptions& output);
+// The same for several files a program writes into one folder.
+void check_outputs_free(const std::vector<std::string>& paths, bool overwrite);
+
+// --horizons, in seconds, for the programs that learn or predict a number of steps ahead
+// (ssl-trainer, ssl-predictor; ssl-evaluate takes a list of them): "auto", or the longest horizon
+// in seconds (of a list, the longest), which must be a whole number of steps.
+void add_horizons_option(po::options_description& options, std::string& horizons,
+                         const std::string& what);
+// An int option's value before the command line gives one (an old spelling that may be 0).
+inline constexpr int not_given = std::numeric_limits<int>::min();
+// The steps --horizons asks for at `step_s`; `auto_steps` for "auto". Throws UsageError.
+int horizon_steps(const std::string& horizons, double step_s, int auto_steps);
+
+// Old spellings of renamed options, kept for a release: parsed like the new ones, left out of
+// --help, and noted once on stderr when given.
+class OldSpellings {
+ public:
+  // `value` stores where the program reads the new option from; `hint` is added to the note.
+  void add(const std::string& old_name, const std::string& new_name, po::value_semantic* value,
+           const std::string& hint = "");
+  const po::options_description& options() const { return options_; }
+  // Prints "PROGRAM: note: --OLD is now NEW ..." for each old spelling given.
+  void note_used(const std::string& program, const po::variables_map& values) const;
+
+ private:
+  struct Renamed {
+    std::string old_name, new_name, hint;
+  };
+  po::options_description options_;
+  std::vector<Renamed> renamed_;
+};
+
 // Parses argv. Prints --help (with defaults) and returns false when the program should exit 0.
 // Throws UsageError for anything wrong, with one line of explanation.
 bool parse_command_line(int argc, const char* const argv[], const po::options_description& options,
                         const std::string& usage_line, const std::string& description,
-                        const po::positional_options_description* positional = nullptr);
+                        const po::positional_options_description* positional = nullptr,
+                        const OldSpellings* old_spellings = nullptr);
 
-// Runs `body` and turns UsageError into "PROGRAM: error: ..." on stderr and exit code 2, and
-// any other exception into "PROGRAM: ..." and exit code 1.
+// Runs `body` and turns an exception into one line "PROGRAM: error: ..." on stderr: exit code 2
+// for a UsageError (which also points to --help), 1 for any other.
 int run_main(const char* program, const std::function<int()>& body);
 
 }  // namespace ssl_formation::app
