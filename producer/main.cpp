@@ -2,13 +2,13 @@
 // running a playbook at 60 frames a second, what the default motion model learns from;
 // --simulation paper the paper's simulated vision (three plays and random formations), one
 // formation every --period seconds. Either with a simulated game controller's referee messages
-// on the referee group. With --write-log
-// it writes the same packets to an official SSL log instead; with --replay it sends a log's
-// vision packets with their recorded timing.
+// on the referee group. With -o it writes the same packets to an official SSL log instead; with
+// --replay it sends a log's vision packets with their recorded timing, and its referee messages
+// and tracked vision to their groups.
 
-#include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/producer/producer_options.hpp"
 
 namespace sf = ssl_formation;
 namespace po = boost::program_options;
@@ -17,19 +17,10 @@ int main(int argc, char** argv) {
   return sf::app::run_main("ssl-producer", [&] {
     sf::producer::ProducerOptions o;
     po::options_description network("Network (the live simulation and --replay)");
-    // clang-format off
-    network.add_options()
-        ("vision-address", po::value(&o.vision_address)->default_value(o.vision_address),
-         "multicast group:port to send to")
-        ("referee-address", po::value(&o.referee_address)->default_value(o.referee_address),
-         "where the simulated game controller's referee messages go, or with --replay the log's "
-         "(the game controller's group); none: not sent")
-        ("tracker-address", po::value(&o.tracker_address)->default_value(o.tracker_address),
-         "--replay: where the log's tracked vision (TrackerWrapperPacket) goes; none: not sent")
-        ("interface", po::value(&o.interface)->default_value(o.interface),
-         "IPv4 address of the interface to send from")
-        ("ttl", po::value(&o.ttl)->default_value(o.ttl), "multicast TTL (1 keeps packets on the link)");
-    // clang-format on
+    sf::app::NetworkOptions addresses;
+    sf::app::add_network_options(network, addresses, sf::app::FeedUse::send);
+    network.add_options()("ttl", po::value(&o.ttl)->default_value(o.ttl),
+                          "multicast TTL (1 keeps packets on the link)");
     po::options_description simulation("Simulation (live and --write-log)");
     // clang-format off
     simulation.add_options()
@@ -49,8 +40,8 @@ int main(int argc, char** argv) {
         ("period", po::value(&o.period_s)->default_value(o.period_s),
          "paper: wall-clock seconds between formations; 0 = as fast as possible (not used by "
          "--write-log)")
-        ("step", po::value(&o.step_s)->default_value(o.step_s),
-         "paper: data-clock seconds (t_capture) between formations")
+        ("step", po::value(&o.step_s)->default_value(o.step_s, "auto"),
+         "paper: data-clock seconds (t_capture) between formations; auto: 2, the paper's")
         ("count", po::value(&o.count)->default_value(o.count),
          "formations (paper) or frames (match) to send or write, then exit; 0 = no limit. With "
          "--replay: packets to send")
@@ -91,13 +82,16 @@ int main(int argc, char** argv) {
          "seconds of data time (t_capture) in each half; half time is 20 s");
     // clang-format on
     po::options_description logs("Log files (official SSL format; .log.gz is gzip-compressed)");
+    sf::app::OutputOptions output;
+    sf::app::add_output_options(logs, output,
+                                "write the simulated feed to this log (.log or .log.gz) as fast as "
+                                "possible, no network; receive time = t_capture in ns; needs "
+                                "--count or --duration");
     // clang-format off
     logs.add_options()
-        ("write-log", po::value(&o.write_log)->value_name("FILE"),
-         "write the simulated feed to FILE (.log or .log.gz) as fast as possible, no network; "
-         "receive time = t_capture in ns; needs --count or --duration")
         ("replay", po::value(&o.replay)->value_name("FILE"),
-         "send FILE's vision packets (types 4 and 2) with their recorded timing instead of the "
+         "send FILE's vision packets (types 4 and 2) with their recorded timing, and its referee "
+         "messages and tracked vision to --referee-address and --tracker-address, instead of the "
          "simulation; the simulation options are ignored")
         ("speed", po::value(&o.speed)->default_value(o.speed),
          "replay speed: 1 = as recorded, 10 = ten times faster, 0 = as fast as possible")
@@ -116,23 +110,41 @@ int main(int argc, char** argv) {
     // clang-format on
     sf::app::add_daemon_options(general, o.daemon);
     general.add(network).add(simulation).add(game).add(logs);
+    sf::app::OldSpellings old;
+    std::string old_write_log;
+    old.add("write-log", "-o/--output", po::value(&old_write_log),
+            "which refuses a file that exists unless --overwrite");
     if (!sf::app::parse_command_line(
             argc, argv, general,
             "ssl-producer [options]\n"
             "       ssl-producer --simulation paper [--period S] [--step S]\n"
-            "       ssl-producer --write-log FILE --count N|--duration S [simulation options]\n"
+            "       ssl-producer -o FILE --count N|--duration S [simulation options]\n"
             "       ssl-producer --replay FILE [--speed X] [--loop] [--start S] [--end S] "
             "[--vision-address G:P]",
             "Sends SSL-Vision packets of a simulated opponent on multicast, with a game "
             "controller's referee messages:\nthe paper's (three plays and random formations) or "
             "a match (a team running a playbook, 60 frames a\nsecond). Writes them to an "
-            "official SSL log instead (--write-log), or replays a log with its recorded\ntiming "
-            "(--replay).")) {
+            "official SSL log instead (-o), or replays a log with its recorded\ntiming "
+            "(--replay).",
+            nullptr, &old)) {
       return 0;
     }
-    if (!o.write_log.empty() && !o.replay.empty()) {
-      throw sf::app::UsageError("--write-log and --replay exclude each other");
+    o.vision_address = addresses.vision_address;
+    o.referee_address = addresses.referee_address;
+    o.tracker_address = addresses.tracker_address;
+    o.interface = addresses.interface;
+    if (!output.path.empty() && !old_write_log.empty()) {
+      throw sf::app::UsageError("give -o/--output or its old name --write-log, not both");
     }
+    if (!old_write_log.empty()) {
+      // The old spelling replaced a file that existed, as it always did.
+      output = {old_write_log, true};
+    }
+    o.write_log = output.path;
+    if (!o.write_log.empty() && !o.replay.empty()) {
+      throw sf::app::UsageError("-o/--output and --replay exclude each other");
+    }
+    sf::app::check_output_free(output);
     sf::app::init_logging("ssl-producer", o.verbose);
     if (!o.write_log.empty()) return sf::producer::run_write_log(o);
     if (!o.replay.empty()) return sf::producer::run_replay(o);

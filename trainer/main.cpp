@@ -14,12 +14,11 @@ namespace {
 
 int merge_main(int argc, const char* const argv[]) {
   std::vector<std::string> inputs;
-  std::string output;
+  sf::app::OutputOptions output;
   double max_table_mb = sf::default_max_table_mb;
   po::options_description options("Options");
-  options.add_options()("output,o", po::value(&output)->required(),
-                        "the merged table file to write (atomically)")(
-      "input", po::value(&inputs)->multitoken(), "table files to add up");
+  sf::app::add_output_options(options, output, "the merged table file to write (required)");
+  options.add_options()("input", po::value(&inputs)->multitoken(), "table files to add up");
   sf::app::add_max_table_option(options, max_table_mb);
   po::positional_options_description positional;
   positional.add("input", -1);
@@ -28,8 +27,10 @@ int merge_main(int argc, const char* const argv[]) {
                                    &positional)) {
     return 0;
   }
+  if (output.path.empty()) throw sf::app::UsageError("-o/--output TABLE is required");
+  sf::app::check_output_free(output);
   (void)sf::app::table_budget_option(max_table_mb);  // refuses a bad one before any work
-  sf::trainer::merge_tables(inputs, output, max_table_mb);
+  sf::trainer::merge_tables(inputs, output.path, max_table_mb);
   return 0;
 }
 
@@ -44,7 +45,7 @@ int main(int argc, char** argv) {
     sf::trainer::TrainerOptions o;
     if (!sf::trainer::parse_trainer_options(argc, argv, o)) return 0;
     sf::app::init_logging("ssl-trainer", o.verbose);
-    if (o.table_dir.empty()) sf::app::take_table_settings(o.model, o.table);
+    sf::trainer::settle_trainer_options(o);
     if (!o.from_logs.empty()) return sf::trainer::run_offline(o);
     return sf::trainer::run_live(o);
   });

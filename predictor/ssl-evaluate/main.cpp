@@ -50,8 +50,6 @@ int main(int argc, char** argv) {
         "cameras of the simulated vision")(
         "grids", po::value(&o.grids)->multitoken()->default_value(o.grids, "3x2 6x4 9x6 12x9"),
         "grid-sweep: the grids to compare")(
-        "output-dir", po::value(&o.output_dir)->value_name("DIR"),
-        "write the tables as CSV files into DIR too (none without it)")(
         "write-samples", po::value(&o.write_samples)->value_name("FILE"),
         "holdout, grid-sweep: also write every scored robot to this CSV file, a line per robot, "
         "instant and horizon (where it was, where it went, every method's forecast; about 170 "
@@ -76,21 +74,24 @@ int main(int argc, char** argv) {
         "playbook", po::value(&o.playbook)->default_value(o.playbook),
         "holdout --simulation match: the opponent's playbook (a built-in name or a file)")(
         "from-log", po::value(&o.from_log)->value_name("FILE"),
-        "as-real-log: the clean recording (an official log, .log or .log.gz) to rewrite")(
-        "write-log", po::value(&o.write_log)->value_name("FILE"),
-        "as-real-log: the log to write (gzip if it ends in .gz)")(
+        "the recording to read (an official log, .log or .log.gz): score: the match the "
+        "predictions were made for; as-real-log: the clean recording to rewrite")(
         "mess", po::value(&o.mess)->default_value(o.mess), mess_help.c_str())(
         "report", po::value(&o.report)->value_name("FILE.html"),
         "holdout, score: also write one self-contained page to open: the table by game state "
         "with intervals, error against horizon, reliability diagrams, the radii's coverage, the "
         "error per robot id and a field heat map of where the model wins and loses (holdout: "
         "the chains of --step, the predictor's own figures)")(
-        "log", po::value(&o.log)->value_name("FILE"),
-        "score: the recorded match (an official log) the predictions were made for")(
         "predictions", po::value(&o.predictions)->value_name("CSV"),
         "score: the predictions, with the columns of ssl-predictor --from-log's CSV (at least "
         "t_capture, robot_id, horizon_s, predicted_feed_x_mm, predicted_feed_y_mm; radii, cells "
         "and probabilities if given); --train-log: where the damped baselines are fitted");
+    sf::app::OutputOptions output;
+    sf::app::add_output_options(general, output,
+                                "paper, holdout, grid-sweep, score: a folder to write the tables "
+                                "into as CSV files too (none without it); as-real-log: the log to "
+                                "write (gzip if it ends in .gz). --overwrite also lets --report "
+                                "and --write-samples replace their files");
     sf::app::add_model_options(general, o.model);
     sf::app::add_learn_during_option(general, o.learn_during);
     sf::app::add_vision_source_option(general, o.network);
@@ -99,6 +100,13 @@ int main(int argc, char** argv) {
     sf::app::add_max_table_option(general, o.max_table_mb);
     po::positional_options_description positional;
     positional.add("mode", 1);
+    sf::app::OldSpellings old;
+    std::string old_output_dir;
+    std::string old_write_log;
+    std::string old_log;
+    old.add("output-dir", "-o/--output", po::value(&old_output_dir));
+    old.add("write-log", "-o/--output", po::value(&old_write_log));
+    old.add("log", "--from-log", po::value(&old_log));
     if (!sf::app::parse_command_line(
             argc, argv, general,
             "ssl-evaluate paper|holdout|grid-sweep|as-real-log|score [options]",
@@ -106,9 +114,28 @@ int main(int argc, char** argv) {
             "accuracy against baselines, and a grid sweep; scores "
             "predictions made elsewhere; writes a recording the way "
             "real match logs come, to evaluate on.",
-            &positional)) {
+            &positional, &old)) {
       return 0;
     }
+    if (!old_output_dir.empty() || !old_write_log.empty()) {
+      if (!output.path.empty()) {
+        throw sf::app::UsageError("give -o/--output or its old spelling, not both");
+      }
+      output = {old_output_dir.empty() ? old_write_log : old_output_dir, true};  // as they did
+    }
+    if (!old_log.empty()) {
+      if (!o.from_log.empty()) throw sf::app::UsageError("give --from-log or --log, not both");
+      o.from_log = old_log;
+    }
+    o.overwrite = output.overwrite;
+    if (o.mode == "as-real-log") {
+      o.write_log = output.path;
+      sf::app::check_output_free(output);
+    } else {
+      o.output_dir = output.path;
+      if (o.mode == "score") o.log = o.from_log;
+    }
+    sf::app::check_outputs_free({o.report, o.write_samples}, o.overwrite);
     if (o.tests < 1 || o.train_formations < 1 || o.test_formations < 1) {
       throw sf::app::UsageError(
           "--tests, --train-formations and --test-formations must be positive");

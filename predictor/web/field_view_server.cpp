@@ -344,6 +344,11 @@ void FieldViewHub::start() {
   acceptor_.open(endpoint.protocol(), ec);
   if (!ec) acceptor_.set_option(asio::socket_base::reuse_address(true), ec);
   if (!ec) acceptor_.bind(endpoint, ec);
+  if (ec == asio::error::address_in_use && options_.any_port_if_taken) {
+    spdlog::warn("the field view's port {} is taken: listening on another one", options_.port);
+    ec.clear();
+    acceptor_.bind(tcp::endpoint(address, 0), ec);
+  }
   if (ec) {
     std::string hint;
     if (ec == asio::error::address_in_use)

@@ -19,8 +19,11 @@
 namespace ssl_formation::predictor::web {
 
 struct FieldViewOptions {
-  std::string address = "127.0.0.1";     // where to listen; loopback unless told otherwise
-  std::uint16_t port = 0;                // 0: the kernel picks one (see FieldViewServer::port())
+  std::string address = "127.0.0.1";  // where to listen; loopback unless told otherwise
+  std::uint16_t port = 0;             // 0: the kernel picks one (see FieldViewServer::port())
+  // When `port` is taken: listen on one the kernel picks instead of failing (the default port,
+  // where a second predictor on the machine should still show its view).
+  bool any_port_if_taken = false;
   std::size_t max_clients = 64;          // connections at once, page loads and live views together
   std::size_t queue_limit = 8;           // messages waiting per live view
   std::size_t max_request_bytes = 8192;  // request line and headers; requests carry no body

@@ -61,8 +61,12 @@ void apply_feed_settings(const ProducerOptions& options, Config& config) {
 sim::SimulationConfig simulation_config(const ProducerOptions& options) {
   sim::SimulationConfig config;
   config.seed = options.seed;
-  if (!(options.step_s > 0.0)) throw app::UsageError("--step must be a positive number of seconds");
-  config.step_s = options.step_s;
+  if (options.step_s != 0.0) {
+    if (!(options.step_s > 0.0) || !std::isfinite(options.step_s)) {
+      throw app::UsageError("--step must be a positive number of seconds, or auto");
+    }
+    config.step_s = options.step_s;
+  }
   config.start_time_s = options.start_time_s;
   apply_feed_settings(options, config);
   config.field = FieldSize{options.field_length_mm, options.field_width_mm};

@@ -12,23 +12,13 @@ int main(int argc, char** argv) {
   return sf::app::run_main("ssl-record", [&] {
     sf::recorder::RecordOptions o;
     po::options_description general("Options");
-    // clang-format off
-    general.add_options()
-        ("vision-address", po::value(&o.network.vision_address)->default_value(o.network.vision_address),
-         "SSL-Vision multicast group:port to record (type 4)")
-        ("referee-address", po::value(&o.network.referee_address)->default_value(o.network.referee_address),
-         "the game controller's referee group to record too (type 3); none: not recorded")
-        ("tracker-address", po::value(&o.network.tracker_address)->default_value(o.network.tracker_address),
-         "the trackers' group to record too (TrackerWrapperPacket, type 5); none: not recorded")
-        ("interface", po::value(&o.network.interface)->default_value(o.network.interface),
-         "IPv4 address of the interface to join on, or 'all' for every interface");
-    // clang-format on
+    sf::app::add_network_options(general, o.network, sf::app::FeedUse::record);
     sf::app::add_daemon_options(general, o.daemon);
+    sf::app::OutputOptions output;
+    sf::app::add_output_options(general, output,
+                                "log file to write: FILE.log, or FILE.log.gz for gzip-compressed");
     // clang-format off
     general.add_options()
-        ("output,o", po::value(&o.output)->value_name("FILE"),
-         "log file to write: FILE.log, or FILE.log.gz for gzip-compressed")
-        ("overwrite", po::bool_switch(&o.overwrite), "replace --output if it exists")
         ("duration", po::value(&o.duration_s)->default_value(o.duration_s),
          "seconds to record, then stop; 0 = until SIGINT/SIGTERM")
         ("count", po::value(&o.count)->default_value(o.count),
@@ -43,13 +33,17 @@ int main(int argc, char** argv) {
     // clang-format on
     if (!sf::app::parse_command_line(
             argc, argv, general, "ssl-record --output FILE [options]",
-            "Records a live SSL-Vision multicast feed, the referee and the trackers into an official "
+            "Records a live SSL-Vision multicast feed, the referee and the trackers into an "
+            "official "
             "SSL log file\n(types 4, 3 and 5 in the order received, receive time = Unix time in "
             "ns). Datagrams that are not\nwhat their group carries are counted, not recorded. "
             "SIGINT/SIGTERM, --duration or --count\n(vision packets) end it with a complete "
             "file.")) {
       return 0;
     }
+    o.output = output.path;
+    o.overwrite = output.overwrite;
+    sf::app::check_output_free(output);
     sf::app::init_logging("ssl-record", o.verbose);
     return sf::recorder::run_record(o);
   });

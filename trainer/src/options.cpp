@@ -21,9 +21,6 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
       ("reset", po::bool_switch(&o.reset),
        "start an empty table even if --table holds one of another grid, step, model or motion-model "
        "settings (an older version's)")
-      ("horizon", po::value(&o.horizon)->default_value(o.horizon),
-       "--model motion: steps ahead to learn (1 to 16), as many as ssl-predictor --horizon "
-       "predicts")
       ("flush-interval", po::value(&o.flush_interval_s)->default_value(o.flush_interval_s),
        "seconds between saves of the table (it is also saved on SIGINT/SIGTERM)")
       ("status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
@@ -43,17 +40,50 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
        "--from-log: exit 1 also when a log only ends inside its last message (by default that "
        "is a warning: a recorder killed mid-write leaves such files)");
   // clang-format on
+  app::add_horizons_option(general, o.horizons,
+                           "--model motion: how far ahead to learn (up to 16 steps); auto: 3 "
+                           "steps, 1.5 s at the default --step (ssl-predictor extrapolates "
+                           "beyond)");
+  app::add_output_options(general, o.output,
+                          "--from-log: the table file to write, trained from nothing (in place "
+                          "of --table, which resumes a table)");
   app::add_vision_options(general, o.network);
   app::add_model_options(general, o.model);
   app::add_learn_during_option(general, o.learn_during);
   app::add_max_table_option(general, o.max_table_mb);
   app::add_daemon_options(general, o.daemon);
+  app::OldSpellings old;
+  old.add("horizon", "--horizons", po::value(&o.old_horizon_steps),
+          "in seconds: --horizon 3 at a 0.5 s step is --horizons 1.5");
   return app::parse_command_line(
       argc, argv, general,
-      "ssl-trainer [options]\n       ssl-trainer --from-log FILE... [options]\n"
+      "ssl-trainer [options]\n       ssl-trainer --from-log FILE... [-o TABLE] [options]\n"
       "       ssl-trainer merge TABLE... -o OUT",
       "Counts the opponent's formation transitions (and, with --model motion, how each robot "
-      "moves) from the vision feed (or from logs) into a table file.");
+      "moves) from the vision feed (or from logs) into a table file.",
+      nullptr, &old);
+}
+
+void settle_trainer_options(TrainerOptions& o) {
+  if (!o.output.path.empty()) {
+    if (o.from_logs.empty()) {
+      throw app::UsageError("-o/--output is for --from-log; live, the table is --table");
+    }
+    if (!o.table_dir.empty()) throw app::UsageError("give -o/--output or --table-dir, not both");
+    if (o.output.path == "-") throw app::UsageError("-o/--output: a table is a file, not -");
+    app::check_output_free(o.output);
+    o.table = o.output.path;
+    o.reset = true;  // from nothing: what the file held is replaced once the training succeeds
+  } else if (o.table_dir.empty()) {
+    app::take_table_settings(o.model, o.table);
+  }
+  if (o.old_horizon_steps != app::not_given && o.horizons != "auto") {
+    throw app::UsageError("give --horizons or its old spelling --horizon, not both");
+  }
+  const int auto_steps = o.old_horizon_steps != app::not_given ? o.old_horizon_steps : 3;
+  // The paper's model learns no horizons: a step it does not use cannot be refused.
+  if (!describe(o.model.parsed_model()).keeps_motion_rows) return;
+  o.horizon = app::horizon_steps(o.horizons, o.model.step(), auto_steps);
 }
 
 std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
@@ -65,8 +95,8 @@ std::optional<MotionConfig> motion_config(const TrainerOptions& options) {
   }
   if (!model.keeps_motion_rows) return std::nullopt;
   if (options.horizon < 1 || options.horizon > MotionConfig::max_horizons) {
-    throw app::UsageError("--horizon must be 1 to " + std::to_string(MotionConfig::max_horizons) +
-                          ", not " + std::to_string(options.horizon));
+    throw app::UsageError("--horizons must be 1 to " + std::to_string(MotionConfig::max_horizons) +
+                          " steps, not " + std::to_string(options.horizon));
   }
   MotionConfig config;
   config.step_s = options.model.step();

@@ -62,10 +62,10 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
   if (reset || !std::filesystem::exists(table_path, ignored)) {
     const std::string what =
         config.grid.to_string() + (motion ? " table with the motion model" : " table");
-    if (reset)
-      spdlog::info("--reset: starting an empty {}; {} will be replaced at the first save", what,
+    if (reset && std::filesystem::exists(table_path, ignored))
+      spdlog::info("starting an empty {}; {} will be replaced at the first save", what,
                    table_path.string());
-    else
+    else if (!reset)
       spdlog::info("no table at {} yet: starting an empty {}", table_path.string(), what);
     ResumedLearner empty = resume_learner(TransitionTable(config.grid), std::move(empty_motion));
     return std::make_unique<Training>(training, empty.kind, std::move(empty.learner));
@@ -102,9 +102,10 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
     const MotionConfig& saved = stored.motion->config();
     throw std::runtime_error(
         saved.horizons != motion->horizons
-            ? fmt::format("{} was trained with --horizon {}, not {}: use the same --horizon, "
-                          "another --table, or --reset",
-                          table_path.string(), saved.horizons, motion->horizons)
+            ? fmt::format("{} was trained with --horizons {:g} ({} steps), not {:g}: use the "
+                          "same --horizons, another --table, or --reset",
+                          table_path.string(), saved.horizons * saved.step_s, saved.horizons,
+                          motion->horizons * motion->step_s)
             : fmt::format("{} was trained with other motion model settings ({}) than this "
                           "program's ({}): give another --table, or --reset",
                           table_path.string(), describe_motion(saved), describe_motion(*motion)));

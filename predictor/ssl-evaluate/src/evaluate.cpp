@@ -82,14 +82,15 @@ RecordedMatch match_simulation(const EvaluateOptions& options, std::uint64_t see
   return sim::record_match_simulation(std::move(config), seconds);
 }
 
-// A CSV file in --output-dir, or nowhere without one: tables are printed either way. It replaces
-// an earlier file of the name only when the run gets to its end: leaving its scope while an
-// exception unwinds (a failed run) leaves the earlier file as it was.
+// A CSV file in -o/--output's folder, or nowhere without one: tables are printed either way. It
+// replaces an earlier file of the name only when the run gets to its end: leaving its scope
+// while an exception unwinds (a failed run) leaves the earlier file as it was.
 class CsvFile {
  public:
   CsvFile(const EvaluateOptions& options, const std::string& name) {
     if (options.output_dir.empty()) return;
     const std::filesystem::path path = std::filesystem::path(options.output_dir) / name;
+    app::check_outputs_free({path.string()}, options.overwrite);
     std::filesystem::create_directories(path.parent_path());
     file_.emplace(path);
     spdlog::info("writing {}", path.string());
@@ -752,7 +753,7 @@ void write_holdout_csv(CsvFile& accuracy, CsvFile& calibration, CsvFile& reliabi
 }
 
 // The report's three CSV files (accuracy, calibration, reliability) with their headers, in
-// --output-dir with `prefix` ("holdout-", "grid-sweep-", "score-").
+// -o/--output's folder with `prefix` ("holdout-", "grid-sweep-", "score-").
 struct ReportFiles {
   ReportFiles(const EvaluateOptions& options, const std::string& prefix)
       : accuracy(options, prefix + "accuracy.csv"),
@@ -918,11 +919,11 @@ constexpr double low_cell_share = 0.05;
 int run_score(const EvaluateOptions& options) {
   if (options.log.empty() || options.predictions.empty()) {
     throw app::UsageError(
-        "score needs --log (the recorded match) and --predictions (a CSV of "
+        "score needs --from-log (the recorded match) and --predictions (a CSV of "
         "ssl-predictor --from-log's columns for that log)");
   }
   if (!options.test_logs.empty() || options.split > 0.0) {
-    throw app::UsageError("score takes one --log; --test-log and --split are for holdout");
+    throw app::UsageError("score takes one --from-log; --test-log and --split are for holdout");
   }
   check_report_path(options);
   Result<RecordedPredictions> read = read_prediction_csv(options.predictions);
@@ -1031,7 +1032,7 @@ int run_score(const EvaluateOptions& options) {
 
 int run_as_real_log(const EvaluateOptions& options) {
   if (options.from_log.empty() || options.write_log.empty()) {
-    throw app::UsageError("as-real-log needs --from-log FILE and --write-log FILE");
+    throw app::UsageError("as-real-log needs --from-log FILE and -o/--output FILE");
   }
   std::optional<RealLogMess> mess = parse_real_log_mess(options.mess);
   if (!mess) {

@@ -1,6 +1,6 @@
 #pragma once
 // ssl-producer's options: the simulated opponent, the network it sends on, and the log files it
-// writes (--write-log) or replays (--replay). Parsed in main.cpp, used by the three modes.
+// writes (-o/--output) or replays (--replay). Parsed in main.cpp, used by the three modes.
 
 #include <cstdint>
 #include <optional>
@@ -24,18 +24,18 @@ struct ProducerOptions {
   std::string tracker_address = app::default_tracker_address;
   std::string interface = app::default_interface;
   int ttl = net::kDefaultMulticastTtl;
-  // Simulation (live and --write-log).
+  // Simulation (live and -o).
   // match (the default: camera-rate frames, what the default motion model learns from) | paper
   std::string simulation = "match";
-  std::string division = "A";        // the match simulation's: A | B
-  double frame_rate_hz = 60.0;       // the match simulation's frames per second
-  std::string playbook = "wings";    // the match simulation's: a built-in name or a file
-  double duration_s = 0.0;           // seconds of data time to simulate; 0: --count decides
+  std::string division = "A";      // the match simulation's: A | B
+  double frame_rate_hz = 60.0;     // the match simulation's frames per second
+  std::string playbook = "wings";  // the match simulation's: a built-in name or a file
+  double duration_s = 0.0;         // seconds of data time to simulate; 0: --count decides
   double period_s = 2.0;
-  double step_s = 2.0;
+  double step_s = 0.0;      // the paper simulation's step; 0: its own (2 s, the paper's)
   std::uint64_t count = 0;  // formations; with --replay: packets
   std::uint64_t seed = 1;
-  int cameras = 1;
+  int cameras = 4;  // as a Division A field has them, and as the demo sends
   double camera_overlap_mm = 200.0;
   double jitter_mm = 0.0;
   double drop_rate = 0.0;
@@ -44,13 +44,13 @@ struct ProducerOptions {
   double field_length_mm = 9000.0;
   double field_width_mm = 6000.0;
   double start_time_s = 0.0;
-  // The simulated game controller (live and --write-log).
+  // The simulated game controller (live and -o).
   bool referee = true;
   std::string our_team = "ssl-formation";
   std::string opponent_team = "Simulated Opponent";
   double half_length_s = 300.0;
   // Log files.
-  std::string write_log;  // --write-log FILE
+  std::string write_log;  // -o/--output FILE (once --write-log)
   std::string replay;     // --replay FILE
   double speed = 1.0;
   bool loop = false;

@@ -22,8 +22,14 @@ struct TrainerOptions {
   app::ModelOptions model;
   app::NetworkOptions network;
   app::DaemonOptions daemon;
-  // --model motion: the steps ahead the motion model learns (--horizon, as the predictor's).
+  // --model motion: how far ahead the motion model learns, in seconds (--horizons), and the
+  // steps that makes once the step is known (settle_trainer_options).
+  std::string horizons = "auto";
   int horizon = 3;
+  // --horizon N, the old spelling in steps; app::not_given without it.
+  int old_horizon_steps = app::not_given;
+  // --from-log -o FILE: the table to write, from nothing, in place of --table.
+  app::OutputOptions output;
   std::string learn_during = "all";
   std::string table = app::default_table;
   // One table file per opponent team in this folder instead of --table (live training).
@@ -46,6 +52,9 @@ struct TrainerOptions {
 // Parses ssl-trainer's command line (not merge's) into `options`. Returns false when --help was
 // printed and the program should exit 0; throws app::UsageError for anything wrong.
 bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& options);
+// What the options leave open once parsed: -o in place of --table, the grid, step and model
+// from an existing --table, and the steps --horizons makes at that step. Throws app::UsageError.
+void settle_trainer_options(TrainerOptions& options);
 
 // The motion model's configuration the options ask for: none with --model paper. Throws
 // app::UsageError for a bad --model or --horizon, or a model that keeps no table (a baseline).

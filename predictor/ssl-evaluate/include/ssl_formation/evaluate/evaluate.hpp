@@ -58,7 +58,10 @@ struct EvaluateOptions {
   // The model is scored on its table as ssl-trainer would save it within this size (0: no
   // bound).
   double max_table_mb = default_max_table_mb;
-  std::string output_dir;  // none: no CSV files
+  std::string output_dir;  // -o/--output; none: no CSV files
+  // Files of the names written may be replaced (--overwrite); otherwise one that exists is
+  // refused before anything is written.
+  bool overwrite = false;
   // holdout, grid-sweep: every scored robot as a CSV line (ev::ScoredSample); none without it.
   std::string write_samples;
   // holdout, grid-sweep: the resamples of the block bootstrap behind every interval (0: none)
@@ -75,7 +78,8 @@ struct EvaluateOptions {
   // the program was run, for the page to say.
   std::string report;
   std::string command_line;
-  // score: the recorded match and the predictions made for it (ssl-predictor --from-log's CSV).
+  // score: the recorded match (--from-log) and the predictions made for it (ssl-predictor
+  // --from-log's CSV).
   std::string log;
   std::string predictions;
 };
