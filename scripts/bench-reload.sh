@@ -5,7 +5,7 @@
 # predictor that read and prepared its table on the prediction's path stopped predicting for as
 # long as a load took (about a second for a 40 MB table).
 # The table is the build's ssl-trainer's of an hour of simulated match (ssl-producer
-# --write-log, then ssl-trainer --from-log --max-table-mb 0), or SSLF_RELOAD_TABLE: trainers
+# -o, then ssl-trainer --from-log --max-table-mb 0), or SSLF_RELOAD_TABLE: trainers
 # before the table budget (--max-table-mb) made 41 MB of that hour, today's fold it into 3.3 MB,
 # so the 40 MB case takes an older trainer's table. The predictor follows a copy of it in a
 # temporary folder. Everything sends and joins on 127.0.0.1 with TTL 1, on 224.5.23.214:10214
@@ -56,7 +56,7 @@ if [ -n "${SSLF_RELOAD_TABLE:-}" ]; then
   cp "$SSLF_RELOAD_TABLE" "$work/table.bin"
 else
   echo "making the table: $match_seconds s of simulated match"
-  "$producer" --write-log "$work/match.log" --duration "$match_seconds" 2>"$work/producer.log"
+  "$producer" --cameras 1 -o "$work/match.log" --duration "$match_seconds" 2>"$work/producer.log"
   "$trainer" --from-log "$work/match.log" --table "$work/table.bin" --our-team ssl-formation \
     --max-table-mb "$table_mb" 2>"$work/trainer.log"
   rm -f "$work/match.log"

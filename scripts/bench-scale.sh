@@ -8,7 +8,8 @@
 #   against the length of its test log and of its training log, and the longest gap between
 #   predictions at 60 frames/s while the hour's table is replaced every 2 s
 #   (scripts/bench-reload.sh, on loopback test groups).
-# The logs are made by ssl-producer --write-log (the 5-hour one gzipped, about 240 MB), in a
+# The logs are made by ssl-producer -o with one camera, as the figures in docs/benchmarks.md
+# were (the 5-hour one gzipped, about 240 MB), in a
 # temporary folder that is removed at the end. Takes about 8 minutes on 2 cores.
 #   SSLF_BUILD_DIR        build folder (default: build)
 #   SSLF_SCALE_SECONDS    the match lengths (default "600 3600 18000")
@@ -54,7 +55,7 @@ echo "scale benchmark, $(date -u '+%Y-%m-%d %H:%M UTC'), $(nproc) CPUs, load ave
   "$(cut -d' ' -f1-3 /proc/loadavg), $(git -C "$SSLF_ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')"
 
 # One second of match: what ssl-predictor --from-log predicts while the table's load is timed.
-"$producer" --write-log "$work/second.log" --duration 1 --seed 9 2>/dev/null
+"$producer" --cameras 1 -o "$work/second.log" --duration 1 --seed 9 2>/dev/null
 
 echo
 echo "| match | log | table | rows stored of learned | training | trainer memory | load + 1 s of prediction | predictor memory |"
@@ -62,7 +63,7 @@ echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
 for seconds in $lengths; do
   log="$work/m$seconds.log"
   [ "$seconds" -gt 3600 ] && log="$log.gz"
-  "$producer" --write-log "$log" --duration "$seconds" 2>/dev/null
+  "$producer" --cameras 1 -o "$log" --duration "$seconds" 2>/dev/null
   measure "train$seconds" "$trainer" --from-log "$log" --table "$work/t$seconds.bin" \
     --our-team ssl-formation
   measure "load$seconds" "$predictor" --from-log "$work/second.log" --table "$work/t$seconds.bin" \
@@ -98,7 +99,7 @@ PLAYS
 generic=()
 for playbook in wings centre "$work/flanks.txt"; do
   name="$(basename "$playbook" .txt)"
-  "$producer" --write-log "$work/g-$name.log.gz" --duration "$generic_seconds" \
+  "$producer" --cameras 1 -o "$work/g-$name.log.gz" --duration "$generic_seconds" \
     --playbook "$playbook" --seed 5 2>/dev/null
   measure "generic-$name" "$trainer" --from-log "$work/g-$name.log.gz" \
     --table "$work/g-$name.bin" --our-team ssl-formation
@@ -116,7 +117,7 @@ printf '| generic: 3 x %s s merged | | %s MB | %s | | %s MB (merge) | %s s | %s 
 # A log of the run by its name (m600, b600, m18000: the long ones are gzipped).
 log_of() { if [ -f "$work/$1.log" ]; then echo "$work/$1.log"; else echo "$work/$1.log.gz"; fi; }
 if [ -f "$work/m600.log" ] && [ -f "$work/m3600.log" ]; then
-  "$producer" --write-log "$work/b600.log" --duration 600 --seed 2 2>/dev/null
+  "$producer" --cameras 1 -o "$work/b600.log" --duration 600 --seed 2 2>/dev/null
   echo
   echo "ssl-evaluate holdout (the four horizons and the chains, defaults):"
   echo

@@ -94,7 +94,7 @@ fi
 match_rates=()
 for seed in 1 2 3; do
   started=$(date +%s.%N)
-  "$build_dir/producer/ssl-producer" --simulation match --write-log "$work/match.log" \
+  "$build_dir/producer/ssl-producer" --simulation match -o "$work/match.log" \
     --duration 600 --cameras 4 --seed "$seed" 2>/dev/null
   match_rates+=("$(awk -v s="$started" -v e="$(date +%s.%N)" 'BEGIN { printf "%.0f", 600 / (e - s) }')")
 done
@@ -102,7 +102,7 @@ row "match simulation written, simulated s per wall s" \
   "$(printf '%s\n' "${match_rates[@]}" | sort -n | sed -n 2p)" ">= 50"
 
 # The paper table's memory per grid, on the paper's simulated opponent.
-"$build_dir/predictor/ssl-evaluate" grid-sweep --model paper --output-dir "$work" 2>/dev/null >/dev/null
+"$build_dir/predictor/ssl-evaluate" grid-sweep --model paper -o "$work" --overwrite 2>/dev/null >/dev/null
 while IFS=, read -r grid states transitions memory prediction _; do
   [ "$grid" = grid ] && continue
   row "table memory, $grid ($states states, $transitions transitions)" "$(awk -v m="$memory" 'BEGIN { printf "%.1f KiB", m / 1024 }')"

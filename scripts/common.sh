@@ -65,7 +65,7 @@ sslf_recording() {
     esac
     return
   fi
-  "$build_dir/producer/ssl-producer" --simulation match --write-log "$dest" --duration 600 \
+  "$build_dir/producer/ssl-producer" --simulation match -o "$dest" --duration 600 \
     --cameras 4 --seed "$seed" 2>"$dest.producer.log" || {
     cat "$dest.producer.log" >&2
     return 1

@@ -5,15 +5,16 @@
 # frame). Stops all three on Ctrl-C or after --duration seconds.
 #
 #   scripts/demo.sh [--duration SECONDS] [--simulation match|paper] [--replay LOG] [--model M]
-#                   [--grid LxW] [--horizon N] [--cameras N] [--period SECONDS] [--keep-table]
-#                   [--http-port PORT]
+#                   [--grid LxW] [--horizons SECONDS] [--cameras N] [--period SECONDS]
+#                   [--keep-table] [--http-port PORT]
 #
 # The terminal shows the newest prediction once a second, short (the robots' lists left out) and
 # cut to the terminal's width, and the trainer's and predictor's status lines and every warning
 # or error of the three programs as they come. The full prediction stream, one line per
 # prediction with every robot, goes to build/demo/predictions.txt (rewritten at each start); the
 # programs' logs to build/demo/producer.log, trainer.log and predictor.log; the live field view
-# is at http://127.0.0.1:8080/ (--http-port). (build/ is $SSLF_BUILD_DIR when that is set.)
+# is at http://127.0.0.1:8080/ (another free port if 8080 is taken; the demo prints the one in
+# use; --http-port picks one). (build/ is $SSLF_BUILD_DIR when that is set.)
 #
 # The daemons are told only our team's name, as at a tournament: the referee gives the
 # opponent's colour and side (the teams change ends at half time, every 5 minutes) and learning
@@ -22,7 +23,7 @@
 # --simulation paper sends the paper's simulated opponent instead, jumping from formation to
 # formation every 2 s of data time (one every --period s of wall time), with the paper's model.
 # --replay LOG (an official log of a real or simulated match, e.g. one you make with
-# `build/producer/ssl-producer --write-log match.log.gz --duration 120`; without a referee in
+# `build/producer/ssl-producer -o match.log.gz --duration 120`; without a referee in
 # the log the opponent is yellow attacking +x) loops the recording instead.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -30,10 +31,14 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 duration=0
 period=0.1
 grid=3x2
-horizon=2
+horizons=1
 cameras=4
 keep_table=0
-http_port=8080
+http_port=""
+# The simulated match of this seed opens with half a minute of running play (a kick-off, then
+# play until a goal): what a newcomer should see first, where most seeds, like real matches,
+# soon stop for a placement or a HALT.
+seed=8
 replay=""
 model=""
 simulation=match
@@ -43,7 +48,7 @@ while [ $# -gt 0 ]; do
     --duration) duration="$2"; shift 2 ;;
     --period) period="$2"; shift 2 ;;
     --grid) grid="$2"; shift 2 ;;
-    --horizon) horizon="$2"; shift 2 ;;
+    --horizons) horizons="$2"; shift 2 ;;
     --cameras) cameras="$2"; shift 2 ;;
     --keep-table) keep_table=1; shift ;;
     --http-port) http_port="$2"; shift 2 ;;
@@ -166,9 +171,9 @@ match_options=()
   "${match_options[@]}" 2>"$run_dir/trainer.log" &
 pids+=($!)
 "$build_dir/predictor/ssl-predictor" --vision-address "$vision" --prediction-address "$predictions" \
-  --table "$table" --grid "$grid" --model "$model" --horizon "$horizon" --sampling frame \
+  --table "$table" --grid "$grid" --model "$model" --horizons "$horizons" --sampling frame \
   --reload-interval 0.5 --print-predictions \
-  --http-port "$http_port" --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
+  ${http_port:+--http-port "$http_port"} --http-address 127.0.0.1 --ready-file "$run_dir/predictor.ready" \
   "${match_options[@]}" >"$predictions_file" 2>"$run_dir/predictor.log" &
 pids+=($!)
 # The producer starts once both daemons have joined the group (they write their ready files).
@@ -187,11 +192,12 @@ elif [ "$simulation" = paper ]; then
     --cameras "$cameras" --our-team ssl-formation 2>"$run_dir/producer.log" &
 else
   "$build_dir/producer/ssl-producer" --simulation match --vision-address "$vision" \
-    --cameras "$cameras" --our-team ssl-formation 2>"$run_dir/producer.log" &
+    --cameras "$cameras" --seed "$seed" --our-team ssl-formation 2>"$run_dir/producer.log" &
 fi
 pids+=($!)
 
-echo "Live field view: open http://127.0.0.1:$http_port/"
+field_view=$(sed -n 's/^http=//p' "$run_dir/predictor.ready")
+[ -z "$field_view" ] || echo "Live field view: open $field_view"
 if [ -n "$replay" ]; then
   source_line="Replaying $replay in a loop; the $model model, grid $grid."
 elif [ "$simulation" = paper ]; then
@@ -225,7 +231,7 @@ watchers+=($!)
 tail -q -n +1 -F --pid=$$ "$run_dir/trainer.log" "$run_dir/predictor.log" \
   "$run_dir/producer.log" 2>/dev/null \
   > >(trap '' INT; exec grep --line-buffered -E \
-    'ssl-(trainer|predictor) [a-z]+: status: | (warning|error|critical): ') &
+    'ssl-(trainer|predictor): [a-z]+: status: | (warning|error|critical): ') &
 watchers+=($!)
 
 # Until --duration has passed or, without one, until the trainer stops. From here on Ctrl-C and

@@ -26,11 +26,11 @@ sslf_build_quietly "$build_dir" || exit 1
 mkdir -p "$out"
 evaluate="$build_dir/predictor/ssl-evaluate"
 # shellcheck disable=SC2086
-"$evaluate" paper --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} | tee "$out/paper.txt"
+"$evaluate" paper -o "$out" --overwrite ${SSLF_EVAL_OPTIONS:-} | tee "$out/paper.txt"
 # shellcheck disable=SC2086
-"$evaluate" holdout --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} ${SSLF_HOLDOUT_OPTIONS:-} | tee "$out/holdout.txt"
+"$evaluate" holdout -o "$out" --overwrite ${SSLF_EVAL_OPTIONS:-} ${SSLF_HOLDOUT_OPTIONS:-} | tee "$out/holdout.txt"
 # shellcheck disable=SC2086
-"$evaluate" grid-sweep --output-dir "$out" ${SSLF_EVAL_OPTIONS:-} ${SSLF_HOLDOUT_OPTIONS:-} | tee "$out/grid-sweep.txt"
+"$evaluate" grid-sweep -o "$out" --overwrite ${SSLF_EVAL_OPTIONS:-} ${SSLF_HOLDOUT_OPTIONS:-} | tee "$out/grid-sweep.txt"
 
 # Debian's python3 (where python3-matplotlib lives), whatever else is first on PATH.
 MPLBACKEND=Agg /usr/bin/python3 - "$out" <<'PY'
