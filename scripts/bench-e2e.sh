@@ -87,7 +87,13 @@ stop() {
 
 # value TEXT KEY: the number after KEY= in TEXT.
 value() { sed -n "s/.*[ :]$2=\([0-9.na-]*\).*/\1/p" <<<"$1" | head -1; }
-last_status() { grep 'status:' "$1" | tail -1; }
+# The last status line of a daemon's LOG, with the lines of what it had no room for as it stopped
+# ("status, more: ..."); counter TEXT KEY: KEY's number there, 0 when left out (as every counter
+# at zero is).
+last_status() {
+  awk '/ status: / { s = $0; next } / status, more: / { s = s " " $0 } END { print s }' "$1"
+}
+counter() { local v; v="$(value "$1" "$2")"; echo "${v:-0}"; }
 
 failures=0
 rows=()
@@ -147,8 +153,8 @@ latency_run() {
   row "predictor adds: median - floor median" "$rate/s" "" "" "$added" "" "" "" "<= 20 us" "$result"
   judge "$(awk -v r="$ratio" 'BEGIN { print (r <= 1.5) ? 1 : 0 }')"
   row "predictor p99 / floor p99" "$rate/s" "" "" "" "" "${ratio}x" "" "<= 1.5x" "$result"
-  row "  predictor status at exit" "$rate/s" "$(value "$status" packets)" "" "" "" "" "" \
-    "drops=$(value "$status" kernel_drops) preds=$(value "$status" predictions)" ""
+  row "  predictor status at exit" "$rate/s" "$(counter "$status" packets)" "" "" "" "" "" \
+    "drops=$(counter "$status" kernel_drops) preds=$(counter "$status" predictions)" ""
 }
 
 latency_run 60 "$slow_seconds"
@@ -186,15 +192,16 @@ row "load: packets sent (6+6 robots, 4 cams)" "$(value "$load" achieved_pps)/s" 
   "$load_rate/s for $load_seconds s" ""
 for daemon in trainer predictor; do
   status="$(last_status "$work/$daemon-load.log")"
-  got="$(value "$status" packets)"
-  drops="$(value "$status" kernel_drops)"
-  errors="$(value "$status" parse_errors)"
-  formations="$(value "$status" formations)"
+  got="$(counter "$status" packets)"
+  drops="$(counter "$status" kernel_drops)"
+  errors="$(counter "$status" parse_errors)"
+  formations="$(counter "$status" formations)"
   ok=$([ "$got" = "$sent" ] && [ "$drops" = 0 ] && [ "$errors" = 0 ] && echo 1 || echo 0)
   judge "$ok"
   row "load: $daemon received, kernel drops" "" "$got" "$drops" "" "" "" "" "= sent, 0 drops" "$result"
   extra="formations=$formations/$frames"
-  [ "$daemon" = predictor ] && extra="$extra sent=$(value "$status" sent)"
+  [ "$daemon" = predictor ] &&
+    extra="$extra sent=$(( $(counter "$status" predictions) - $(counter "$status" send_errors) ))"
   judge "$([ "$formations" = "$frames" ] && echo 1 || echo 0)"
   row "  $daemon formations (= complete frames)" "" "$formations" "" "" "" "" "" "$extra" "$result"
 done

@@ -54,8 +54,13 @@ wait_for() {  # LOG TEXT PID
   cat "$1" >&2
   return 1
 }
-# field LOG KEY: KEY's value on the last status line of LOG.
-field() { grep 'status:' "$1" | tail -1 | grep -o "$2=[0-9]*" | head -1 | cut -d= -f2; }
+# field LOG KEY: KEY's value on the last status line of LOG; 0 when the line leaves it out, as
+# status lines do with every counter at zero.
+field() {
+  local value
+  value=$(grep 'status:' "$1" | tail -1 | grep -o "[ :]$2=[0-9]*" | head -1 | cut -d= -f2)
+  echo "${value:-0}"
+}
 
 "$bench" make-table --table "$work/fixed.bin" --formations 2000 >/dev/null
 "$trainer" --referee-address none --vision-address "$vision" --table "$work/trainer.bin" --flush-interval 1 \

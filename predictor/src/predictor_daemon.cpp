@@ -360,27 +360,41 @@ std::filesystem::path PredictorDaemon::table_path(const std::string& opponent) c
   return std::filesystem::path(options_.table_dir) / team_table_file_name(opponent);
 }
 
-void PredictorDaemon::log_status(const net::LiveMatchEvents* live) {
+void PredictorDaemon::log_status(const net::LiveMatchEvents* live, app::StatusMoment moment) {
   const auto& c = pipeline_.sampler().counters();
-  spdlog::info(
-      "status: {}{} formations={} predictions={} sent={} warm_ups={} table_reloads={}{} "
-      "attacks={} {} | {}",
-      live ? app::describe_reception(live->vision()) : std::string("packets=(in-process)"),
-      app::describe_tracked(pipeline_.front_end()), c.samples, pipeline_.predictions(),
-      output_.sent(), warm_ups_, table_reloads_, describe_for_status(pipeline_.live_score()),
-      app::describe_attacks(pipeline_.sampler().attacks(),
-                            pipeline_.match().opponent().attacks_because),
-      app::describe_referee_counts(pipeline_.match()), describe_rejections(c));
+  app::StatusLine status;
+  app::add_reception(status, live, pipeline_.front_end());
+  status.figure("predictions", pipeline_.predictions());
+  // Why nothing is predicted, when that is why.
+  if (pipeline_.needs_table() && !pipeline_.table()) status.note("no table yet");
+  if (const std::string error = describe_for_status(pipeline_.live_score()); !error.empty()) {
+    status.figure("live_error", error);
+  }
+  app::add_match(status, pipeline_.front_end());
+  status.detail("formations", c.samples)
+      .detail("table_reloads", table_reloads_)
+      .detail("warm_ups", warm_ups_)
+      .detail("referee_messages", pipeline_.match().referee().counters().messages);
+  // Every prediction is sent at once: one not sent is a send that failed (and was logged).
+  status.problem("send_errors",
+                 pipeline_.predictions() - std::min(pipeline_.predictions(), output_.sent()));
+  app::add_sampler_counters(status, c);
+  app::add_reception_details(status, live, pipeline_.front_end());
+  status.log("status", moment);
   // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
   for (const std::string& line : new_rejections(reported_, c)) spdlog::warn("input: {}", line);
   reported_ = c;
   if (web_) {
     const web::FieldViewCounters w = web_->counters();
-    spdlog::info(
-        "field view: viewers={} connections={} refused={} dropped_frames={} stalled={} "
-        "bad_requests={}",
-        w.live_clients, w.connections, w.refused, w.dropped_frames, w.stalled_clients,
-        w.bad_requests);
+    app::StatusLine view;
+    if (w.live_clients == 0) view.note("no viewers");
+    view.figure("viewers", w.live_clients)
+        .detail("connections", w.connections)
+        .problem("refused", w.refused)
+        .problem("dropped_frames", w.dropped_frames)
+        .problem("stalled", w.stalled_clients)
+        .problem("bad_requests", w.bad_requests);
+    view.log("field view", moment);
   }
 }
 
@@ -532,7 +546,7 @@ int run_daemon(const PredictorOptions& options) {
     daemon.when_viewer_joins([&] { daemon.publish_status(&events); });
   }
   io.run();
-  daemon.log_status(&events);
+  daemon.log_status(&events, app::StatusMoment::at_stop);
   return 0;
 }
 

@@ -43,14 +43,16 @@ class SimulatedFeed {
   }
   bool finished() const { return simulation_done(options_, steps_, simulation_->step_s()); }
 
-  void log_summary(const char* what) const {
+  void log_summary(const char* what, app::StatusMoment moment) const {
+    app::StatusLine line;
+    simulation_->describe(steps_, line);
+    line.figure("packets", sender_.sent());
+    if (referee_) line.detail("referee_sent", referee_->sent());
+    line.detail("drop_rate_dropped", dropped_)
+        .problem("send_errors", sender_.send_errors() + (referee_ ? referee_->send_errors() : 0));
     const sim::SimulatedGameController* game = simulation_->game_controller();
-    spdlog::info("{}: {}, {} packets sent, {} dropped by --drop-rate, {} send errors{}", what,
-                 simulation_->describe(steps_), sender_.sent(), dropped_,
-                 sender_.send_errors() + (referee_ ? referee_->send_errors() : 0),
-                 referee_ && game ? fmt::format("; {} referee messages sent, {}", referee_->sent(),
-                                                sim::describe(*game))
-                                  : std::string());
+    if (referee_ && game) describe_game_controller(*game, line);
+    line.log(what, moment);
   }
 
  private:
@@ -144,7 +146,8 @@ int run_simulation(const ProducerOptions& options) {
                  options.referee ? "--referee-address none" : "--referee off");
   }
   SimulatedFeed feed(io, options, std::move(simulation), sender, referee ? &*referee : nullptr);
-  app::RepeatingTimer status(io, status_period, [&] { feed.log_summary("status"); });
+  app::RepeatingTimer status(io, status_period,
+                             [&] { feed.log_summary("status", app::StatusMoment::periodic); });
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: stopping", signal);
     feed.stop();
@@ -158,7 +161,7 @@ int run_simulation(const ProducerOptions& options) {
                                     {"interface", interface.to_string()}});
   feed.start();
   io.run();
-  feed.log_summary(feed.finished() ? "done" : "stopped");
+  feed.log_summary(feed.finished() ? "done" : "stopped", app::StatusMoment::at_stop);
   return 0;
 }
 

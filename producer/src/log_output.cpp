@@ -74,20 +74,24 @@ int run_write_log(const ProducerOptions& options) {
   std::uint64_t dropped = 0;
   bool stopped = false;
   const auto started = std::chrono::steady_clock::now();
-  const auto log_status = [&](const char* what) {
+  const auto log_status = [&](const char* what, app::StatusMoment moment) {
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    spdlog::info(
-        "{}: {}, {} packets and {} referee messages written ({} bytes, {} dropped by "
-        "--drop-rate) to {} in {:.2f} s{}",
-        what, simulation->describe(steps), packets, referee_messages, writer->offset(), dropped,
-        options.write_log, wall_s, game ? "; " + sim::describe(*game) : std::string());
+    app::StatusLine line;
+    simulation->describe(steps, line);
+    line.figure("packets", packets)
+        .figure("bytes", writer->offset())
+        .figure("seconds", fmt::format("{:.2f}", wall_s));
+    if (game) describe_game_controller(*game, line);
+    line.detail("referee_written", referee_messages).detail("drop_rate_dropped", dropped);
+    line.log(what, moment);
   };
 
   // Signals and status lines through the same io_context as the other modes, polled between
   // batches: the loop itself never waits.
   boost::asio::io_context io;
-  app::RepeatingTimer status(io, status_period, [&] { log_status("status"); });
+  app::RepeatingTimer status(io, status_period,
+                             [&] { log_status("status", app::StatusMoment::periodic); });
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: closing {} and stopping", signal, options.write_log);
     stopped = true;
@@ -117,7 +121,7 @@ int run_write_log(const ProducerOptions& options) {
   }
   status.cancel();
   if (!writer->close()) throw failed();
-  log_status(stopped ? "stopped" : "done");
+  log_status(stopped ? "stopped" : "done", app::StatusMoment::at_stop);
   return 0;
 }
 

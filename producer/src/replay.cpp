@@ -5,6 +5,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -101,28 +102,32 @@ class LogReplay {
   int exit_code() const { return exit_code_; }
   bool finished() const { return finished_; }
 
-  void log_status() const {
-    spdlog::info(
-        "status: sent={} referee_sent={} tracker_sent={} pass={} log_time={:.2f}s send_errors={}",
-        sender_.sent(), referee_sent_, tracker_sent_, passes_, last_t_, sender_.send_errors());
-  }
-
-  void log_summary(const char* what) const {
+  // The same line each --status-interval and at the end ("done", "stopped", "failed").
+  void log_status(const char* what, app::StatusMoment moment) const {
     LogReadCounters counters = totals_;
     if (reader_) add_counters(counters, reader_->counters());
     const double seconds = std::chrono::duration<double>(Clock::now() - started_).count();
-    spdlog::info(
-        "{}: {} packets sent in {:.2f} s ({} pass{} over {}, timing from {}, speed {}); "
-        "{} of the log's {} referee messages sent{}, {} of its {} tracked vision packets "
-        "sent{}; skipped: blank={} unknown={} legacy_vision_unusable={} undecodable={}; "
-        "{} packets before --start, {} send errors",
-        what, sender_.sent(), seconds, passes_, passes_ == 1 ? "" : "es", options_.replay,
-        to_string(timeline_.clock()), options_.speed, referee_sent_, counters.referee,
-        referee_ ? "" : " (--referee-address none)", tracker_sent_, counters.tracker,
-        tracker_ ? "" : " (--tracker-address none)", counters.blank,
-        counters.unknown, counters.legacy_unusable, counters.parse_errors, before_start_,
-        sender_.send_errors() + (referee_ ? referee_->send_errors() : 0) +
-            (tracker_ ? tracker_->send_errors() : 0));
+    app::StatusLine line;
+    if (sender_.sent() == 0) line.note("no vision packets sent yet");
+    line.figure("sent", sender_.sent())
+        .figure("log_time", fmt::format("{:.2f}s", last_t_))
+        .figure("seconds", fmt::format("{:.2f}", seconds));
+    // The log's referee messages and tracked vision not sent: no group for them, or before
+    // --start.
+    line.detail("referee_sent", referee_sent_)
+        .detail("referee_unsent", counters.referee - std::min(counters.referee, referee_sent_))
+        .detail("tracker_sent", tracker_sent_)
+        .detail("tracker_unsent", counters.tracker - std::min(counters.tracker, tracker_sent_))
+        .detail("passes", passes_)
+        .detail("before_start", before_start_)
+        .detail("blank", counters.blank)
+        .detail("unknown", counters.unknown)
+        .detail("legacy_vision_unusable", counters.legacy_unusable);
+    line.problem("undecodable", counters.parse_errors)
+        .problem("encode_errors", sender_.encode_errors())
+        .problem("send_errors", sender_.send_errors() + (referee_ ? referee_->send_errors() : 0) +
+                                    (tracker_ ? tracker_->send_errors() : 0));
+    line.log(what, moment);
   }
 
  private:
@@ -336,7 +341,8 @@ int run_replay(const ProducerOptions& options) {
                group.to_string(), interface.to_string(), options.ttl,
                options.speed > 0.0 ? fmt::format("{}", options.speed) : "0 (as fast as possible)",
                window);
-  app::RepeatingTimer status(io, status_period, [&] { replay.log_status(); });
+  app::RepeatingTimer status(io, status_period,
+                             [&] { replay.log_status("status", app::StatusMoment::periodic); });
   app::StopSignals signals(io, [&](int signal) {
     spdlog::info("signal {}: stopping", signal);
     replay.stop();
@@ -352,7 +358,10 @@ int run_replay(const ProducerOptions& options) {
                                     {"log", options.replay}});
   replay.start();
   io.run();
-  replay.log_summary(!replay.finished() ? "stopped" : replay.exit_code() == 0 ? "done" : "failed");
+  replay.log_status(!replay.finished()        ? "stopped"
+                    : replay.exit_code() == 0 ? "done"
+                                              : "failed",
+                    app::StatusMoment::at_stop);
   return replay.exit_code();
 }
 

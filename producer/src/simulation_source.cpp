@@ -28,11 +28,17 @@ class PaperSource final : public SimulationSource {
   const char* steps_name() const override { return "formations"; }
   double step_s() const override { return simulation_.vision().config().step_s; }
   double live_period_s() const override { return period_s_; }
-  std::string describe(std::uint64_t steps) const override {
+  void describe(std::uint64_t steps, app::StatusLine& line) const override {
     const double total = static_cast<double>(steps ? steps : 1);
-    return fmt::format("{} formations ({} from plays = {:.1f}%, {} random = {:.1f}%)", steps,
-                       play_formations_, 100.0 * play_formations_ / total, steps - play_formations_,
-                       100.0 * (steps - play_formations_) / total);
+    const std::uint64_t random = steps - play_formations_;
+    line.figure("formations", steps);
+    if (play_formations_ != 0) {
+      line.detail("from_plays",
+                  fmt::format("{} ({:.1f}%)", play_formations_, 100.0 * play_formations_ / total));
+    }
+    if (random != 0) {
+      line.detail("random", fmt::format("{} ({:.1f}%)", random, 100.0 * random / total));
+    }
   }
   const sim::SimulatedGameController* game_controller() const override {
     return simulation_.game_controller();
@@ -62,10 +68,15 @@ class MatchSource final : public SimulationSource {
   const char* steps_name() const override { return "frames"; }
   double step_s() const override { return 1.0 / match_.config().frame_rate_hz; }
   double live_period_s() const override { return step_s(); }
-  std::string describe(std::uint64_t steps) const override {
-    return fmt::format("{} frames ({:.1f} s of match), {} plays, {} passes, {} shots, {} goals",
-                       steps, static_cast<double>(steps) * step_s(), match_.plays_started(),
-                       match_.passes(), match_.shots(), match_.goals());
+  void describe(std::uint64_t steps, app::StatusLine& line) const override {
+    line.figure("frames", steps);
+    if (steps != 0) {
+      line.figure("match_time", fmt::format("{:.1f}s", static_cast<double>(steps) * step_s()));
+    }
+    line.detail("plays", match_.plays_started())
+        .detail("passes", match_.passes())
+        .detail("shots", match_.shots())
+        .detail("goals", match_.goals());
   }
   const sim::SimulatedGameController* game_controller() const override {
     return match_.game_controller();
@@ -76,6 +87,16 @@ class MatchSource final : public SimulationSource {
 };
 
 }  // namespace
+
+void describe_game_controller(const sim::SimulatedGameController& game, app::StatusLine& line) {
+  const Referee& message = game.message();
+  line.figure("game", to_string(game.state()))
+      .figure("attacks", to_string(game.opponent_attacks()))
+      .figure("score",
+              fmt::format("{}:{}(yellow:blue)", message.yellow().score(), message.blue().score()));
+  line.detail("stage", Referee::Stage_Name(message.stage()))
+      .detail("match", game.matches_started());
+}
 
 bool simulation_done(const ProducerOptions& options, std::uint64_t steps, double step_s) {
   return (options.count != 0 && steps >= options.count) ||

@@ -11,10 +11,10 @@
 #include <regex>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
+#include "status_lines.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -75,26 +75,19 @@ TEST(DaemonReports, StatusLinesGiveTheFastPathShareAndTheFieldSizeIsLoggedWithIt
     ASSERT_TRUE(
         daemon.wait_for_stderr("field: 12000 x 9000 mm (Division A) from a geometry packet", 10s))
         << daemon.stderr_text();
-    // Every detection packet of the simulation takes the fast path; geometry goes through
-    // protobuf. The share is in every status line once packets came.
-    const std::regex share(R"(packets=(\d+) .*fast_path=([\d.]+)%)");
-    bool seen = false;
-    for (int attempt = 0; attempt < 100 && !seen; ++attempt) {
-      const std::string text = daemon.stderr_text();
-      for (auto it = std::sregex_iterator(text.begin(), text.end(), share);
-           it != std::sregex_iterator(); ++it) {
-        if (std::stoul((*it)[1]) == 0) continue;
-        const double percent = std::stod((*it)[2]);
-        EXPECT_GT(percent, 50.0);
-        EXPECT_LT(percent, 100.0);  // the geometry packets
-        seen = true;
-      }
-      if (!seen) std::this_thread::sleep_for(20ms);  // polling for the next status line
-    }
-    EXPECT_TRUE(seen) << daemon.stderr_text();
     EXPECT_EQ(occurrences(daemon.stderr_text(), "(Division A) from a geometry packet"), 1u);
+    ASSERT_TRUE(testing::wait_for_status(daemon, "packets", 1, 10s)) << daemon.stderr_text();
     daemon.signal(SIGTERM);
     EXPECT_EQ(daemon.wait(10s), 0) << daemon.stderr_text();
+    // Every detection packet of the simulation takes the fast path; geometry goes through
+    // protobuf. The share is a detail of the status lines: on the last word at stop, with every
+    // figure the periodic lines had no room for.
+    const std::string text = daemon.stderr_text();
+    const std::string last_word = text.substr(text.rfind("status: "));
+    std::smatch share;
+    ASSERT_TRUE(std::regex_search(last_word, share, std::regex(R"(fast_path=([\d.]+)%)"))) << text;
+    EXPECT_GT(std::stod(share[1]), 50.0);
+    EXPECT_LT(std::stod(share[1]), 100.0);  // the geometry packets
   }
 }
 

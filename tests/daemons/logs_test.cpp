@@ -268,8 +268,7 @@ TEST(Logs, ReplaySendsExactlyTheFilesPackets) {
   for (std::size_t i = 0; i < received.size(); ++i) {
     ASSERT_EQ(received[i].bytes, file.packets[i].SerializeAsString()) << "packet " << i;
   }
-  EXPECT_NE(result.err.find("done: " + std::to_string(file.packets.size()) + " packets sent"),
-            std::string::npos)
+  EXPECT_EQ(testing::last_status(result.err, "done:").at("sent"), file.packets.size())
       << result.err;
 }
 
@@ -310,16 +309,20 @@ TEST(Logs, ReplaySendsLegacyVisionAndCountsWhatItSkips) {
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const auto received = listener.wait_for(3, 5s);
   EXPECT_EQ(frame_numbers(received), (std::vector<std::uint32_t>{0, 1, 3}));
-  EXPECT_NE(result.err.find("done: 3 packets sent"), std::string::npos) << result.err;
+  const testing::Status done = testing::last_status(result.err, "done:");
+  EXPECT_EQ(done.at("sent"), 3u) << result.err;
   // The referee messages and tracked vision go to their own groups as they are, the first
   // referee message (before any vision) too; the rest is skipped and counted.
   EXPECT_EQ(referee_listener.wait_for(2, 5s).size(), 2u);
   EXPECT_EQ(tracker_listener.wait_for(1, 5s).size(), 1u);
-  EXPECT_NE(result.err.find("2 of the log's 2 referee messages sent, 1 of its 1 tracked vision "
-                            "packets sent; skipped: blank=0 unknown=0 "
-                            "legacy_vision_unusable=1 undecodable=1"),
-            std::string::npos)
-      << result.err;
+  EXPECT_EQ(done.at("referee_sent"), 2u) << result.err;
+  EXPECT_EQ(done.at("referee_unsent"), 0u) << result.err;
+  EXPECT_EQ(done.at("tracker_sent"), 1u) << result.err;
+  EXPECT_EQ(done.at("tracker_unsent"), 0u) << result.err;
+  EXPECT_EQ(done.at("blank"), 0u) << result.err;
+  EXPECT_EQ(done.at("unknown"), 0u) << result.err;
+  EXPECT_EQ(done.at("legacy_vision_unusable"), 1u) << result.err;
+  EXPECT_EQ(done.at("undecodable"), 1u) << result.err;
 }
 
 TEST(Logs, ReplayKeepsTheRecordedPaceAndScalesItWithSpeed) {
@@ -419,7 +422,7 @@ TEST(Logs, ReplayLoopsUntilTheCount) {
   std::vector<std::uint32_t> expected;
   for (int i = 0; i < 50; ++i) expected.push_back(static_cast<std::uint32_t>(i % 20));
   EXPECT_EQ(frame_numbers(received), expected);
-  EXPECT_NE(result.err.find("3 passes"), std::string::npos) << result.err;
+  EXPECT_EQ(testing::last_status(result.err, "done:").at("passes"), 3u) << result.err;
 
   // Paced, the second pass follows the first at once and keeps the pace.
   const std::string paced_group = new_group();

@@ -336,7 +336,7 @@ TEST_F(MotionDaemons, WarmUpsBetweenFramesAtTheRealPaceSendNothingAndChangeNoPre
   EXPECT_EQ(daemon.wait(5s), 0) << daemon.stderr_text();
   const auto status = testing::last_status(daemon.stderr_text());
   EXPECT_EQ(status.at("predictions"), static_cast<std::uint64_t>(frames));
-  EXPECT_EQ(status.at("sent"), static_cast<std::uint64_t>(frames));
+  EXPECT_EQ(status.at("send_errors"), 0u);  // every prediction sent
   // Nearly every gap between two frames had its warm-up (a busy machine may let a frame come
   // first now and then).
   EXPECT_GT(status.at("warm_ups"), static_cast<std::uint64_t>(frames / 2)) << daemon.stderr_text();

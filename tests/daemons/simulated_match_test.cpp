@@ -125,7 +125,7 @@ TEST(SimulatedMatch, ATrainerLearnsTheLiveMatchFollowingItsReferee) {
        "--duration", "4", "--cameras", "2", "--division", "B", "--status-interval", "100"},
       dir.path(), "producer", 20s);
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
-  EXPECT_NE(produced.err.find("done: 240 frames (4.0 s of match)"), std::string::npos)
+  EXPECT_NE(produced.err.find("done: frames=240 match_time=4.0s"), std::string::npos)
       << produced.err;
   // 240 frames at 60 Hz, sampled every frame by the motion model: most of them arrive.
   ASSERT_TRUE(testing::wait_for_status(trainer, "formations", 200, 10s)) << trainer.stderr_text();

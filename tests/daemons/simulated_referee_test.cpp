@@ -9,6 +9,7 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
+#include "status_lines.hpp"
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/files/table_file.hpp"
@@ -141,7 +142,7 @@ TEST(SimulatedReferee, ThePredictorFollowsTheLiveSimulationsRefereeThroughHalfTi
                            "100", "--period", "0.02", "--status-interval", "100"});
   const auto produced = testing::run_to_end(producer_program, live, dir.path(), "producer");
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
-  EXPECT_NE(produced.err.find("100 referee messages sent"), std::string::npos) << produced.err;
+  EXPECT_EQ(testing::last_status(produced.err, "done:").at("referee_sent"), 100u) << produced.err;
 
   const auto messages = listener.drain(5s);
   ASSERT_TRUE(messages.has_value());

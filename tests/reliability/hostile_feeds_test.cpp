@@ -252,6 +252,16 @@ TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
   const std::uint64_t real_changes = tap.command_changes() - real_changes_before;
   ASSERT_TRUE(trainer.running()) << trainer.stderr_text();
   ASSERT_TRUE(predictor.running()) << predictor.stderr_text();
+  expect_quiet_logs(trainer, trainer_log_from, "trainer");
+  expect_quiet_logs(predictor, predictor_log_from, "predictor");
+  // The counters from the lines each daemon logs as it stops: they hold every one, where a
+  // periodic line crowded with problems leaves details out.
+  producer.signal(SIGTERM);
+  trainer.signal(SIGTERM);
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(trainer.wait(10s), 0) << trainer.stderr_text();
+  EXPECT_EQ(predictor.wait(10s), 0) << predictor.stderr_text();
+  producer.wait(10s);
   const auto after = last_status(trainer.stderr_text());
   const auto predictor_after = last_status(predictor.stderr_text());
 
@@ -288,15 +298,6 @@ TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
     }
     EXPECT_LE(changes, real_changes + 2) << during;
   }
-  expect_quiet_logs(trainer, trainer_log_from, "trainer");
-  expect_quiet_logs(predictor, predictor_log_from, "predictor");
-
-  producer.signal(SIGTERM);
-  trainer.signal(SIGTERM);
-  predictor.signal(SIGTERM);
-  EXPECT_EQ(trainer.wait(10s), 0) << trainer.stderr_text();
-  EXPECT_EQ(predictor.wait(10s), 0) << predictor.stderr_text();
-  producer.wait(10s);
   std::cout << "[ figures  ] referee flood: sent=" << sent.sent << " heard=" << heard
             << " replays=" << sent.replays << " spoofed_names=" << sent.spoofed_names
             << " trainer_referee_stale=" << after.at("referee_stale")
@@ -396,6 +397,13 @@ TEST(HostileFeeds, ATrackerGroupFloodNeitherStallsNorFloodsTheDaemons) {
   real.join();
   ASSERT_TRUE(trainer.running()) << trainer.stderr_text();
   ASSERT_TRUE(predictor.running()) << predictor.stderr_text();
+  expect_quiet_logs(trainer, trainer_log_from, "trainer");
+  expect_quiet_logs(predictor, predictor_log_from, "predictor");
+  // The counters from the lines the trainer logs as it stops: they hold every one.
+  trainer.signal(SIGTERM);
+  predictor.signal(SIGTERM);
+  EXPECT_EQ(trainer.wait(10s), 0) << trainer.stderr_text();
+  EXPECT_EQ(predictor.wait(10s), 0) << predictor.stderr_text();
   const auto after = last_status(trainer.stderr_text());
 
   EXPECT_GE(predictions_during, 150U);
@@ -404,13 +412,6 @@ TEST(HostileFeeds, ATrackerGroupFloodNeitherStallsNorFloodsTheDaemons) {
   EXPECT_GE(after.at("tracker_other_source") - before.at("tracker_other_source"), sent / 6 / 2);
   // The tracker followed is still "a".
   EXPECT_EQ(trainer.stderr_text().find("following tracker 'b"), std::string::npos);
-  expect_quiet_logs(trainer, trainer_log_from, "trainer");
-  expect_quiet_logs(predictor, predictor_log_from, "predictor");
-
-  trainer.signal(SIGTERM);
-  predictor.signal(SIGTERM);
-  EXPECT_EQ(trainer.wait(10s), 0) << trainer.stderr_text();
-  EXPECT_EQ(predictor.wait(10s), 0) << predictor.stderr_text();
   std::cout << "[ figures  ] tracker flood: sent=" << sent << " real_frames=" << frames
             << " predictions_during=" << predictions_during << " trainer_tracker_undecodable="
             << after.at("tracker_undecodable") - before.at("tracker_undecodable")

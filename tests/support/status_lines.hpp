@@ -1,8 +1,9 @@
 #pragma once
 // The daemons' status lines as numbers. Every daemon and ssl-record log a line like
-// "status: packets=12 parse_errors=0 kernel_drops=0 ... formations=3 | ..." every
-// --status-interval, and a last one as they exit: key=value throughout, so tests wait on counters
-// instead of on the wording of a log line, and read the final figures from the last line.
+// "status: packets=12 formations=3 ... | problems: kernel_drops=2" every --status-interval, and a
+// last one as they exit: key=value throughout, so tests wait on counters instead of on the
+// wording of a log line, and read the final figures from the last line. A counter at zero is left
+// off the line (app/status_line.hpp): Status::at reads a key that is not there as 0.
 
 #include <chrono>
 #include <cstdint>
@@ -14,32 +15,46 @@
 
 namespace ssl_formation::testing {
 
-using Status = std::map<std::string, std::uint64_t>;
+// The key=value pairs of a status line; at() gives 0 for a key the line leaves out.
+class Status : public std::map<std::string, std::uint64_t> {
+ public:
+  std::uint64_t at(const std::string& key) const {
+    const auto it = find(key);
+    return it == end() ? 0 : it->second;
+  }
+};
 
 // The key=value pairs (with whole-number values) of the last complete line of `text` that
-// contains `marker`: a key is a run of [a-z_] right before '=', its value the digits right after
-// ("fast_path=98.2%" gives 98, "attacks=+x" nothing). A line still being written is left out:
-// its last number may be cut short.
+// contains `marker`, and of the "<marker without its colon>, more:" lines right after it (what a
+// program's last status line had no room for): a key is a run of [a-z_] right before '=', its
+// value the digits right after ("fast_path=98.2%" gives 98, "attacks=+x" nothing). A line still
+// being written is left out: its last number may be cut short.
 inline Status last_status(const std::string& text, const std::string& marker = "status:") {
   Status out;
   const std::size_t end = text.rfind('\n');
   if (end == std::string::npos) return out;
-  const std::size_t at = text.rfind(marker, end);
+  std::size_t at = text.rfind(marker, end);
   if (at == std::string::npos) return out;
-  const std::string line = text.substr(at, text.find('\n', at) - at);
+  const std::string more = marker.substr(0, marker.size() - 1) + ", more:";
   const auto key_char = [](char c) { return (c >= 'a' && c <= 'z') || c == '_'; };
   const auto digit = [](char c) { return c >= '0' && c <= '9'; };
-  std::size_t taken = 0;  // the end of the last pair read: keys start after it
-  for (std::size_t equals = line.find('='); equals != std::string::npos;
-       equals = line.find('=', equals + 1)) {
-    std::size_t key = equals;
-    while (key > taken && key_char(line[key - 1])) --key;
-    std::size_t value_end = equals + 1;
-    while (value_end < line.size() && digit(line[value_end])) ++value_end;
-    if (key == equals || value_end == equals + 1) continue;
-    out[line.substr(key, equals - key)] =
-        std::stoull(line.substr(equals + 1, value_end - equals - 1));
-    taken = value_end;
+  for (bool first = true; at != std::string::npos && at < end; first = false) {
+    const std::size_t line_end = text.find('\n', at);
+    const std::string line = text.substr(at, line_end - at);
+    if (!first && line.find(more) == std::string::npos) break;
+    std::size_t taken = 0;  // the end of the last pair read: keys start after it
+    for (std::size_t equals = line.find('='); equals != std::string::npos;
+         equals = line.find('=', equals + 1)) {
+      std::size_t key = equals;
+      while (key > taken && key_char(line[key - 1])) --key;
+      std::size_t value_end = equals + 1;
+      while (value_end < line.size() && digit(line[value_end])) ++value_end;
+      if (key == equals || value_end == equals + 1) continue;
+      out[line.substr(key, equals - key)] =
+          std::stoull(line.substr(equals + 1, value_end - equals - 1));
+      taken = value_end;
+    }
+    at = line_end + 1;
   }
   return out;
 }

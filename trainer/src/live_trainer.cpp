@@ -73,23 +73,30 @@ void LiveTrainer::tick() {
 
 bool LiveTrainer::save_at_exit() { return tables_.save_at_exit(); }
 
-void LiveTrainer::log_status(const net::LiveMatchEvents* live) {
+void LiveTrainer::log_status(const net::LiveMatchEvents* live, app::StatusMoment moment) {
   const Training& training = tables_.training();
   const SamplerCounters& c = training.sampler().counters();
   const MotionTable* motion = training.motion();
-  spdlog::info(
-      "status: {}{} formations={} transitions={} table_transitions={} states_seen={}{} "
-      "rejected_robots={} late_frames={} attacks={} {} | {}",
-      live ? app::describe_reception(live->vision()) : std::string("packets=(in-process)"),
-      app::describe_tracked(training.front_end()), c.samples, c.transitions,
-      training.table().transitions(), training.table().rows_seen(),
-      motion ? fmt::format(" motion_instances={} motion_held_out={} motion_rows={}",
-                           motion->instances(), motion->held_out(), motion->rows())
-             : std::string(),
-      c.robots_non_finite + c.robots_out_of_range + c.robots_bad_id, c.frames_late,
-      app::describe_attacks(training.sampler().attacks(),
-                            training.match().opponent().attacks_because),
-      app::describe_referee_counts(training.match()), describe_rejections(c));
+  app::StatusLine status;
+  app::add_reception(status, live, training.front_end());
+  status.figure("formations", c.samples);
+  // What was learned: the motion model's instances, or the paper's transitions.
+  if (motion) {
+    status.figure("motion_instances", motion->instances());
+  } else {
+    status.figure("table_transitions", training.table().transitions());
+  }
+  app::add_match(status, training.front_end());
+  status.detail("transitions", c.transitions)
+      .detail("referee_messages", training.match().referee().counters().messages);
+  if (motion) status.detail("table_transitions", training.table().transitions());
+  status.detail("states_seen", training.table().rows_seen()).detail("saves", saves_);
+  app::add_sampler_counters(status, c);
+  if (motion) {
+    status.detail("motion_rows", motion->rows()).detail("motion_held_out", motion->held_out());
+  }
+  app::add_reception_details(status, live, training.front_end());
+  status.log("status", moment);
   for (const std::string& line : new_rejections(reported_, c)) spdlog::warn("input: {}", line);
   reported_ = c;
 }
@@ -130,7 +137,7 @@ int run_live(const TrainerOptions& options) {
                     {"interface", feeds.interface.to_string()},
                     {"table", trainer.tables().path().string()}});
   io.run();
-  trainer.log_status(&events);
+  trainer.log_status(&events, app::StatusMoment::at_stop);
   return saved_on_exit ? 0 : 1;
 }
 

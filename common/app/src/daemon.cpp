@@ -15,12 +15,23 @@
 
 namespace ssl_formation::app {
 
+namespace {
+// What every log line starts with; info_prefix_chars counts it for status lines.
+constexpr const char* log_pattern = "[%H:%M:%S.%e] %n %l: %v";
+constexpr std::string_view info_level = "info";
+constexpr std::size_t time_chars = std::string_view("[23:14:05.123] ").size();
+}  // namespace
+
+std::size_t info_prefix_chars(std::string_view program) {
+  return time_chars + program.size() + 1 + info_level.size() + 2;  // " info: "
+}
+
 void init_logging(const std::string& program, bool verbose) {
   // Every line through the repeat limit (log_limit.hpp), and libprotobuf's own messages too.
   auto limited = std::make_shared<LimitedSink>(
       std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
   auto logger = std::make_shared<spdlog::logger>(program, std::move(limited));
-  logger->set_pattern("[%H:%M:%S.%e] %n %l: %v");
+  logger->set_pattern(log_pattern);
   logger->set_level(verbose ? spdlog::level::debug : spdlog::level::info);
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
@@ -124,22 +135,23 @@ net::LiveFeeds live_feeds(const NetworkOptions& network, int receive_buffer_byte
   return feeds;
 }
 
-std::string describe_tracked(const MatchFrontEnd& front_end) {
-  if (!front_end.config().tracked_vision) return {};
-  const TrackerCounters& c = front_end.tracked_vision().counters();
-  return fmt::format(" tracker_packets={} tracker_frames={} tracker_other_source={} "
-                     "tracker_undecodable={}",
-                     c.packets, c.frames, c.other_source, c.undecodable);
-}
-
-std::string describe_referee_counts(const MatchFollower& match) {
-  const RefereeCounters& c = match.referee().counters();
+void add_match(StatusLine& line, const MatchFrontEnd& front_end) {
+  const MatchFollower& match = front_end.match();
   const Opponent& opponent = match.opponent();
-  return fmt::format(
-      "opponent={} ({}) game={} referee_messages={} referee_unused={} referee_stale={} "
-      "name_switches_refused={}",
-      to_string(opponent.color), to_string(opponent.color_because), to_string(match.game_state()),
-      c.messages, c.messages - c.used, c.stale, c.refused_name_switches);
+  const std::optional<AttackDirection> attacks = front_end.sampler().attacks();
+  // Why, unless the referee said so: what it says is what a match runs on.
+  const auto why = [](Because because) {
+    return because == Because::referee ? std::string()
+                                       : "(" + std::string(to_string(because)) + ")";
+  };
+  line.figure("game", to_string(match.game_state()))
+      .figure("opponent", std::string(to_string(opponent.color)) + why(opponent.color_because))
+      .figure("attacks", (attacks ? std::string(to_string(*attacks)) : "unknown-yet") +
+                             why(opponent.attacks_because));
+  const RefereeCounters& c = match.referee().counters();
+  line.problem("referee_unused", c.messages - c.used)
+      .problem("referee_stale", c.stale)
+      .problem("name_switches_refused", c.refused_name_switches);
 }
 
 StopSignals::StopSignals(boost::asio::io_context& io, std::function<void(int)> on_stop)
@@ -208,14 +220,58 @@ void RepeatingTimer::arm() {
   });
 }
 
-std::string describe_reception(const net::VisionReceiver& receiver) {
-  const net::ReceiverCounters& counters = receiver.counters();
-  const std::uint64_t datagrams = counters.datagrams.load();
-  std::string text = fmt::format("packets={} parse_errors={} kernel_drops={} fast_path=", datagrams,
-                                 counters.parse_errors.load(), counters.kernel_drops.load());
-  if (datagrams == 0) return text + "-";
-  return text + fmt::format("{:.1f}%", 100.0 * static_cast<double>(receiver.direct_decodes()) /
-                                           static_cast<double>(datagrams));
+void add_reception(StatusLine& line, const net::LiveMatchEvents* live,
+                   const MatchFrontEnd& front_end) {
+  const bool tracked = front_end.config().tracked_vision;
+  if (tracked) {
+    const TrackerCounters& c = front_end.tracked_vision().counters();
+    if (c.frames == 0) line.note("no tracked frames yet");
+    line.figure("tracker_frames", c.frames).problem("tracker_undecodable", c.undecodable);
+  }
+  if (!live) return;
+  const net::ReceiverCounters& vision = live->vision().counters();
+  const std::uint64_t packets = vision.datagrams.load();
+  // With tracked vision the vision packets give only the field's size: a detail.
+  if (tracked) {
+    line.detail("packets", packets);
+  } else {
+    if (packets == 0) line.note("no vision packets yet");
+    line.figure("packets", packets);
+  }
+  line.problem("parse_errors", vision.parse_errors.load())
+      .problem("kernel_drops", vision.kernel_drops.load());
+  std::uint64_t receive_errors = vision.receive_errors.load();
+  if (const net::MulticastReceiver* referee = live->referee()) {
+    line.problem("referee_kernel_drops", referee->counters().kernel_drops.load());
+    receive_errors += referee->counters().receive_errors.load();
+  }
+  if (const net::MulticastReceiver* tracker = live->tracker()) {
+    line.problem("tracker_kernel_drops", tracker->counters().kernel_drops.load());
+    receive_errors += tracker->counters().receive_errors.load();
+  }
+  line.problem("receive_errors", receive_errors);
+}
+
+void add_reception_details(StatusLine& line, const net::LiveMatchEvents* live,
+                           const MatchFrontEnd& front_end) {
+  if (front_end.config().tracked_vision) {
+    const TrackerCounters& c = front_end.tracked_vision().counters();
+    line.detail("tracker_packets", c.packets).detail("tracker_other_source", c.other_source);
+  }
+  if (!live) return;
+  const std::uint64_t datagrams = live->vision().counters().datagrams.load();
+  if (datagrams == 0) return;
+  line.detail("fast_path",
+              fmt::format("{:.1f}%", 100.0 * static_cast<double>(live->vision().direct_decodes()) /
+                                         static_cast<double>(datagrams)));
+}
+
+void add_sampler_counters(StatusLine& line, const SamplerCounters& counters) {
+  for (const auto& [name, count] : rejection_counts(counters)) {
+    line.problem(name, count, "input_refused");
+  }
+  line.detail("clock_resets", counters.clock_resets)
+      .detail("field_changes", counters.field_changes);
 }
 
 FieldSizeLog::FieldSizeLog(const FieldSize& from_options, bool geometry_used)
@@ -228,11 +284,6 @@ void FieldSizeLog::update(const FieldSize& field) {
   if (field == logged_) return;
   spdlog::info("field: {} from a geometry packet (was {})", describe(field), describe(logged_));
   logged_ = field;
-}
-
-std::string describe_attacks(std::optional<AttackDirection> now, Because because) {
-  const std::string why = " (" + std::string(to_string(because)) + ")";
-  return now ? std::string(to_string(*now)) + why : std::string("unknown-yet") + why;
 }
 
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds) {

@@ -140,8 +140,8 @@ std::string describe_for_status(const LiveScore& score) {
   const LiveScore::Horizon* h = score.nearest(1.0);
   if (h == nullptr) return {};
   char text[128];
-  std::snprintf(text, sizeof text, " live_error_mm=%.0f stays_error_mm=%.0f live_horizon_s=%.1f",
-                h->model_mm, h->persistence_mm, h->horizon_s);
+  std::snprintf(text, sizeof text, "%.0fmm at %.1fs (stays %.0fmm)", h->model_mm, h->horizon_s,
+                h->persistence_mm);
   return text;
 }
 

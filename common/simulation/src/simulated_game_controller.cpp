@@ -425,17 +425,6 @@ const Referee& SimulatedGameController::message_at(double t_s) {
   return message_;
 }
 
-std::string describe(const SimulatedGameController& game_controller) {
-  const Referee& message = game_controller.message();
-  std::string text = "match " + std::to_string(game_controller.matches_started()) + ", " +
-                     Referee::Stage_Name(message.stage()) + ", game " +
-                     std::string(to_string(game_controller.state())) + ", opponent attacks " +
-                     std::string(to_string(game_controller.opponent_attacks())) + ", score " +
-                     std::to_string(message.yellow().score()) + ":" +
-                     std::to_string(message.blue().score()) + " (yellow:blue)";
-  return text;
-}
-
 RefereedSimulation::RefereedSimulation(SimulationConfig vision,
                                        std::optional<GameControllerConfig> game)
     : vision_(vision) {

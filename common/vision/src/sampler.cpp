@@ -532,6 +532,16 @@ std::string describe_rejections(const SamplerCounters& counters) {
   return out;
 }
 
+std::vector<std::pair<std::string_view, std::uint64_t>> rejection_counts(
+    const SamplerCounters& counters) {
+  std::vector<std::pair<std::string_view, std::uint64_t>> out;
+  out.reserve(std::size(rejection_kinds));
+  for (const RejectionKind& kind : rejection_kinds) {
+    out.emplace_back(kind.key, counters.*kind.counter);
+  }
+  return out;
+}
+
 std::vector<std::string> new_rejections(const SamplerCounters& before,
                                         const SamplerCounters& after) {
   std::vector<std::string> out;

@@ -134,22 +134,38 @@ int run_record(const RecordOptions& options) {
   boost::asio::io_context io;
   net::MulticastReceiver receiver(io, group, interface, options.receive_buffer_bytes);
   const auto started = std::chrono::steady_clock::now();
-  const auto log_status = [&](const char* what) {
-    const auto& net = receiver.counters();
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    spdlog::info(
-        "{}: recorded={} referee_recorded={} tracked_recorded={} bytes={} skipped={} "
-        "referee_skipped={} tracked_skipped={} kernel_drops={} receive_errors={} seconds={:.1f}",
-        what, recorder.recorded(), recorder.referee().recorded, recorder.tracked().recorded,
-        writer->offset(), recorder.skipped(), recorder.referee().skipped,
-        recorder.tracked().skipped, net.kernel_drops.load(), net.receive_errors.load(), seconds);
-  };
-  bool by_signal = false;
   std::optional<net::MulticastReceiver> referee;
   if (referee_group) referee.emplace(io, *referee_group, interface, options.receive_buffer_bytes);
   std::optional<net::MulticastReceiver> tracker;
   if (tracker_group) tracker.emplace(io, *tracker_group, interface, options.receive_buffer_bytes);
+  const auto log_status = [&](const char* what, app::StatusMoment moment) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    app::StatusLine line;
+    if (recorder.recorded() == 0) line.note("no vision packets yet");
+    line.figure("recorded", recorder.recorded())
+        .figure("bytes", writer->offset())
+        .figure("seconds", fmt::format("{:.1f}", seconds));
+    line.detail("referee_recorded", recorder.referee().recorded)
+        .detail("tracked_recorded", recorder.tracked().recorded);
+    // Datagrams that are not what their group carries, and every receiver's losses.
+    line.problem("skipped", recorder.skipped())
+        .problem("referee_skipped", recorder.referee().skipped)
+        .problem("tracked_skipped", recorder.tracked().skipped)
+        .problem("kernel_drops", receiver.counters().kernel_drops.load());
+    std::uint64_t receive_errors = receiver.counters().receive_errors.load();
+    if (referee) {
+      line.problem("referee_kernel_drops", referee->counters().kernel_drops.load());
+      receive_errors += referee->counters().receive_errors.load();
+    }
+    if (tracker) {
+      line.problem("tracker_kernel_drops", tracker->counters().kernel_drops.load());
+      receive_errors += tracker->counters().receive_errors.load();
+    }
+    line.problem("receive_errors", receive_errors);
+    line.log(what, moment);
+  };
+  bool by_signal = false;
   const auto stop = [&] {
     receiver.stop();
     if (referee) referee->stop();
@@ -179,7 +195,8 @@ int run_record(const RecordOptions& options) {
       options.duration_s > 0.0 ? fmt::format(" for {} s", options.duration_s) : "",
       options.count ? fmt::format(", at most {} packets", options.count) : "");
 
-  app::RepeatingTimer status(io, status_period, [&] { log_status("status"); });
+  app::RepeatingTimer status(io, status_period,
+                             [&] { log_status("status", app::StatusMoment::periodic); });
   boost::asio::steady_timer deadline(io);
   if (options.duration_s > 0.0) {
     deadline.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -213,7 +230,7 @@ int run_record(const RecordOptions& options) {
     spdlog::error("{}", writer->error());
     return 1;
   }
-  log_status(by_signal ? "stopped" : "done");
+  log_status(by_signal ? "stopped" : "done", app::StatusMoment::at_stop);
   return 0;
 }
 

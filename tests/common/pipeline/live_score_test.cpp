@@ -61,7 +61,7 @@ TEST(LiveScore, ARightPredictionScoresNothingAndEveryoneStaysScoresTheDistanceTr
     EXPECT_GT(h.robots, 30.0);
   }
   EXPECT_EQ(score.nearest(1.0)->horizon_s, 1.0);
-  EXPECT_EQ(describe_for_status(score), " live_error_mm=0 stays_error_mm=600 live_horizon_s=1.0");
+  EXPECT_EQ(describe_for_status(score), "0mm at 1.0s (stays 600mm)");
   // Four predictions a second (the remember interval), each robot and step scored once.
   EXPECT_NEAR(static_cast<double>(score.scored()), 4 * 20 * 2 * 2, 8);
 }

@@ -95,8 +95,10 @@ class PredictorDaemon final : public MatchEventSink {
   bool settle_table_loads(
       std::chrono::steady_clock::duration timeout = std::chrono::steady_clock::duration::max());
   // One status line, then a warning for each kind of bad input that arrived since the last one.
-  // `live`: the network's counters, when the events come from there.
-  void log_status(const net::LiveMatchEvents* live = nullptr);
+  // `live`: the network's counters, when the events come from there. At stop, whatever did not fit
+  // on the line follows it.
+  void log_status(const net::LiveMatchEvents* live = nullptr,
+                  app::StatusMoment moment = app::StatusMoment::periodic);
   // The field view's status message.
   void publish_status(const net::LiveMatchEvents* live = nullptr);
 

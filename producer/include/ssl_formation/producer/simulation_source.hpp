@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "ssl_formation/app/status_line.hpp"
 #include "ssl_formation/producer/producer_options.hpp"
 #include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper.pb.h"
@@ -33,10 +34,15 @@ class SimulationSource {
   virtual double step_s() const = 0;
   // The wall time between two steps of the live feed; 0: as fast as possible.
   virtual double live_period_s() const = 0;
-  // What has happened so far, for status lines: "12000 frames, 40 plays, 85 passes, ...".
-  virtual std::string describe(std::uint64_t steps) const = 0;
+  // What has happened so far, on a status line: "frames=12000 match_time=200.0s plays=40 ...".
+  virtual void describe(std::uint64_t steps, app::StatusLine& line) const = 0;
   virtual const sim::SimulatedGameController* game_controller() const = 0;
 };
+
+// The simulated game controller on a status line: the figures game=running attacks=-x
+// score=1:0(yellow:blue) (the side the opponent attacks), and the details stage and match (how
+// many matches began).
+void describe_game_controller(const sim::SimulatedGameController& game, app::StatusLine& line);
 
 // Whether `steps` steps of `step_s` each are all that --count or --duration ask for.
 bool simulation_done(const ProducerOptions& options, std::uint64_t steps, double step_s);

@@ -36,8 +36,10 @@ class LiveTrainer final : public MatchEventSink {
   // At exit (SIGINT, SIGTERM): saves (--table's file in any case). False if the save failed.
   bool save_at_exit();
   // One status line, then a warning for each kind of bad input that arrived since the last one.
-  // `live`: the network's counters, when the events come from there.
-  void log_status(const net::LiveMatchEvents* live = nullptr);
+  // `live`: the network's counters, when the events come from there. At stop, whatever did not fit
+  // on the line follows it.
+  void log_status(const net::LiveMatchEvents* live = nullptr,
+                  app::StatusMoment moment = app::StatusMoment::periodic);
 
   const OpponentTables& tables() const { return tables_; }
   // Blocks until the saves handed to the saver's thread are done; false if one failed.

@@ -10,10 +10,12 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
+#include "ssl_formation/app/status_line.hpp"
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/match/match.hpp"
 #include "ssl_formation/match/tracked_vision.hpp"
@@ -26,6 +28,9 @@ namespace ssl_formation::app {
 
 // All log lines go to stderr through spdlog: "[23:14:05.123] ssl-trainer info: ...".
 void init_logging(const std::string& program, bool verbose = false);
+// The characters init_logging puts before an info message of `program`:
+// "[23:14:05.123] ssl-trainer: info: ".
+std::size_t info_prefix_chars(std::string_view program);
 
 // Both throw UsageError naming the option.
 net::MulticastEndpoint parse_group_option(const std::string& option, const std::string& text);
@@ -61,10 +66,12 @@ class MatchLog {
   std::string logged_tracker_;  // the uuid of the tracker followed, as last logged
 };
 
-// "opponent=blue (referee) game=running referee_messages=N referee_unused=N", for status lines:
-// the opponent's colour and why, the game state, and the referee messages not followed (another
-// game controller, unknown commands, undecodable).
-std::string describe_referee_counts(const MatchFollower& match);
+// The match on a status line: the figures game=running opponent=blue attacks=+x(inferred) (the
+// opponent's colour and the side it attacks, and why they are believed unless the referee said
+// so: option, default or inferred), and as problems the referee messages not followed
+// (referee_unused: another game controller, unknown commands, undecodable), the stale ones
+// (referee_stale) and the team names refused (name_switches_refused).
+void add_match(StatusLine& line, const MatchFrontEnd& front_end);
 
 // Calls `on_stop` once on the first SIGINT or SIGTERM, from the io_context's thread. From then on
 // the signals have their default action again, so a second Ctrl-C (or SIGTERM) ends the process
@@ -114,13 +121,24 @@ class ReadyFile {
   bool written_ = false;
 };
 
-// "packets=N parse_errors=N kernel_drops=N fast_path=99.9%": the receiving side of a status
-// line, the same in every daemon. fast_path is the share of datagrams decoded without protobuf,
-// so a change in SSL-Vision's packets that moves everything to the slow path is visible.
-std::string describe_reception(const net::VisionReceiver& receiver);
-// " tracker_packets=N tracker_frames=N tracker_other_source=N tracker_undecodable=N" with
-// --vision-source tracked (empty without), for status lines.
-std::string describe_tracked(const MatchFrontEnd& front_end);
+// The receiving side of a status line, the same in every daemon: the figure packets (vision
+// datagrams read; "no vision packets yet" before the first), and the problems parse_errors,
+// kernel_drops (vision datagrams the kernel dropped for want of room), referee_kernel_drops,
+// tracker_kernel_drops and receive_errors. With --vision-source tracked the figure is
+// tracker_frames, packets a detail, and tracker_undecodable a problem. `live` null: the events
+// come from a test's hands, not the network.
+void add_reception(StatusLine& line, const net::LiveMatchEvents* live,
+                   const MatchFrontEnd& front_end);
+// The receiving side's details, for the end of a status line: with --vision-source tracked
+// tracker_packets and tracker_other_source (packets of trackers not followed), and fast_path=99.9%,
+// the share of vision datagrams decoded without protobuf, so that a change in SSL-Vision's
+// packets that moves everything to the slow path is visible.
+void add_reception_details(StatusLine& line, const net::LiveMatchEvents* live,
+                           const MatchFrontEnd& front_end);
+// The sampler's refusals of bad input as problems (non_finite=N late=N ..., the names of
+// rejection_counts; summed as input_refused=N when they crowd the figures out), and the details
+// clock_resets and field_changes.
+void add_sampler_counters(StatusLine& line, const SamplerCounters& counters);
 
 // Logs the field size sampling uses, once at start and once per change (geometry packets), with
 // the division it implies: a wrong field size silently moves every robot to other cells.
@@ -134,9 +152,6 @@ class FieldSizeLog {
  private:
   FieldSize logged_;
 };
-
-// "+x (option)", "-x (referee)", "unknown-yet (inferred)": for status lines.
-std::string describe_attacks(std::optional<AttackDirection> now, Because because);
 
 std::chrono::steady_clock::duration seconds_option(const std::string& option, double seconds);
 

@@ -90,8 +90,8 @@ class LiveScore {
   std::uint64_t scored_ = 0;
 };
 
-// For status lines, at the step nearest 1 s: " live_error_mm=140 stays_error_mm=307
-// live_horizon_s=1.0" (with its leading space), or "" before anything was scored.
+// For status lines, at the step nearest 1 s: the model's mean error and that of "everyone stays"
+// as "140mm at 1.0s (stays 307mm)", or "" before anything was scored.
 std::string describe_for_status(const LiveScore& score);
 
 }  // namespace ssl_formation

@@ -214,10 +214,6 @@ class SimulatedGameController {
   std::uint32_t blue_score_ = 0;
 };
 
-// "match 1, NORMAL_SECOND_HALF, game running, opponent attacks -x, score 1:0 (yellow:blue)",
-// for status lines.
-std::string describe(const SimulatedGameController& game_controller);
-
 struct RefereedFormation {
   // Sent first, on the referee group (live) or as a type-3 message (a log); none without a game
   // controller.

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "ssl_formation/base/formation.hpp"
@@ -118,8 +119,12 @@ struct SamplerCounters {
   std::uint64_t transitions = 0;
 };
 
-// "non_finite=0 out_of_range=0 ..." : every refusal counter, for status lines.
+// "non_finite=0 out_of_range=0 ..." : every refusal counter, zeros too.
 std::string describe_rejections(const SamplerCounters& counters);
+// Every refusal counter with the name status lines give it ("non_finite", "late", ...), in the
+// order they print them.
+std::vector<std::pair<std::string_view, std::uint64_t>> rejection_counts(
+    const SamplerCounters& counters);
 // One sentence per kind of refusal that grew from `before` to `after` ("2 frames with a camera id
 // over the limit (5 in all)"), for a daemon to log as warnings when new kinds of bad input arrive.
 std::vector<std::string> new_rejections(const SamplerCounters& before,
