@@ -83,7 +83,10 @@ PredictorDaemon::PredictorDaemon(boost::asio::io_context& io, const PredictorOpt
   if (options.http_port != 0) {
     web::FieldViewOptions web_options;
     web_options.address = options.http_address;
-    web_options.port = static_cast<std::uint16_t>(options.http_port);
+    const bool default_port = options.http_port == PredictorOptions::http_port_default;
+    web_options.port = static_cast<std::uint16_t>(default_port ? PredictorOptions::default_http_port
+                                                               : options.http_port);
+    web_options.any_port_if_taken = default_port;
     web_options.max_clients = static_cast<std::size_t>(options.http_max_clients);
     web_options.send_buffer_bytes = options.http_send_buffer_bytes;
     web_.emplace(io, web_options);
@@ -478,8 +481,8 @@ PredictionConfig prediction_config(const PredictorOptions& options) {
                           "constant-velocity and constant-acceleration");
   }
   if (options.horizon < 1 || options.horizon > PredictionConfig::max_horizon) {
-    throw app::UsageError("--horizon must be 1 to " +
-                          std::to_string(PredictionConfig::max_horizon));
+    throw app::UsageError("--horizons must be 1 to " +
+                          std::to_string(PredictionConfig::max_horizon) + " steps");
   }
   config.horizon = options.horizon;
   config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
@@ -500,7 +503,8 @@ int run_daemon(const PredictorOptions& options) {
   if (options.ttl < 0 || options.ttl > 255) throw app::UsageError("--ttl must be 0 to 255");
   const auto reload_period = app::seconds_option("reload-interval", options.reload_interval_s);
   const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
-  if (options.http_port < 0 || options.http_port > 65535)
+  if ((options.http_port < 0 && options.http_port != PredictorOptions::http_port_default) ||
+      options.http_port > 65535)
     throw app::UsageError("--http-port must be 0 to 65535");
   if (options.http_max_clients < 1 || options.http_max_clients > 10000) {
     throw app::UsageError("--http-max-clients must be 1 to 10000");

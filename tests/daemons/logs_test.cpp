@@ -519,7 +519,7 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
   const auto produced =
       testing::run_to_end(producer_program,
                           {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--period", "0.002",
-                           "--count", "100", "--seed", "3", "--status-interval", "100"},
+                           "--count", "100", "--seed", "3", "--cameras", "1", "--status-interval", "100"},
                           dir.path(), "producer", 20s);
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
   ASSERT_TRUE(testing::wait_for_status(recorder, "recorded", expected.size(), 10s))

@@ -177,18 +177,67 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   std::cout << log.substr(log.rfind("status:")) << "\n";
 }
 
-TEST(FieldViewBadClients, OffByDefaultAndBadOptionsAreRefused) {
+// Holds 127.0.0.1:port for as long as it lives; another program may hold it already, which
+// serves the same purpose.
+class TakenPort {
+ public:
+  explicit TakenPort(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    address.sin_port = htons(port);
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0) {
+      ::listen(fd_, 1);
+    }
+  }
+  ~TakenPort() { ::close(fd_); }
+  TakenPort(const TakenPort&) = delete;
+  TakenPort& operator=(const TakenPort&) = delete;
+
+ private:
+  int fd_;
+};
+
+TEST(FieldViewBadClients, OnByDefaultElsewhereWhenItsPortIsTakenOffWithZeroBadOptionsRefused) {
   TempDir dir;
   const std::string vision = testing::new_group();
+  const TakenPort taken(8080);
+  // The default port taken (by this test, or by another predictor on the machine): the view is
+  // served on a free one, and the address is logged and in the ready file.
   ChildProcess predictor(predictor_program,
                          {"--vision-address", vision, "--table", (dir / "t.bin").string()},
                          dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
-  EXPECT_EQ(predictor.ready_fact("table_loaded"), "0");
-  EXPECT_EQ(predictor.ready_fact("http"), "");  // no field view
-  EXPECT_EQ(predictor.stderr_text().find("field view"), std::string::npos);
+  const std::string url = predictor.ready_fact("http");
+  std::smatch port;
+  ASSERT_TRUE(std::regex_match(url, port, std::regex(R"(http://127\.0\.0\.1:(\d+)/)"))) << url;
+  EXPECT_NE(port[1], "8080");
+  EXPECT_NE(predictor.stderr_text().find("field view: open " + url), std::string::npos)
+      << predictor.stderr_text();
+  EXPECT_NE(predictor.stderr_text().find("port 8080 is taken"), std::string::npos)
+      << predictor.stderr_text();
+  RawClient client(static_cast<std::uint16_t>(std::stoi(port[1])));
+  EXPECT_TRUE(client.connected());
   predictor.signal(SIGTERM);
   EXPECT_EQ(predictor.wait(5s), 0);
+
+  ChildProcess off(predictor_program,
+                   {"--vision-address", vision, "--table", (dir / "t.bin").string(),
+                    "--http-port", "0"},
+                   dir.path(), "off", Readiness::ready_file);
+  ASSERT_TRUE(off.wait_until_ready(10s)) << off.stderr_text();
+  EXPECT_EQ(off.ready_fact("table_loaded"), "0");
+  EXPECT_EQ(off.ready_fact("http"), "");  // no field view
+  EXPECT_EQ(off.stderr_text().find("field view"), std::string::npos);
+  off.signal(SIGTERM);
+  EXPECT_EQ(off.wait(5s), 0);
+
+  // A port given is that port: taken, the predictor says so and stops.
+  const auto given = testing::run_to_end(
+      predictor_program, {"--vision-address", vision, "--http-port", "8080"}, dir.path(), "given",
+      10s);
+  EXPECT_EQ(given.exit_code, 1) << given.err;
+  EXPECT_NE(given.err.find("another program uses the port"), std::string::npos) << given.err;
 
   const auto bad_port =
       testing::run_to_end(predictor_program, {"--http-port", "70000"}, dir.path(), "bad-port", 10s);

@@ -1,11 +1,15 @@
 #include "ssl_formation/app/daemon.hpp"
 
+#include <spdlog/pattern_formatter.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -16,22 +20,51 @@
 namespace ssl_formation::app {
 
 namespace {
-// What every log line starts with; info_prefix_chars counts it for status lines.
-constexpr const char* log_pattern = "[%H:%M:%S.%e] %n %l: %v";
+// What every log line starts with: "[23:14:05.123] ssl-trainer: info: ", and an error
+// "ssl-trainer: error: " as the programs' own error lines (run_main) are: one format a user or
+// a script looks for, whether the error stopped the program or not. info_prefix_chars counts it
+// for status lines.
+constexpr const char* log_pattern = "%*%n: %l: %v";
 constexpr std::string_view info_level = "info";
 constexpr std::size_t time_chars = std::string_view("[23:14:05.123] ").size();
+
+// %*: the time of day, but not before an error.
+class TimeUnlessError : public spdlog::custom_flag_formatter {
+ public:
+  void format(const spdlog::details::log_msg& message, const std::tm&,
+              spdlog::memory_buf_t& out) override {
+    if (message.level >= spdlog::level::err) return;
+    // The formatter only fills in its std::tm for its own time flags: this one makes its own.
+    const std::time_t seconds = spdlog::log_clock::to_time_t(message.time);
+    std::tm time{};
+    localtime_r(&seconds, &time);
+    const auto millis =
+        std::chrono::duration_cast<std::chrono::milliseconds>(message.time.time_since_epoch())
+            .count() %
+        1000;
+    char text[32];
+    const int n = std::snprintf(text, sizeof text, "[%02d:%02d:%02d.%03d] ", time.tm_hour,
+                                time.tm_min, time.tm_sec, static_cast<int>(millis));
+    out.append(text, text + n);
+  }
+  std::unique_ptr<custom_flag_formatter> clone() const override {
+    return std::make_unique<TimeUnlessError>();
+  }
+};
 }  // namespace
 
 std::size_t info_prefix_chars(std::string_view program) {
-  return time_chars + program.size() + 1 + info_level.size() + 2;  // " info: "
+  return time_chars + program.size() + 2 + info_level.size() + 2;  // ": info: "
 }
 
 void init_logging(const std::string& program, bool verbose) {
   // Every line through the repeat limit (log_limit.hpp), and libprotobuf's own messages too.
-  auto limited = std::make_shared<LimitedSink>(
-      std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
+  auto limited =
+      std::make_shared<LimitedSink>(std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
   auto logger = std::make_shared<spdlog::logger>(program, std::move(limited));
-  logger->set_pattern(log_pattern);
+  auto formatter = std::make_unique<spdlog::pattern_formatter>();
+  formatter->add_flag<TimeUnlessError>('*').set_pattern(log_pattern);
+  logger->set_formatter(std::move(formatter));
   logger->set_level(verbose ? spdlog::level::debug : spdlog::level::info);
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
@@ -61,8 +94,7 @@ std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& te
 }
 
 double steady_seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 void MatchLog::update(const MatchFrontEnd& front_end, const RefereeChange& change) {
@@ -103,10 +135,11 @@ void MatchLog::update(const MatchFrontEnd& front_end, const RefereeChange& chang
         RefereeFollower::max_timestamp_ahead_s);
   }
   if (change.resync) {
-    spdlog::warn("referee: following the newest messages of the game controller '{}' again, "
-                 "after refusing them as stale (a replay heard first, a log starting over, or "
-                 "forged messages); {} such times so far",
-                 referee.view().source, c.resyncs);
+    spdlog::warn(
+        "referee: following the newest messages of the game controller '{}' again, "
+        "after refusing them as stale (a replay heard first, a log starting over, or "
+        "forged messages); {} such times so far",
+        referee.view().source, c.resyncs);
   }
   if (change.source) {
     spdlog::warn("referee: the game controller followed fell silent; now following '{}'",
