@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "captured_log.hpp"
 #include "scratch_dir.hpp"
 #include "ssl_formation/app/options.hpp"
 
@@ -149,31 +150,7 @@ TEST(DescribeField, SaysTheDivision) {
   EXPECT_NE(describe(FieldSize{12000.0, 9001.0}).find("neither"), std::string::npos);
 }
 
-// Routes spdlog's default logger into a string for the test's lifetime.
-class CapturedLog {
- public:
-  CapturedLog() : previous_(spdlog::default_logger()) {
-    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(text_);
-    auto logger = std::make_shared<spdlog::logger>("captured", sink);
-    logger->set_pattern("%v");
-    logger->set_level(spdlog::level::trace);
-    spdlog::set_default_logger(logger);
-  }
-  ~CapturedLog() { spdlog::set_default_logger(previous_); }
-  CapturedLog(const CapturedLog&) = delete;
-  CapturedLog& operator=(const CapturedLog&) = delete;
-  std::vector<std::string> lines() {
-    spdlog::default_logger()->flush();
-    std::vector<std::string> out;
-    std::istringstream in(text_.str());
-    for (std::string line; std::getline(in, line);) out.push_back(line);
-    return out;
-  }
-
- private:
-  std::ostringstream text_;
-  std::shared_ptr<spdlog::logger> previous_;
-};
+using testing::CapturedLog;
 
 TEST(FieldSizeLog, LogsAtStartAndOncePerChange) {
   CapturedLog log;
@@ -428,8 +405,8 @@ TEST(RecalibrationOption, ZeroIsOffAndABadHalfLifeNamesTheOption) {
   ASSERT_TRUE(settings.has_value());
   EXPECT_EQ(settings->half_life_s, 30.0);
   EXPECT_EQ(settings->prior_weight, OnlineCalibrationSettings{}.prior_weight);
-  for (double bad : {-1.0, std::numeric_limits<double>::quiet_NaN(),
-                     std::numeric_limits<double>::infinity()}) {
+  for (double bad :
+       {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     try {
       (void)recalibration_settings(bad);
       ADD_FAILURE() << bad << " accepted";

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "captured_log.hpp"
 #include "ssl_formation/app/daemon.hpp"
 
 namespace ssl_formation::app {
@@ -173,30 +174,7 @@ TEST(StatusLine, TheRoomIsWhatTheLogLinePrefixLeavesOfTheLimit) {
       2u);
 }
 
-// Routes spdlog's default logger, named as a program, into a string for the test's lifetime.
-class CapturedLog {
- public:
-  explicit CapturedLog(const std::string& program) : previous_(spdlog::default_logger()) {
-    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(text_);
-    auto logger = std::make_shared<spdlog::logger>(program, sink);
-    logger->set_pattern("%v");
-    spdlog::set_default_logger(logger);
-  }
-  ~CapturedLog() { spdlog::set_default_logger(previous_); }
-  CapturedLog(const CapturedLog&) = delete;
-  CapturedLog& operator=(const CapturedLog&) = delete;
-  std::vector<std::string> lines() {
-    spdlog::default_logger()->flush();
-    std::vector<std::string> out;
-    std::istringstream in(text_.str());
-    for (std::string line; std::getline(in, line);) out.push_back(line);
-    return out;
-  }
-
- private:
-  std::ostringstream text_;
-  std::shared_ptr<spdlog::logger> previous_;
-};
+using testing::CapturedLog;
 
 TEST(StatusLine, AtStopWhatDidNotFitFollowsOnLinesOfItsOwn) {
   StatusLine line;
