@@ -7,12 +7,16 @@
 
 #include <chrono>
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "child_process.hpp"
 #include "feed_groups.hpp"
 #include "prediction_rows.hpp"
+#include "ssl_formation/files/log_file.hpp"
+#include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation {
 namespace {
@@ -123,6 +127,55 @@ TEST(Defaults, AFeedTheModelCannotLearnFromIsNamedWithTheOptionThatFixesIt) {
   // Said once.
   const auto first = err.find("needs frames");
   EXPECT_EQ(err.find("needs frames", first + 1), std::string::npos) << err;
+}
+
+// The producer's default feed is the demo's: four cameras, each frame's robots split among them.
+TEST(Defaults, TheProducerSendsFourCamerasAsTheDemoDoes) {
+  TempDir dir;
+  const auto run = testing::run_to_end(producer_program, {"-o", "d.log", "--duration", "1"},
+                                       dir.path(), "producer");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const LogVisionPackets log = read_vision_log(dir / "d.log").value();
+  std::set<std::uint32_t> cameras;
+  for (const auto& packet : log.packets) {
+    if (packet.has_detection()) cameras.insert(packet.detection().camera_id());
+  }
+  EXPECT_EQ(cameras, (std::set<std::uint32_t>{0, 1, 2, 3}));
+}
+
+// The demo's match opens in running play: a newcomer's first half minute is play, not a HALT.
+TEST(Defaults, TheDemosMatchOpensInRunningPlay) {
+  TempDir dir;
+  std::ifstream demo(std::filesystem::path(SSLF_SCRIPTS_DIR) / "demo.sh");
+  std::string seed;
+  const std::regex seed_line(R"(^seed=(\d+)$)");
+  for (std::string line; std::getline(demo, line);) {
+    std::smatch match;
+    if (std::regex_match(line, match, seed_line)) seed = match[1];
+  }
+  ASSERT_FALSE(seed.empty()) << "scripts/demo.sh sets no seed=";
+  const auto run =
+      testing::run_to_end(producer_program, {"-o", "demo.log", "--duration", "30", "--seed", seed},
+                          dir.path(), "producer");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  auto reader = LogReader::open(dir / "demo.log");
+  ASSERT_TRUE(reader) << reader.error().message;
+  LogMessage message;
+  std::int64_t first_ns = -1;
+  int running_from_3s = 0;
+  while (reader->next(message)) {
+    if (message.type != static_cast<std::int32_t>(LogMessageType::referee)) continue;
+    Referee referee;
+    ASSERT_TRUE(referee.ParseFromString(message.payload));
+    if (first_ns < 0) first_ns = message.receive_time_ns;
+    // The kick-off is prepared in the first 2 s; from the third second on, play runs.
+    if (message.receive_time_ns - first_ns < 3'000'000'000) continue;
+    EXPECT_EQ(referee.command(), Referee::NORMAL_START)
+        << "at " << (message.receive_time_ns - first_ns) / 1e9 << " s";
+    if (referee.command() != Referee::NORMAL_START) break;
+    ++running_from_3s;
+  }
+  EXPECT_GT(running_from_3s, 60 * 26);  // every frame's message from 3 s to the end
 }
 
 }  // namespace
