@@ -67,7 +67,8 @@ class LogReplay {
     while (samples.size() < kClockSamplePackets && read(pending)) {
       if (pending.kind == LogReader::MatchInput::vision) {
         ClockSample sample{pending.receive_time, std::nullopt};
-        if (pending.packet.has_detection()) sample.t_capture = pending.packet.detection().t_capture();
+        if (pending.packet.has_detection())
+          sample.t_capture = pending.packet.detection().t_capture();
         samples.push_back(sample);
       }
       lookahead_.push_back(std::move(pending));
@@ -350,12 +351,13 @@ int run_replay(const ProducerOptions& options) {
     io.stop();
   });
   app::ReadyFile ready(options.daemon.ready_file);
-  ready.mark_ready("ssl-producer", {{"mode", "replay"},
-                                    {"vision", group.to_string()},
-                                    {"referee", referee_group ? referee_group->to_string() : "none"},
-                                    {"tracker", tracker_group ? tracker_group->to_string() : "none"},
-                                    {"interface", interface.to_string()},
-                                    {"log", options.replay}});
+  ready.mark_ready("ssl-producer",
+                   {{"mode", "replay"},
+                    {"vision", group.to_string()},
+                    {"referee", referee_group ? referee_group->to_string() : "none"},
+                    {"tracker", tracker_group ? tracker_group->to_string() : "none"},
+                    {"interface", interface.to_string()},
+                    {"log", options.replay}});
   replay.start();
   io.run();
   replay.log_status(!replay.finished()        ? "stopped"

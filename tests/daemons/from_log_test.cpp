@@ -197,10 +197,9 @@ TEST_F(PredictFromLog, SaysWhatIsWrongAndUsesWhatItCan) {
   const std::string good_csv = read_text(csv_path);
   ASSERT_EQ(split(good_csv, '\n').size(), 1u + 60u * 2u * 6u);
   for (const auto& input : {dir / "missing.log", table}) {
-    const auto failed =
-        predict({"--from-log", input.string(), "--table", table.string(), "-o", csv_path.string(),
-                 "--overwrite"},
-                "failed-into-file");
+    const auto failed = predict({"--from-log", input.string(), "--table", table.string(), "-o",
+                                 csv_path.string(), "--overwrite"},
+                                "failed-into-file");
     EXPECT_EQ(failed.exit_code, 1) << failed.err;
     EXPECT_NE(failed.err.find("left as it was"), std::string::npos) << failed.err;
     EXPECT_EQ(read_text(csv_path), good_csv) << input;

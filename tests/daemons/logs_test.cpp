@@ -17,8 +17,8 @@
 #include "pipeline_support.hpp"
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
-#include "ssl_formation/vision/sampler.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
+#include "ssl_formation/vision/sampler.hpp"
 #include "ssl_vision_wrapper_tracked.pb.h"
 #include "status_lines.hpp"
 
@@ -181,10 +181,10 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
     const auto path = dir / name;
     const auto result = testing::run_to_end(
         producer_program,
-        {"--simulation", "paper", "--referee",   "off",    "--write-log", path.string(),  "--count",
-         "80",          "--seed", "7",           "--cameras",    "3",
-         "--jitter-mm", "12",     "--drop-rate", "0.1",          "--opponent-color",
-         "blue",        "--step", "0.5",         "--start-time", "100"},
+        {"--simulation", "paper", "--referee",    "off", "--write-log",      path.string(),
+         "--count",      "80",    "--seed",       "7",   "--cameras",        "3",
+         "--jitter-mm",  "12",    "--drop-rate",  "0.1", "--opponent-color", "blue",
+         "--step",       "0.5",   "--start-time", "100"},
         dir.path(), "write-log", 20s);
     ASSERT_EQ(result.exit_code, 0) << result.err;
 
@@ -231,16 +231,19 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
 TEST(Logs, WriteLogNeedsACountAndRefusesReplayToo) {
   TempDir dir;
   const auto no_count = testing::run_to_end(
-      producer_program, {"--simulation", "paper", "--write-log", (dir / "a.log").string()}, dir.path(), "no-count", 5s);
+      producer_program, {"--simulation", "paper", "--write-log", (dir / "a.log").string()},
+      dir.path(), "no-count", 5s);
   EXPECT_EQ(no_count.exit_code, 2) << no_count.err;
   const auto both = testing::run_to_end(
       producer_program,
       {"--write-log", (dir / "a.log").string(), "--replay", (dir / "b.log").string()}, dir.path(),
       "both", 5s);
   EXPECT_EQ(both.exit_code, 2) << both.err;
-  const auto unwritable = testing::run_to_end(
-      producer_program, {"--simulation", "paper", "--write-log", (dir / "no-such-dir" / "a.log").string(), "--count", "3"},
-      dir.path(), "unwritable", 5s);
+  const auto unwritable =
+      testing::run_to_end(producer_program,
+                          {"--simulation", "paper", "--write-log",
+                           (dir / "no-such-dir" / "a.log").string(), "--count", "3"},
+                          dir.path(), "unwritable", 5s);
   EXPECT_EQ(unwritable.exit_code, 1);
   EXPECT_NE(unwritable.err.find("no-such-dir"), std::string::npos) << unwritable.err;
 }
@@ -252,8 +255,8 @@ TEST(Logs, ReplaySendsExactlyTheFilesPackets) {
   TempDir dir;
   const auto path = dir / "feed.log.gz";
   ASSERT_EQ(testing::run_to_end(producer_program,
-                                {"--simulation", "paper", "--referee", "off", "--write-log", path.string(), "--count", "40",
-                                 "--seed", "5", "--cameras", "2"},
+                                {"--simulation", "paper", "--referee", "off", "--write-log",
+                                 path.string(), "--count", "40", "--seed", "5", "--cameras", "2"},
                                 dir.path(), "write-log", 20s)
                 .exit_code,
             0);
@@ -303,9 +306,9 @@ TEST(Logs, ReplaySendsLegacyVisionAndCountsWhatItSkips) {
   Listener listener(group);
   Listener referee_listener(referee_group);
   Listener tracker_listener(tracker_group);
-  const auto result = replay(dir, path, group,
-                             {"--speed", "0", "--referee-address", referee_group,
-                              "--tracker-address", tracker_group});
+  const auto result = replay(
+      dir, path, group,
+      {"--speed", "0", "--referee-address", referee_group, "--tracker-address", tracker_group});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const auto received = listener.wait_for(3, 5s);
   EXPECT_EQ(frame_numbers(received), (std::vector<std::uint32_t>{0, 1, 3}));
@@ -516,11 +519,11 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
       dir.path(), "record", Readiness::ready_file);
   ASSERT_TRUE(recorder.wait_until_ready(10s)) << recorder.stderr_text();
   EXPECT_EQ(recorder.ready_fact("output"), path.string());
-  const auto produced =
-      testing::run_to_end(producer_program,
-                          {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--period", "0.002",
-                           "--count", "100", "--seed", "3", "--cameras", "1", "--status-interval", "100"},
-                          dir.path(), "producer", 20s);
+  const auto produced = testing::run_to_end(
+      producer_program,
+      {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--period", "0.002",
+       "--count", "100", "--seed", "3", "--cameras", "1", "--status-interval", "100"},
+      dir.path(), "producer", 20s);
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
   ASSERT_TRUE(testing::wait_for_status(recorder, "recorded", expected.size(), 10s))
       << recorder.stderr_text();
@@ -622,11 +625,11 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
   const std::string referee = new_group();
   const std::string tracker = new_group();
   const auto path = dir / "match.log";
-  ChildProcess recorder(record_program,
-                        {"--vision-address", vision, "--referee-address", referee,
-                         "--tracker-address", tracker, "--output", path.string(), "--count", "4",
-                         "--status-interval", "0.05"},
-                        dir.path(), "record", Readiness::ready_file);
+  ChildProcess recorder(
+      record_program,
+      {"--vision-address", vision, "--referee-address", referee, "--tracker-address", tracker,
+       "--output", path.string(), "--count", "4", "--status-interval", "0.05"},
+      dir.path(), "record", Readiness::ready_file);
   ASSERT_TRUE(recorder.wait_until_ready(10s)) << recorder.stderr_text();
   EXPECT_EQ(recorder.ready_fact("referee"), referee);
   testing::RefereeSpec spec;
@@ -681,9 +684,9 @@ TEST(Logs, RecordKeepsTheRefereeMessagesInPlaceAndReplaySendsThemToTheirGroup) {
   Listener vision_listener(vision_out);
   Listener referee_listener(referee_out);
   Listener tracker_listener(tracker_out);
-  const auto result = replay(dir, path, vision_out,
-                             {"--speed", "0", "--referee-address", referee_out,
-                              "--tracker-address", tracker_out});
+  const auto result =
+      replay(dir, path, vision_out,
+             {"--speed", "0", "--referee-address", referee_out, "--tracker-address", tracker_out});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(vision_listener.wait_for(4, 5s).size(), 4u);
   const auto tracked_sent = tracker_listener.wait_for(1, 5s);

@@ -9,11 +9,11 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "status_lines.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/match/referee.hpp"
 #include "ssl_gc_referee_message.pb.h"
+#include "status_lines.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -37,7 +37,8 @@ std::vector<std::string> match_options(const std::string& seed) {
 }
 
 void write_log(const TempDir& dir, const std::string& name, std::vector<std::string> options) {
-  options.insert(options.begin(), {"--simulation", "paper", "--write-log", (dir / name).string(), "--count", "400"});
+  options.insert(options.begin(),
+                 {"--simulation", "paper", "--write-log", (dir / name).string(), "--count", "400"});
   const auto written = testing::run_to_end(producer_program, options, dir.path(), "write-" + name);
   ASSERT_EQ(written.exit_code, 0) << written.err;
 }
@@ -88,8 +89,8 @@ TEST(SimulatedReferee, AWrittenMatchTrainsTheNamedOpponentThroughTheChangeOfEnds
   // Found by name, followed through every change of ends; what is counted outside running play.
   std::string err;
   const TransitionTable refereed_table =
-      train(dir, "match.log", "refereed.bin", {"--opponent-team", " away ", "--learn-during", "running"},
-            &err);
+      train(dir, "match.log", "refereed.bin",
+            {"--opponent-team", " away ", "--learn-during", "running"}, &err);
   EXPECT_NE(err.find("opponent 'Away' blue (referee), attacks "), std::string::npos) << err;
   EXPECT_NE(err.find("; 0 changes of colour, " + std::to_string(changes_of_ends) +
                      " changes of ends; 400 formations ("),
@@ -138,8 +139,9 @@ TEST(SimulatedReferee, ThePredictorFollowsTheLiveSimulationsRefereeThroughHalfTi
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   testing::PredictionListener listener(predictions);
   std::vector<std::string> live = match_options("5");
-  live.insert(live.end(), {"--simulation", "paper", "--vision-address", vision, "--referee-address", referee, "--count",
-                           "100", "--period", "0.02", "--status-interval", "100"});
+  live.insert(live.end(),
+              {"--simulation", "paper", "--vision-address", vision, "--referee-address", referee,
+               "--count", "100", "--period", "0.02", "--status-interval", "100"});
   const auto produced = testing::run_to_end(producer_program, live, dir.path(), "producer");
   ASSERT_EQ(produced.exit_code, 0) << produced.err;
   EXPECT_EQ(testing::last_status(produced.err, "done:").at("referee_sent"), 100u) << produced.err;

@@ -10,9 +10,9 @@
 #include <signal.h>
 
 #include <atomic>
-#include <optional>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -134,7 +134,8 @@ std::optional<std::string> malformed(int kind, const std::string& valid, std::mt
     case 0:
       return random_bytes(random);
     case 1:
-      return valid.substr(0, std::uniform_int_distribution<std::size_t>(1, valid.size() - 1)(random));
+      return valid.substr(0,
+                          std::uniform_int_distribution<std::size_t>(1, valid.size() - 1)(random));
     case 2:
       return huge_varints(static_cast<int>(random() % 2));
     default:
@@ -213,25 +214,25 @@ TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
   const std::string predictions = new_group();
   const std::string tables = (dir / "tables").string();
   RefereeTap tap(referee);
-  ChildProcess trainer(trainer_program,
-                       {"--vision-address", vision, "--referee-address", referee, "--our-team",
-                        "ssl-formation", "--table-dir", tables, "--status-interval", "1",
-                        "--flush-interval", "1"},
-                       dir.path(), "trainer", Readiness::ready_file);
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--referee-address", referee, "--our-team",
-                          "ssl-formation", "--table-dir", tables, "--prediction-address",
-                          predictions, "--status-interval", "1", "--reload-interval", "0.5",
-                          "--quiet"},
-                         dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess trainer(
+      trainer_program,
+      {"--vision-address", vision, "--referee-address", referee, "--our-team", "ssl-formation",
+       "--table-dir", tables, "--status-interval", "1", "--flush-interval", "1"},
+      dir.path(), "trainer", Readiness::ready_file);
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--referee-address", referee, "--our-team", "ssl-formation",
+       "--table-dir", tables, "--prediction-address", predictions, "--status-interval", "1",
+       "--reload-interval", "0.5", "--quiet"},
+      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   // A simulated match with its game controller, on groups of this test.
-  ChildProcess producer(producer_program,
-                        {"--simulation", "match", "--vision-address", vision, "--referee-address",
-                         referee, "--our-team", "ssl-formation", "--cameras", "1",
-                         "--status-interval", "100"},
-                        dir.path(), "producer");
+  ChildProcess producer(
+      producer_program,
+      {"--simulation", "match", "--vision-address", vision, "--referee-address", referee,
+       "--our-team", "ssl-formation", "--cameras", "1", "--status-interval", "100"},
+      dir.path(), "producer");
   PredictionListener listener(predictions);
   // Until the predictor predicts from the trainer's table.
   for (const auto deadline = std::chrono::steady_clock::now() + 60s;
@@ -289,8 +290,8 @@ TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
   // The game state followed the real game controller only: as many changes as it made (give or
   // take the one under way at either end of the flood), not one per replayed kick-off.
   for (const ChildProcess* process : {&trainer, &predictor}) {
-    const std::string during = process->stderr_text().substr(
-        process == &trainer ? trainer_log_from : predictor_log_from);
+    const std::string during =
+        process->stderr_text().substr(process == &trainer ? trainer_log_from : predictor_log_from);
     std::size_t changes = 0;
     for (std::size_t at = during.find("referee: game "); at != std::string::npos;
          at = during.find("referee: game ", at + 1)) {
@@ -316,9 +317,9 @@ TEST(HostileFeeds, ATrackerGroupFloodNeitherStallsNorFloodsTheDaemons) {
   const std::string tracker = new_group();
   const std::string predictions = new_group();
   const std::filesystem::path table = dir / "table.bin";
-  const std::vector<std::string> tracked{"--vision-source", "tracked", "--tracker-address",
-                                         tracker, "--referee-address", new_group(),
-                                         "--status-interval", "1"};
+  const std::vector<std::string> tracked{
+      "--vision-source",   "tracked",   "--tracker-address", tracker,
+      "--referee-address", new_group(), "--status-interval", "1"};
   std::vector<std::string> trainer_args = tracked;
   trainer_args.insert(trainer_args.end(), {"--table", table.string(), "--flush-interval", "1"});
   std::vector<std::string> predictor_args = tracked;

@@ -217,10 +217,9 @@ TEST_F(MotionTraining, RefusesToResumeAVersionOneTableWithTheMotionModel) {
             0);
   expect_refused(at("t.bin"), parse({}), {"only the paper's counts", "--model paper", "--table"});
   // run_offline refuses it the same way, before reading any log.
-  EXPECT_THROW(
-      train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("t.bin").string(),
-                       "--model", "motion"}),
-      std::runtime_error);
+  EXPECT_THROW(train_from_logs({"--from-log", at("b.log.gz").string(), "--table",
+                                at("t.bin").string(), "--model", "motion"}),
+               std::runtime_error);
   EXPECT_EQ(version_of(at("t.bin")), table_file_version);
   // --reset replaces it at the first save.
   auto training =
@@ -237,7 +236,8 @@ TEST_F(MotionTraining, RefusesToResumeAVersionTwoTableWithThePaperModel) {
 TEST_F(MotionTraining, RefusesToResumeAnotherHorizon) {
   ASSERT_EQ(train_from_logs({"--from-log", at("a.log").string(), "--table", at("t.bin").string()}),
             0);
-  expect_refused(at("t.bin"), parse({"--horizon", "4"}), {"--horizons 1.5 (3 steps), not 2", "--reset"});
+  expect_refused(at("t.bin"), parse({"--horizon", "4"}),
+                 {"--horizons 1.5 (3 steps), not 2", "--reset"});
 }
 
 TEST_F(MotionTraining, SavesAndResumesInProcess) {

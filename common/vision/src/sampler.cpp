@@ -330,8 +330,7 @@ void FormationSampler::on_instant(const ClockInstant& instant) {
 // field, so half of every instant's robots are the last one's again).
 FormationSample& FormationSampler::build_sample(const ClockInstant& instant,
                                                 std::vector<FormationRobot>& robots,
-                                                const Formation* before,
-                                                const Formation* latest) {
+                                                const Formation* before, const Formation* latest) {
   FormationSample& sample = sample_scratch_;
   sample.transitions.clear();
   // `before` is a formation of this sampler's, sorted by id with each id once, and the robots

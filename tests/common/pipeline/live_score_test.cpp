@@ -134,10 +134,10 @@ TEST(LiveScore, KeepsThePredictionsOfEachPhaseApart) {
     // All together: between the two, weighted by their robots.
     const LiveScore::Horizon& all = score.horizons()[step];
     EXPECT_NEAR(all.robots, stop[step].robots + running[step].robots, 1e-9);
-    EXPECT_NEAR(all.model_mm * all.robots,
-                stop[step].model_mm * stop[step].robots +
-                    running[step].model_mm * running[step].robots,
-                1e-6);
+    EXPECT_NEAR(
+        all.model_mm * all.robots,
+        stop[step].model_mm * stop[step].robots + running[step].model_mm * running[step].robots,
+        1e-6);
   }
   score.clear();
   EXPECT_TRUE(score.horizons(GamePhase::stop).empty());
