@@ -23,10 +23,11 @@ Result<BudgetFit> fit_table_to_budget(const TransitionTable& counts, const Table
       header_size + counts_size(header_for(counts, metadata, table_file_compact_motion_version)) +
       checksum_size;
   std::uint64_t row_bytes = 0;  // of the last fit's rows
+  const MotionPruner pruner(motion, budget.settings);
   const auto fit = [&](std::size_t max_rows) -> Result<BudgetFit> {
     MotionPruning pruning = budget.pruning;
     pruning.max_rows = max_rows;
-    BudgetFit result{prune_motion_table(motion, budget.settings, pruning), 0, true};
+    BudgetFit result{pruner.prune(pruning), 0, true};
     const auto encoded = encode_motion_section(result.pruned.table, metadata.step_s);
     if (!encoded) return Unexpected(encoded.error());
     result.file_bytes = fixed + motion_section_size(result.pruned.table, *encoded);
@@ -45,6 +46,8 @@ Result<BudgetFit> fit_table_to_budget(const TransitionTable& counts, const Table
     const double cut = std::max(1.0, std::ceil(over / bytes_per_row * 1.02));
     const std::size_t max_rows =
         cut >= static_cast<double>(rows) ? 1 : rows - static_cast<std::size_t>(cut);
+    // The try that did not fit is let go first: a season's table is tens of megabytes.
+    result->pruned.table = MotionTable(motion.config());
     result = fit(max_rows);
     if (!result) return result;
   }

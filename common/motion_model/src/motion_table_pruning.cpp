@@ -42,28 +42,35 @@ double fold_gain(const MotionLevelEstimates& estimates, std::size_t number, std:
 
 }  // namespace
 
-MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSettings& settings,
-                                const MotionPruning& pruning) {
+MotionPruner::MotionPruner(const MotionTable& table, const MotionModelSettings& settings)
+    : table_(table) {
   const MotionLevelEstimates estimates(table, settings);
   const std::size_t keys = estimates.size();
-  constexpr std::uint32_t none = MotionRowMap::no_row;
+  keys_.resize(keys);
+  levels_.resize(keys);
+  parents_.assign(keys, MotionRowMap::no_row);
+  gains_.assign(keys, 0.0);
+  for (std::size_t i = 0; i < keys; ++i) {
+    keys_[i] = estimates.key(i);
+    levels_[i] = decode_motion_key(keys_[i]).level;
+    if (levels_[i] != MotionLevel::robot && levels_[i] != MotionLevel::zone) continue;
+    parents_[i] = estimates.number(coarser_motion_key(keys_[i]));
+    gains_[i] = fold_gain(estimates, i, parents_[i]);
+  }
+  stored_keys_.reserve(table.rows());
+  table.row_map().for_each(
+      [&](MotionKey key, const MotionRow&) { stored_keys_.push_back(estimates.number(key)); });
+}
 
-  std::vector<std::uint32_t> parent(keys, none);
-  std::vector<double> gain(keys, 0.0);
+MotionPruned MotionPruner::prune(const MotionPruning& pruning) const {
+  const MotionTable& table = table_;
+  const std::size_t keys = keys_.size();
   std::vector<char> kept(keys, 1);
   std::vector<char> stored(keys, 0);                  // has a row of its own in the file
   std::vector<std::uint32_t> kept_children(keys, 0);  // a zone's robot rows still kept
-  table.row_map().for_each(
-      [&](MotionKey key, const MotionRow&) { stored[estimates.number(key)] = 1; });
+  for (const std::uint32_t number : stored_keys_) stored[number] = 1;
   std::size_t rows = table.rows();
 
-  const auto level_of = [&](std::size_t i) { return decode_motion_key(estimates.key(i)).level; };
-  for (std::size_t i = 0; i < keys; ++i) {
-    const MotionLevel level = level_of(i);
-    if (level != MotionLevel::robot && level != MotionLevel::zone) continue;
-    parent[i] = estimates.number(coarser_motion_key(estimates.key(i)));
-    gain[i] = fold_gain(estimates, i, parent[i]);
-  }
   std::size_t folded = 0;
   // Folding `i` into its parent: the parent gets a stored row if it had none (one row moves),
   // or takes the folded row's sums into its own (one row fewer).
@@ -71,22 +78,22 @@ MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSetti
     kept[i] = 0;
     ++folded;
     if (stored[i]) {
-      if (stored[parent[i]]) --rows;
-      stored[parent[i]] = 1;
+      if (stored[parents_[i]]) --rows;
+      stored[parents_[i]] = 1;
       stored[i] = 0;
     }
-    if (level_of(i) == MotionLevel::robot) --kept_children[parent[i]];
+    if (levels_[i] == MotionLevel::robot) --kept_children[parents_[i]];
   };
   // Robot rows first, then the zones all of whose robot rows went.
   for (std::size_t i = 0; i < keys; ++i) {
-    if (level_of(i) == MotionLevel::robot) ++kept_children[parent[i]];
+    if (levels_[i] == MotionLevel::robot) ++kept_children[parents_[i]];
   }
   for (std::size_t i = 0; i < keys; ++i) {
-    if (level_of(i) == MotionLevel::robot && !(gain[i] > pruning.min_gain_nats)) fold(i);
+    if (levels_[i] == MotionLevel::robot && !(gains_[i] > pruning.min_gain_nats)) fold(i);
   }
   for (std::size_t i = 0; i < keys; ++i) {
-    if (level_of(i) == MotionLevel::zone && kept_children[i] == 0 &&
-        !(gain[i] > pruning.min_gain_nats)) {
+    if (levels_[i] == MotionLevel::zone && kept_children[i] == 0 &&
+        !(gains_[i] > pruning.min_gain_nats)) {
       fold(i);
     }
   }
@@ -96,28 +103,29 @@ MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSetti
     using Candidate = std::pair<double, std::uint32_t>;
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue;
     for (std::size_t i = 0; i < keys; ++i) {
-      const MotionLevel level = level_of(i);
+      const MotionLevel level = levels_[i];
       if (kept[i] &&
           (level == MotionLevel::robot || (level == MotionLevel::zone && kept_children[i] == 0))) {
-        queue.emplace(gain[i], static_cast<std::uint32_t>(i));
+        queue.emplace(gains_[i], static_cast<std::uint32_t>(i));
       }
     }
     while (rows > pruning.max_rows && !queue.empty()) {
       const std::uint32_t i = queue.top().second;
       queue.pop();
       fold(i);
-      const std::uint32_t zone = parent[i];
-      if (level_of(i) == MotionLevel::robot && kept[zone] && kept_children[zone] == 0) {
-        queue.emplace(gain[zone], zone);
+      const std::uint32_t zone = parents_[i];
+      if (levels_[i] == MotionLevel::robot && kept[zone] && kept_children[zone] == 0) {
+        queue.emplace(gains_[zone], zone);
       }
     }
   }
 
   MotionTable out(table.config());
-  table.row_map().for_each([&](MotionKey key, const MotionRow& row) {
-    std::uint32_t i = estimates.number(key);
-    while (!kept[i]) i = parent[i];
-    out.add_row(estimates.key(i), row);
+  std::size_t row = 0;
+  table.row_map().for_each([&](MotionKey, const MotionRow& sums) {
+    std::uint32_t i = stored_keys_[row++];
+    while (!kept[i]) i = parents_[i];
+    out.add_row(keys_[i], sums);
   });
   for (int h = 0; h < table.config().horizons; ++h) {
     for (const HeldOutInstance& held : table.calibration(h)) out.add_held_out(h, held);
@@ -126,6 +134,11 @@ MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSetti
   out.set_plays() = table.set_plays();
   const std::size_t rows_after = out.rows();
   return MotionPruned{std::move(out), table.rows(), rows_after, folded};
+}
+
+MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSettings& settings,
+                                const MotionPruning& pruning) {
+  return MotionPruner(table, settings).prune(pruning);
 }
 
 }  // namespace ssl_formation

@@ -12,6 +12,8 @@
 // kept, unless a budget leaves no other choice.
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "ssl_formation/motion_model/motion_estimates.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
@@ -40,9 +42,28 @@ struct MotionPruned {
   std::size_t folded = 0;  // robot and zone rows folded into their parent
 };
 
-// `table` with the rows that add nothing folded into their parents. The held-out calibration
-// sample, the kick-offs and the instance count are kept as they are. A table that was pruned
-// before prunes again the same way: its folded rows are already at their parent's key.
+// The judgement of every robot and zone row of a table, made once: how much better its own
+// estimate fits than its parent's. The table can then be pruned to any number of rows without
+// estimating every key again (a budget's tries), and the estimates, a copy of every key's sums,
+// are let go before the pruned table is built. `table` must outlive the pruner.
+class MotionPruner {
+ public:
+  MotionPruner(const MotionTable& table, const MotionModelSettings& settings);
+  // `table` with the rows that add nothing folded into their parents. The held-out calibration
+  // sample, the kick-offs and the instance count are kept as they are. A table that was pruned
+  // before prunes again the same way: its folded rows are already at their parent's key.
+  MotionPruned prune(const MotionPruning& pruning) const;
+
+ private:
+  const MotionTable& table_;
+  std::vector<MotionKey> keys_;             // every key with counts, at every level
+  std::vector<MotionLevel> levels_;         // of keys_
+  std::vector<std::uint32_t> parents_;      // robot and zone keys' parent (others: none)
+  std::vector<double> gains_;               // robot and zone keys' (fold_gain)
+  std::vector<std::uint32_t> stored_keys_;  // the key of each stored row, in for_each order
+};
+
+// MotionPruner(table, settings).prune(pruning).
 MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSettings& settings,
                                 const MotionPruning& pruning);
 
