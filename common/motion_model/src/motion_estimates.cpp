@@ -156,20 +156,33 @@ MotionHorizonPrior motion_horizon_prior(const MotionConfig& config,
 MotionLevelEstimates::MotionLevelEstimates(const MotionTable& table,
                                            const MotionModelSettings& settings,
                                            const std::vector<MotionEstimate>* generic_roots,
-                                           const GenericEstimate& generic) {
+                                           const GenericEstimate& generic)
+    : rows_(table.row_map()) {
   const MotionConfig& config = table.config();
   const auto horizons = static_cast<std::size_t>(config.horizons);
   // A key's sums are its stored row and every stored row beneath it.
   std::vector<MotionRow> roots(horizons);
-  table.row_map().for_each([&](MotionKey stored, const MotionRow& row) {
+  robot_number_of_row_.assign(rows_.size(), MotionRowMap::no_row);
+  std::uint32_t row_number = 0;
+  rows_.for_each([&](MotionKey stored, const MotionRow& row) {
     roots[static_cast<std::size_t>(decode_motion_key(stored).horizon_index)].add(row);
-    for (MotionKey key = stored;; key = coarser_motion_key(key)) {
-      sums_[key].add(row);
+    MotionKey key = stored;
+    if (decode_motion_key(key).level == MotionLevel::robot) {
+      robot_number_of_row_[row_number] = static_cast<std::uint32_t>(robot_rows_.size());
+      robot_rows_.push_back(row_number);
+      key = coarser_motion_key(key);
+    }
+    for (;; key = coarser_motion_key(key)) {
+      coarse_[key].add(row);
       if (decode_motion_key(key).level == MotionLevel::all) break;
     }
+    ++row_number;
   });
-  keys_.reserve(sums_.size());
-  sums_.for_each([&](MotionKey key, const MotionRow&) { keys_.push_back(key); });
+  keys_.reserve(coarse_.size() + robot_rows_.size());
+  coarse_.for_each([&](MotionKey key, const MotionRow&) { keys_.push_back(key); });
+  rows_.for_each([&](MotionKey key, const MotionRow&) {
+    if (decode_motion_key(key).level == MotionLevel::robot) keys_.push_back(key);
+  });
 
   horizons_.reserve(horizons);
   for (std::size_t h = 0; h < horizons; ++h) {
@@ -189,7 +202,7 @@ MotionLevelEstimates::MotionLevelEstimates(const MotionTable& table,
           prior ? *prior
           : parts.level == MotionLevel::all
               ? horizons_[static_cast<std::size_t>(parts.horizon_index)].prior_of(parts.context)
-              : estimates_[sums_.row_number(coarser_motion_key(keys_[i]))];
+              : estimates_[coarse_.row_number(coarser_motion_key(keys_[i]))];
       const MotionRow& row = sums(i);
       estimates_[i] = motion_team_velocity_holds(MotionFeatures::phase_of_context(parts.context))
                           ? shrink_motion_row(row, parent, settings.shrinkage)
@@ -197,6 +210,16 @@ MotionLevelEstimates::MotionLevelEstimates(const MotionTable& table,
                                               parent, settings.shrinkage);
     }
   }
+}
+
+std::uint32_t MotionLevelEstimates::number(MotionKey key) const {
+  const std::uint32_t coarse = coarse_.row_number(key);
+  if (coarse != MotionRowMap::no_row) return coarse;
+  const std::uint32_t row = rows_.row_number(key);
+  if (row == MotionRowMap::no_row || robot_number_of_row_[row] == MotionRowMap::no_row) {
+    return MotionRowMap::no_row;
+  }
+  return static_cast<std::uint32_t>(coarse_.size()) + robot_number_of_row_[row];
 }
 
 double motion_log_likelihood(const MotionRow& row, const MotionEstimate& estimate,

@@ -104,7 +104,10 @@ MotionHorizonPrior motion_horizon_prior(const MotionConfig& config,
                                         const MotionRow& root,
                                         const MotionEstimate* generic_root = nullptr);
 
-// Every key's sums and estimate, at every level, and each horizon's prior.
+// Every key's sums and estimate, at every level, and each horizon's prior. A robot's key has no
+// finer key beneath it, so its sums are its stored row: they are read from the table rather than
+// copied (most keys are robots', and a season's table is tens of megabytes). `table` must outlive
+// the estimates.
 class MotionLevelEstimates {
  public:
   // The prior table's estimate of a key, if it has one (MotionModel's --prior-table): a row is
@@ -119,16 +122,24 @@ class MotionLevelEstimates {
   const MotionHorizonPrior& horizon(int horizon_index) const {
     return horizons_[static_cast<std::size_t>(horizon_index)];
   }
-  std::size_t size() const { return sums_.size(); }
-  // The keys, their sums and estimates, numbered 0 to size() - 1.
+  std::size_t size() const { return keys_.size(); }
+  // The keys, their sums and estimates, numbered 0 to size() - 1: the coarser keys first, then
+  // the robots'.
   MotionKey key(std::size_t i) const { return keys_[i]; }
-  const MotionRow& sums(std::size_t i) const { return sums_.row(static_cast<std::uint32_t>(i)); }
+  const MotionRow& sums(std::size_t i) const {
+    return i < coarse_.size() ? coarse_.row(static_cast<std::uint32_t>(i))
+                              : rows_.row(robot_rows_[i - coarse_.size()]);
+  }
   const MotionEstimate& estimate(std::size_t i) const { return estimates_[i]; }
   // The number of `key`, MotionRowMap::no_row if it has no counts at any level.
-  std::uint32_t number(MotionKey key) const { return sums_.row_number(key); }
+  std::uint32_t number(MotionKey key) const;
 
  private:
-  MotionRowMap sums_;
+  const MotionRowMap& rows_;  // the table's
+  MotionRowMap coarse_;       // the sums of every key above the robots'
+  // Each robot key's row in rows_, in the order of its number past the coarser keys, and back.
+  std::vector<std::uint32_t> robot_rows_;
+  std::vector<std::uint32_t> robot_number_of_row_;  // no_row for a row above the robots'
   std::vector<MotionKey> keys_;
   std::vector<MotionEstimate> estimates_;
   std::vector<MotionHorizonPrior> horizons_;
