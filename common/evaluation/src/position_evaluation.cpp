@@ -268,7 +268,13 @@ void Evaluation::end_training() {
         method.prediction, std::move(forecaster),
         [this, m](const PredictedFormation& p) { on_prediction(m, p); }, front_end);
   }
-  // The forecasters hold what they need: the tables learned are let go before the testing.
+  // The forecasters hold what they need: the tables learned are let go before the testing, and
+  // the result keeps the model's counts and metadata but not its motion rows (the forecaster
+  // built its index of them; a season's rows are tens of megabytes per section).
+  if (result.table && result.table->motion) {
+    result.table = std::make_shared<const StoredTable>(
+        StoredTable{result.table->table, result.table->metadata, std::nullopt});
+  }
   training_front_ends_.clear();
   for (Method& method : methods_) method.training.reset();  // (the ablation had none)
 }

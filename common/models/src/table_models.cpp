@@ -175,18 +175,20 @@ PreparedTable MotionForecaster::prepare_table(std::shared_ptr<const StoredTable>
   if (std::abs(table->motion->config().step_s - settings_.step_s) > 1e-9) {
     throw std::invalid_argument("the table's motion model was trained with another step");
   }
-  auto model = std::make_shared<const MotionModel>(
+  auto built = std::make_shared<BuiltTable>();
+  built->model = std::make_shared<const MotionModel>(
       *table->motion, settings_.grid, table->metadata.field, model_settings(), prior_model_.get());
-  return PreparedTable{std::move(table), std::move(model)};
+  built->set_plays = table->motion->set_plays();
+  return PreparedTable{std::move(table), std::move(built)};
 }
 
 PreparedTable MotionForecaster::install_table(PreparedTable prepared) noexcept {
-  // The prior stays with this forecaster; only the table's own model goes back.
-  PreparedTable old{std::move(table_), model_ == prior_model_ ? nullptr : std::move(model_)};
-  auto model = std::static_pointer_cast<const MotionModel>(std::move(prepared.built));
-  model_ = model ? std::move(model) : prior_model_;
+  // No copy of the stored table is kept (BuiltTable), and what was built of the previous one goes
+  // back (the prior stays with this forecaster), for the caller to let go off the prediction path.
+  PreparedTable old{nullptr, std::move(built_)};
+  built_ = std::static_pointer_cast<const BuiltTable>(std::move(prepared.built));
+  model_ = built_ ? built_->model : prior_model_;
   cache_.clear();
-  table_ = std::move(prepared.table);
   return old;
 }
 
@@ -215,11 +217,10 @@ void MotionForecaster::forecast(const MatchMoment& moment, int steps, Prediction
   const bool preparing = moment.game_state == GameState::kickoff_preparation;
   // At a kick-off of the opponent's, what its earlier kick-offs say (set_play_memory.hpp).
   const SetPlayAdvice* advice = nullptr;
-  if (moment.phase == GamePhase::kickoff_opponent && table_ && table_->motion &&
-      !table_->motion->set_plays().empty()) {
-    table_->motion->set_plays().recall(
-        moment.formation(), preparing ? SetPlayStage::preparation : SetPlayStage::taken,
-        moment.since_command_s, settings_.step_s, steps, set_play_advice_);
+  if (moment.phase == GamePhase::kickoff_opponent && built_ && !built_->set_plays.empty()) {
+    built_->set_plays.recall(moment.formation(),
+                             preparing ? SetPlayStage::preparation : SetPlayStage::taken,
+                             moment.since_command_s, settings_.step_s, steps, set_play_advice_);
     advice = &set_play_advice_;
   } else if (moment.phase == GamePhase::ball_placement_opponent && moment.ball &&
              moment.designated_position) {

@@ -13,6 +13,7 @@
 #include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 #include "ssl_formation/motion_model/online_calibration.hpp"
+#include "ssl_formation/motion_model/set_play_memory.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 
 namespace ssl_formation::models {
@@ -101,13 +102,19 @@ class MotionForecaster : public Forecaster {
     settings.pooled = settings_.pooled_motion;
     return settings;
   }
+  // What the forecaster keeps of a table: the model built of its rows, and its kick-offs. Not
+  // the rows: a season's table is tens of megabytes that no forecast reads again.
+  struct BuiltTable {
+    std::shared_ptr<const MotionModel> model;
+    SetPlayMemory set_plays;
+  };
   ModelSettings settings_;
-  std::shared_ptr<const StoredTable> table_;
+  std::shared_ptr<const BuiltTable> built_;
   // Every team's model (settings.prior_table), built for the first table's field; serves alone
   // until the opponent has a table. Like settings_, set once in the constructor: prepare_table
   // reads both from another thread.
   std::shared_ptr<const MotionModel> prior_model_;
-  std::shared_ptr<const MotionModel> model_;  // built from table_ (under the prior), or the prior
+  std::shared_ptr<const MotionModel> model_;  // built_'s (under the prior), or the prior
   MotionModel::Cache cache_;
   MotionHistory history_;
   OnlineCalibration calibration_;
