@@ -29,7 +29,9 @@ TEST(PrintableWireText, EscapesControlsBadBytesAndDirectionMarks) {
 TEST(PrintableWireText, CutsLongTextAndSaysHowLongItWas) {
   const std::string spoofed(59814, 'Y');
   const std::string shown = printable_wire_text(spoofed);
-  EXPECT_EQ(shown, std::string(64, 'Y') + "…(59814 bytes)");
+  std::string expected(64, 'Y');
+  expected += "…(59814 bytes)";
+  EXPECT_EQ(shown, expected);
   // Escapes count as one character each.
   const std::string controls(100, '\x01');
   const std::string cut = printable_wire_text(controls, 3);

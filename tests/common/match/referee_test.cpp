@@ -166,9 +166,11 @@ TEST(RefereeFollower, SpoofedNamesBetweenTheRealOnesNeverTakeOverAndSwitchesAreR
     t += 0.05;
     EXPECT_FALSE(referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", "B")), t).teams);
     t += 0.05;
-    EXPECT_FALSE(
-        referee.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", std::string("spoof").append(std::to_string(i)))), t)
-            .teams);
+    EXPECT_FALSE(referee
+                     .add(bytes(message(Referee::STOP, 1, "gc-a", "Y",
+                                        std::string("spoof").append(std::to_string(i)))),
+                          t)
+                     .teams);
   }
   EXPECT_EQ(referee.view().blue_name, "B");
   EXPECT_GE(referee.counters().refused_name_switches, 99u);
@@ -179,8 +181,10 @@ TEST(RefereeFollower, SpoofedNamesBetweenTheRealOnesNeverTakeOverAndSwitchesAreR
   int switches = 0;
   for (int k = 1; k <= 4; ++k) {
     for (double s = 0.0; s < 2.0; s += 0.1) {
-      switches += changing.add(bytes(message(Referee::STOP, 1, "gc-a", "Y", std::string("B").append(std::to_string(k)))),
-                               2.0 * k + s)
+      switches += changing
+                      .add(bytes(message(Referee::STOP, 1, "gc-a", "Y",
+                                         std::string("B").append(std::to_string(k)))),
+                           2.0 * k + s)
                       .teams;
     }
   }
@@ -437,13 +441,15 @@ TEST(RefereeFollower, AReplayedOrStaleMessageOfTheFollowedSourceChangesNothing) 
   EXPECT_EQ(referee.view().command_counter, 9u);
   // A message of the stage before, replayed with its own timestamp less than a second old:
   // its counter goes back, and it is no restart, since its timestamp goes back too.
-  EXPECT_TRUE(referee.add(bytes(at(message(Referee::PREPARE_KICKOFF_YELLOW, 2), 59.5,
-                                   Referee::NORMAL_FIRST_HALF_PRE)),
-                          160.5)
+  EXPECT_TRUE(referee
+                  .add(bytes(at(message(Referee::PREPARE_KICKOFF_YELLOW, 2), 59.5,
+                                Referee::NORMAL_FIRST_HALF_PRE)),
+                       160.5)
                   .stale);
   EXPECT_EQ(referee.counters().stale, 5u);
   // The game controller goes on: used.
-  const sf::RefereeChange next = referee.add(bytes(at(message(Referee::NORMAL_START, 10), 61.0)), 161.0);
+  const sf::RefereeChange next =
+      referee.add(bytes(at(message(Referee::NORMAL_START, 10), 61.0)), 161.0);
   EXPECT_TRUE(next.command);
   EXPECT_FALSE(next.stale);
   EXPECT_EQ(referee.view().state, sf::GameState::running);
@@ -460,8 +466,8 @@ TEST(RefereeFollower, ARestartedGameControllerIsFollowedAfterASilenceOrInANewSta
   EXPECT_EQ(referee.view().command_counter, 0u);
   // Restarted at once, in the next stage: followed too.
   referee.add(bytes(at(message(Referee::STOP, 12), 4.0)), 14.0);
-  const sf::RefereeChange next_stage = referee.add(
-      bytes(at(message(Referee::HALT, 1), 4.5, Referee::NORMAL_HALF_TIME)), 14.5);
+  const sf::RefereeChange next_stage =
+      referee.add(bytes(at(message(Referee::HALT, 1), 4.5, Referee::NORMAL_HALF_TIME)), 14.5);
   EXPECT_FALSE(next_stage.stale);
   EXPECT_EQ(referee.view().state, sf::GameState::halt);
   EXPECT_EQ(referee.counters().stale, 0u);
@@ -469,8 +475,11 @@ TEST(RefereeFollower, ARestartedGameControllerIsFollowedAfterASilenceOrInANewSta
 
 TEST(RefereeFollower, NamesFromTheWireAreShortAndPrintable) {
   sf::RefereeFollower referee;
-  referee.add(bytes(message(Referee::HALT, 1, "gc\n-a", std::string(59814, 'Y'), "Blue\x1b[2J")), 1.0);
-  EXPECT_EQ(referee.view().yellow_name, std::string(64, 'Y') + "…(59814 bytes)");
+  referee.add(bytes(message(Referee::HALT, 1, "gc\n-a", std::string(59814, 'Y'), "Blue\x1b[2J")),
+              1.0);
+  std::string cut(64, 'Y');
+  cut += "…(59814 bytes)";
+  EXPECT_EQ(referee.view().yellow_name, cut);
   EXPECT_EQ(referee.view().blue_name, "Blue\\u{001B}[2J");
   EXPECT_EQ(referee.view().source, "gc\\u{000A}-a");
   EXPECT_LT(sf::describe(referee).size(), 250u) << sf::describe(referee);
@@ -512,7 +521,8 @@ TEST(RefereeFollower, AReplayHeardFirstOrALogStartingOverGivesWayToTheNewestCloc
   for (int i = 0; i < 100; ++i) {
     const double t = 0.1 * i;
     referee.add(bytes(at(message(Referee::HALT, 3), 3600.0 + t)), 10.0 + t);
-    const sf::RefereeChange real = referee.add(bytes(at(message(Referee::NORMAL_START, 40), 7200.0 + t)), 10.0 + t + 0.01);
+    const sf::RefereeChange real =
+        referee.add(bytes(at(message(Referee::NORMAL_START, 40), 7200.0 + t)), 10.0 + t + 0.01);
     if (i >= 20) real_used_late += real.stale ? 0 : 1;
   }
   EXPECT_EQ(real_used_late, 80);  // followed within 2 s, for good
@@ -520,10 +530,12 @@ TEST(RefereeFollower, AReplayHeardFirstOrALogStartingOverGivesWayToTheNewestCloc
   EXPECT_EQ(referee.counters().resyncs, 1u);
   // A log that loops: its clock goes back by ten minutes, and nothing else is heard.
   sf::RefereeFollower looping;
-  for (int i = 0; i < 50; ++i) looping.add(bytes(at(message(Referee::STOP, 100), 600.0 + 0.1 * i)), 0.1 * i);
+  for (int i = 0; i < 50; ++i)
+    looping.add(bytes(at(message(Referee::STOP, 100), 600.0 + 0.1 * i)), 0.1 * i);
   int used_after_loop = 0;
   for (int i = 0; i < 30; ++i) {
-    used_after_loop += looping.add(bytes(at(message(Referee::HALT, 1), 0.1 * i)), 5.0 + 0.1 * i).stale ? 0 : 1;
+    used_after_loop +=
+        looping.add(bytes(at(message(Referee::HALT, 1), 0.1 * i)), 5.0 + 0.1 * i).stale ? 0 : 1;
   }
   EXPECT_GE(used_after_loop, 10);  // once nothing was used for 2 s
   EXPECT_EQ(looping.view().state, sf::GameState::halt);
