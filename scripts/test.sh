@@ -46,8 +46,25 @@ if [ "${SSLF_SKIP_SANITIZERS:-0}" != 1 ]; then
   cmake --build "$sanitize_dir" -j "$(nproc)" --target "${sanitized[@]}"
   export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  # Each binary's tests in one shard per core, side by side (the tests already run in parallel
+  # under ctest, each on its own groups and files); a shard's output is shown when it is done.
+  shards="$(nproc)"
+  failed=()
   for binary in "${sanitized[@]}"; do
-    echo "== $binary (sanitized)"
-    "$sanitize_dir/tests/$binary" --gtest_brief=1
+    echo "== $binary (sanitized, $shards shards)"
+    pids=()
+    for ((shard = 0; shard < shards; ++shard)); do
+      GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$shard" \
+        "$sanitize_dir/tests/$binary" --gtest_brief=1 >"$sanitize_dir/$binary.$shard.log" 2>&1 &
+      pids+=("$!")
+    done
+    for ((shard = 0; shard < shards; ++shard)); do
+      if ! wait "${pids[$shard]}"; then failed+=("$binary shard $shard"); fi
+      cat "$sanitize_dir/$binary.$shard.log"
+    done
   done
+  if [ ${#failed[@]} -gt 0 ]; then
+    echo "error: sanitized tests failed: ${failed[*]}" >&2
+    exit 1
+  fi
 fi
