@@ -9,12 +9,12 @@
 #include <random>
 
 #include "ssl_formation/motion_model/set_play_memory.hpp"
-#include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
-#include "ssl_formation/pipeline/training.hpp"
-#include "ssl_formation/vision/vision_frame.hpp"
-#include "ssl_formation/vision/sampler.hpp"
 #include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/pipeline/prediction_pipeline.hpp"
+#include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/sampler.hpp"
+#include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
 namespace sf = ssl_formation;
@@ -167,9 +167,9 @@ void BM_RollingPrediction(benchmark::State& state) {
     const double t = i * frame_s;
     for (std::uint32_t id = 0; id < robots; ++id) {
       const double phase = 0.4 * t + id;
-      spec.yellow.push_back({id,
-                             {-4000.0 + 800.0 * id + 1200.0 * std::cos(phase),
-                              2000.0 * std::sin(phase + 0.5 * id)}});
+      spec.yellow.push_back(
+          {id,
+           {-4000.0 + 800.0 * id + 1200.0 * std::cos(phase), 2000.0 * std::sin(phase + 0.5 * id)}});
     }
     sf::VisionFrame frame;
     sf::to_vision_frame(sf::make_detection_packet(spec), frame);
@@ -194,14 +194,12 @@ void BM_RollingPrediction(benchmark::State& state) {
   for (int i = 0; i < 60 * 60; ++i) frames.push_back(frame_at(i, 0.0));
 
   std::uint64_t predictions = 0;
-  sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& p) {
-    predictions += p.prediction.steps.size();
-  });
+  sf::PredictionPipeline pipeline(
+      config, [&](const sf::PredictedFormation& p) { predictions += p.prediction.steps.size(); });
   sf::TableMetadata metadata;
   metadata.step_s = config.sampler.step_s;
   metadata.field = training.sampler().field();
-  pipeline.set_table(std::make_shared<const sf::StoredTable>(
-      training.stored_table(metadata)));
+  pipeline.set_table(std::make_shared<const sf::StoredTable>(training.stored_table(metadata)));
   std::size_t i = 0;
   double offset_s = 1000.0;
   for (auto _ : state) {
@@ -246,7 +244,7 @@ void BM_SetPlayRecall(benchmark::State& state) {
     for (int i = 0; i < 65; ++i) {
       sf::SetPlaySnapshot s;
       s.offset_ms = 100 * i;
-      s.stage = i < 20 ? sf::SetPlayStage::preparation
+      s.stage = i < 20   ? sf::SetPlayStage::preparation
                 : i < 50 ? sf::SetPlayStage::taken
                          : sf::SetPlayStage::over;
       s.since_command_ms = i < 20 ? 100 * i : 100 * (i - 20);

@@ -40,8 +40,8 @@ class BallTrail {
  private:
   BallTrailSettings settings_;
   std::deque<Point> path_;
-  std::deque<double> times_;  // the data time of each point of path_
-  double last_point_s_ = 0.0;        // the newest point kept every spacing_s
+  std::deque<double> times_;          // the data time of each point of path_
+  double last_point_s_ = 0.0;         // the newest point kept every spacing_s
   bool head_between_points_ = false;  // path_'s last point is the newest sighting since then
   bool seen_ = false;
 };

@@ -101,7 +101,6 @@ class Json {
   bool first_ = true;
 };
 
-
 void write_setup(Json& json, const FieldViewSetup& setup) {
   json.key("field").open('{').key("length").number(setup.field.length_mm);
   json.key("width").number(setup.field.width_mm);

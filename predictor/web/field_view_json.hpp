@@ -8,14 +8,14 @@
 #include <span>
 #include <string>
 
+#include "ball_trail.hpp"
+#include "field_markings.hpp"
 #include "formation_prediction.pb.h"
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/pipeline/live_score.hpp"
-#include "ball_trail.hpp"
-#include "field_markings.hpp"
 #include "team_robots.hpp"
 
 namespace ssl_formation::predictor::web {
@@ -85,7 +85,7 @@ struct FieldViewStatus {
   // How far the predictions have lately been, against everyone staying (LiveScore), per step.
   std::vector<LiveScore::Horizon> live_score;
   std::vector<PhaseLiveScore> live_score_by_phase;  // the phases with figures, in their order
-  std::string referee = "no referee heard";  // describe(RefereeFollower)
+  std::string referee = "no referee heard";         // describe(RefereeFollower)
   // What the followed game controller said last, for the page's banner; referee_heard false:
   // none heard.
   bool referee_heard = false;

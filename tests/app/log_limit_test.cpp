@@ -6,8 +6,8 @@
 
 #include <chrono>
 #include <sstream>
-#include <thread>
 #include <string>
+#include <thread>
 
 #include "ssl_vision_wrapper_tracked.pb.h"
 
@@ -62,7 +62,8 @@ TEST(RepeatLimiter, WritesABurstPerPeriodThenSummarisesWhatItLeftOut) {
 TEST(RepeatLimiter, ManyKindsShareOneWindowBeyondTheLimit) {
   RepeatLimiter limiter(LogLimitSettings{2, 60.0, 1000, 4});
   int written = 0;
-  for (int i = 0; i < 1000; ++i) written += limiter.admit("kind " + std::to_string(i * 7) + "x" + std::string(i % 50, 'a'), 1.0);
+  for (int i = 0; i < 1000; ++i)
+    written += limiter.admit("kind " + std::to_string(i * 7) + "x" + std::string(i % 50, 'a'), 1.0);
   // Four kinds of their own (2 lines each at most) and the rest sharing one (2 lines).
   EXPECT_LE(written, 4 * 2 + 2);
 }
@@ -98,7 +99,8 @@ TEST(LimitedSink, AFloodOfOneWarningBecomesABurstAndASummaryAndLibprotobufGoesTh
   EXPECT_NE(text.find("195 more lines like 'protobuf: Can"), std::string::npos) << text;
   // No line over 1,000 characters.
   std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);) EXPECT_LE(line.size(), 1000U) << line.substr(0, 80);
+  for (std::string line; std::getline(lines, line);)
+    EXPECT_LE(line.size(), 1000U) << line.substr(0, 80);
   EXPECT_NE(text.find("status: after the period"), std::string::npos);
 }
 
@@ -114,7 +116,8 @@ TEST(LimitedSink, WhatIsLeftOutInTheLastPeriodIsSaidAtExitAndErrorsAreNeverLeftO
   }  // the sink goes with the program
   const std::string text = out.str();
   EXPECT_EQ(count_of(text, "packets of another tracker"), 2U + 1U) << text;
-  EXPECT_NE(text.find("8 more lines like 'tracker: # packets of another tracker"), std::string::npos)
+  EXPECT_NE(text.find("8 more lines like 'tracker: # packets of another tracker"),
+            std::string::npos)
       << text;
   EXPECT_EQ(count_of(text, "error: cannot open logs/"), 12U) << text;
 }

@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "child_process.hpp"
-#include "moving_robots.hpp"
 #include "formation_prediction.pb.h"
+#include "moving_robots.hpp"
 #include "prediction_rows.hpp"
 #include "ssl_formation/net/multicast.hpp"
 
@@ -69,23 +69,25 @@ TEST(PredictionClient, DecodesEveryMessageOfTheLivePredictorAndWritesTheFromLogC
   TempDir dir;
   const auto train_log = dir / "train.log";
   const auto test_log = dir / "test.log";
-  ASSERT_EQ(testing::write_vision_log(train_log, testing::moving_robots_packets(
-                                                     {.seed = 1, .seconds = 30.0, .start_time_s = 100.0})),
+  ASSERT_EQ(testing::write_vision_log(train_log,
+                                      testing::moving_robots_packets(
+                                          {.seed = 1, .seconds = 30.0, .start_time_s = 100.0})),
             "");
-  ASSERT_EQ(testing::write_vision_log(test_log, testing::moving_robots_packets(
-                                                    {.seed = 2, .seconds = 5.0, .start_time_s = 1000.0})),
-            "");
+  ASSERT_EQ(
+      testing::write_vision_log(test_log, testing::moving_robots_packets(
+                                              {.seed = 2, .seconds = 5.0, .start_time_s = 1000.0})),
+      "");
   const auto table = dir / "table.bin";
   const auto trained = testing::run_to_end(
       trainer_program, {"--from-log", train_log.string(), "--table", table.string()}, dir.path(),
       "train", 60s);
   ASSERT_EQ(trained.exit_code, 0) << trained.err;
   const auto offline_csv = dir / "from-log.csv";
-  const auto offline = testing::run_to_end(
-      predictor_program,
-      {"--from-log", test_log.string(), "--table", table.string(), "--horizon", "3", "--output",
-       offline_csv.string()},
-      dir.path(), "from-log", 60s);
+  const auto offline =
+      testing::run_to_end(predictor_program,
+                          {"--from-log", test_log.string(), "--table", table.string(), "--horizon",
+                           "3", "--output", offline_csv.string()},
+                          dir.path(), "from-log", 60s);
   ASSERT_EQ(offline.exit_code, 0) << offline.err;
   std::vector<std::string> lines = split(read_text(offline_csv), '\n');
   ASSERT_GT(lines.size(), 1u);
@@ -97,11 +99,11 @@ TEST(PredictionClient, DecodesEveryMessageOfTheLivePredictorAndWritesTheFromLogC
   const std::string vision = new_group();
   const std::string predictions = new_group();
   const auto client_csv = dir / "client.csv";
-  ChildProcess client(python,
-                      {client_script.string(), "--group", predictions, "--interface", "127.0.0.1",
-                       "--csv", client_csv.string(), "--count", std::to_string(instants.size()),
-                       "--duration", "60"},
-                      dir.path(), "client");
+  ChildProcess client(
+      python,
+      {client_script.string(), "--group", predictions, "--interface", "127.0.0.1", "--csv",
+       client_csv.string(), "--count", std::to_string(instants.size()), "--duration", "60"},
+      dir.path(), "client");
   ASSERT_TRUE(client.wait_for_stderr("listening on " + predictions, 20s)) << client.stderr_text();
   // And one that prints, as a team would watch it.
   ChildProcess printer(python,
@@ -115,11 +117,11 @@ TEST(PredictionClient, DecodesEveryMessageOfTheLivePredictorAndWritesTheFromLogC
     std::ofstream old_proto(dir / "old" / "formation_prediction.proto");
     old_proto << first_release_proto;
   }
-  ChildProcess old_reader(python,
-                          {client_script.string(), "--group", predictions, "--proto",
-                           (dir / "old").string(), "--count", std::to_string(instants.size()),
-                           "--duration", "60"},
-                          dir.path(), "old-reader");
+  ChildProcess old_reader(
+      python,
+      {client_script.string(), "--group", predictions, "--proto", (dir / "old").string(), "--count",
+       std::to_string(instants.size()), "--duration", "60"},
+      dir.path(), "old-reader");
   ASSERT_TRUE(old_reader.wait_for_stderr("listening on", 20s)) << old_reader.stderr_text();
   ChildProcess daemon(predictor_program,
                       {"--vision-address", vision, "--prediction-address", predictions, "--table",
@@ -209,8 +211,7 @@ TEST(PredictionClient, SaysWhatIsWrongWithItsOptionsAndStopsWhenTold) {
   EXPECT_NE(bad_group.exit_code, 0);
   EXPECT_NE(bad_group.err.find("not a multicast group"), std::string::npos) << bad_group.err;
   const auto bad_proto = testing::run_to_end(
-      python,
-      {client_script.string(), "--proto", (dir / "nowhere").string(), "--duration", "1"},
+      python, {client_script.string(), "--proto", (dir / "nowhere").string(), "--duration", "1"},
       dir.path(), "bad-proto", 30s);
   EXPECT_NE(bad_proto.exit_code, 0);
   EXPECT_NE(bad_proto.err.find("formation_prediction.proto"), std::string::npos) << bad_proto.err;

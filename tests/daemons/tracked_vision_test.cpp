@@ -54,17 +54,17 @@ TEST(TrackedVision, ATrackersFramesGiveTheFormationsOfRawVisionAndASecondTracker
   const std::string tracked_predictions = new_group();
   const auto predictor = [&](std::vector<std::string> input, const std::string& out,
                              const std::string& name) {
-    std::vector<std::string> args{"--prediction-address", out, "--table",
-                                  (dir / "t.table").string(), "--referee-address", "none",
-                                  "--quiet"};
+    std::vector<std::string> args{
+        "--prediction-address", out,    "--table", (dir / "t.table").string(),
+        "--referee-address",    "none", "--quiet"};
     args.insert(args.end(), input.begin(), input.end());
     return std::make_unique<ChildProcess>(predictor_program, args, dir.path(), name,
                                           Readiness::ready_file);
   };
   auto from_raw = predictor({"--vision-address", raw}, raw_predictions, "raw");
-  auto from_tracker = predictor({"--vision-source", "tracked", "--tracker-address", tracker,
-                                 "--vision-address", raw},
-                                tracked_predictions, "tracked");
+  auto from_tracker = predictor(
+      {"--vision-source", "tracked", "--tracker-address", tracker, "--vision-address", raw},
+      tracked_predictions, "tracked");
   ASSERT_TRUE(from_raw->wait_until_ready(10s)) << from_raw->stderr_text();
   ASSERT_TRUE(from_tracker->wait_until_ready(10s)) << from_tracker->stderr_text();
   EXPECT_EQ(from_tracker->ready_fact("vision"), "tracked " + tracker);

@@ -45,12 +45,12 @@
 
 #include "ssl_formation/base/wire_text.hpp"
 #include "ssl_formation/files/log_file.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/match/tracked_vision.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
-#include "ssl_formation/vision/sampler.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/vision/sampler.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper.pb.h"
@@ -819,7 +819,8 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
     if (c.messages != before.messages + 1) v.fail("counters().messages did not count a message");
     if (c.used + c.undecodable + c.unknown_command + c.other_source + c.stale != c.messages)
       v.fail("used + undecodable + unknown_command + other_source + stale != messages");
-    if (change.stale != (c.stale != before.stale)) v.fail("change.stale and counters().stale differ");
+    if (change.stale != (c.stale != before.stale))
+      v.fail("change.stale and counters().stale differ");
     if (change.source != (c.source_switches != before.source_switches))
       v.fail("change.source and counters().source_switches differ");
     if (change.command != (c.commands != before.commands))
@@ -836,8 +837,8 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
       v.fail("change.sides differs from a change of blue_on_positive_half");
     if (referee.heard() && game_state_of_command(view.command) != view.state)
       v.fail("the game state is not the last command's");
-    if (view.designated_position &&
-        (!std::isfinite(view.designated_position->x) || !std::isfinite(view.designated_position->y)))
+    if (view.designated_position && (!std::isfinite(view.designated_position->x) ||
+                                     !std::isfinite(view.designated_position->y)))
       v.fail("designated_position not finite");
     check_wire_text(view.yellow_name, v, "yellow_name");
     check_wire_text(view.blue_name, v, "blue_name");

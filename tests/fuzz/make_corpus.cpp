@@ -262,8 +262,8 @@ void write_table_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket
 
 // ---- Referee feeds
 
-using testing::RefereeSpec;
 using testing::referee_payload;
+using testing::RefereeSpec;
 
 // The game controller's message for `spec`, sent `step_s` after the last one (its packet
 // timestamp on the receive clock, plus an offset as real senders have).
@@ -581,8 +581,8 @@ void write_tracker_corpus(const fs::path& dir) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   for (int f = 0; f < 4; ++f) {
-    TrackerWrapperPacket packet = tracker_packet("tracker-a", static_cast<std::uint32_t>(f),
-                                                 100.0 + f / 60.0);
+    TrackerWrapperPacket packet =
+        tracker_packet("tracker-a", static_cast<std::uint32_t>(f), 100.0 + f / 60.0);
     TrackedFrame& frame = *packet.mutable_tracked_frame();
     add_robot(frame, YELLOW, 1, 0.5F * static_cast<float>(f), 1.0F);
     add_robot(frame, BLUE, 1, -1.0F, 0.5F, 0.8F);

@@ -94,8 +94,7 @@ TEST(TrackedVisionDaemon, ATrackersFramesGiveTheRawFeedsPredictionsWithItsGeomet
       for (int r = 0; r < a.steps(k).robots_size(); ++r) {
         ASSERT_EQ(a.steps(k).robots(r).state_index(), b.steps(k).robots(r).state_index());
         // The rounding of metres, through the robot's velocity: well under a millimetre.
-        ASSERT_NEAR(a.steps(k).robots(r).position().x(), b.steps(k).robots(r).position().x(),
-                    0.5);
+        ASSERT_NEAR(a.steps(k).robots(r).position().x(), b.steps(k).robots(r).position().x(), 0.5);
       }
     }
   }

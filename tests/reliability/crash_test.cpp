@@ -49,10 +49,11 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
   const std::string group = new_group();
   const auto table_path = dir / "table.bin";
   // 500 formations a second for at most 120 s; the destructor stops it when the test is done.
-  ChildProcess producer(producer_program,
-                        {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--seed", "51", "--period",
-                         "0.002", "--count", "60000", "--status-interval", "100"},
-                        dir.path(), "producer");
+  ChildProcess producer(
+      producer_program,
+      {"--simulation", "paper", "--referee", "off", "--vision-address", group, "--seed", "51",
+       "--period", "0.002", "--count", "60000", "--status-interval", "100"},
+      dir.path(), "producer");
   std::mt19937_64 random(20240601);
   std::uniform_int_distribution<int> delay_ms(5, 400);
   std::uint64_t previous_transitions = 0;
@@ -70,12 +71,11 @@ TEST(Reliability, TrainerKilledFiftyTimesWhileSavingLosesNoSavedCount) {
       ASSERT_TRUE(loaded) << "before round " << round << ": " << loaded.error().message;
       before = std::move(*loaded);
     }
-    ChildProcess trainer(trainer_program,
-                         {"--vision-address", group, "--table", table_path.string(),
-                          "--flush-interval", "0.02", "--status-interval", "100", "--verbose",
-                          "--model", "paper"},
-                         dir.path(), "trainer-" + std::to_string(round),
-                         testing::Readiness::ready_file);
+    ChildProcess trainer(
+        trainer_program,
+        {"--vision-address", group, "--table", table_path.string(), "--flush-interval", "0.02",
+         "--status-interval", "100", "--verbose", "--model", "paper"},
+        dir.path(), "trainer-" + std::to_string(round), testing::Readiness::ready_file);
     ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
     // Ready means the table is open: the trainer resumed exactly what the file holds (and said
     // so), or, without a file, started an empty table.

@@ -240,9 +240,9 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   auto producer = [&](const char* seed, const char* start) {
     return std::make_unique<ChildProcess>(
         producer_program,
-        std::vector<std::string>{"--simulation", "paper", "--vision-address", group, "--seed", seed, "--start-time", start,
-                                 "--period", "0.005", "--count", "300", "--status-interval", "100",
-                                 "--referee", "off"},
+        std::vector<std::string>{"--simulation", "paper", "--vision-address", group, "--seed", seed,
+                                 "--start-time", start, "--period", "0.005", "--count", "300",
+                                 "--status-interval", "100", "--referee", "off"},
         dir.path(), std::string("producer-") + seed);
   };
   auto live = producer("71", "0");

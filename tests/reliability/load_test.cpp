@@ -102,11 +102,11 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
                        {"--vision-address", group, "--table", (dir / "trainer.bin").string(),
                         "--status-interval", "1", "--flush-interval", "1", "--model", "paper"},
                        dir.path(), "trainer", testing::Readiness::ready_file);
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", group, "--prediction-address", new_group(), "--table",
-                          (dir / "fixed.bin").string(), "--quiet", "--status-interval", "1",
-                          "--model", "paper"},
-                         dir.path(), "predictor", testing::Readiness::ready_file);
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", group, "--prediction-address", new_group(), "--table",
+       (dir / "fixed.bin").string(), "--quiet", "--status-interval", "1", "--model", "paper"},
+      dir.path(), "predictor", testing::Readiness::ready_file);
   ASSERT_TRUE(trainer.wait_until_ready(10s)) << trainer.stderr_text();
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();

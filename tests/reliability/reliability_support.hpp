@@ -20,13 +20,13 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
+#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/pipeline/prediction_message.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "status_lines.hpp"
 
 namespace ssl_formation::reliability {
@@ -130,11 +130,11 @@ struct RunningPipeline {
                 {"--vision-address", vision, "--table", (dir / "trainer.bin").string(),
                  "--status-interval", "0.1", "--flush-interval", "60", "--model", "paper"},
                 dir.path(), "trainer", testing::Readiness::ready_file),
-        predictor(predictor_program,
-                  {"--vision-address", vision, "--prediction-address", predictions, "--table",
-                   predictor_table.string(), "--quiet", "--status-interval", "0.1", "--model",
-                   "paper"},
-                  dir.path(), "predictor", testing::Readiness::ready_file) {}
+        predictor(
+            predictor_program,
+            {"--vision-address", vision, "--prediction-address", predictions, "--table",
+             predictor_table.string(), "--quiet", "--status-interval", "0.1", "--model", "paper"},
+            dir.path(), "predictor", testing::Readiness::ready_file) {}
 
   ::testing::AssertionResult ready() {
     if (!trainer.wait_until_ready(10s)) {

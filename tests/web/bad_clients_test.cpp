@@ -65,12 +65,12 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   const std::string vision = testing::new_group();
   const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--model", "paper", "--http-port",
-                          std::to_string(port),
-                          "--quiet", "--status-interval", "0.5", "--http-send-buffer", "8192"},
-                         dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+       table_path.string(), "--model", "paper", "--http-port", std::to_string(port), "--quiet",
+       "--status-interval", "0.5", "--http-send-buffer", "8192"},
+      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("http"), "http://127.0.0.1:" + std::to_string(port) + "/")
       << predictor.stderr_text();
@@ -93,8 +93,8 @@ TEST(FieldViewBadClients, NeverBlockThePredictionsOnTheMulticastGroup) {
   constexpr int formations = 1000;
   ChildProcess producer(
       producer_program,
-      {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "9", "--count",
-       std::to_string(formations), "--period", "0.003", "--status-interval", "100"},
+      {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "9",
+       "--count", std::to_string(formations), "--period", "0.003", "--status-interval", "100"},
       dir.path(), "producer");
   // Meanwhile, clients that vanish mid-frame, mid-request and mid-write, again and again.
   std::thread vandal([&] {
@@ -221,10 +221,10 @@ TEST(FieldViewBadClients, OnByDefaultElsewhereWhenItsPortIsTakenOffWithZeroBadOp
   predictor.signal(SIGTERM);
   EXPECT_EQ(predictor.wait(5s), 0);
 
-  ChildProcess off(predictor_program,
-                   {"--vision-address", vision, "--table", (dir / "t.bin").string(),
-                    "--http-port", "0"},
-                   dir.path(), "off", Readiness::ready_file);
+  ChildProcess off(
+      predictor_program,
+      {"--vision-address", vision, "--table", (dir / "t.bin").string(), "--http-port", "0"},
+      dir.path(), "off", Readiness::ready_file);
   ASSERT_TRUE(off.wait_until_ready(10s)) << off.stderr_text();
   EXPECT_EQ(off.ready_fact("table_loaded"), "0");
   EXPECT_EQ(off.ready_fact("http"), "");  // no field view
@@ -233,9 +233,9 @@ TEST(FieldViewBadClients, OnByDefaultElsewhereWhenItsPortIsTakenOffWithZeroBadOp
   EXPECT_EQ(off.wait(5s), 0);
 
   // A port given is that port: taken, the predictor says so and stops.
-  const auto given = testing::run_to_end(
-      predictor_program, {"--vision-address", vision, "--http-port", "8080"}, dir.path(), "given",
-      10s);
+  const auto given =
+      testing::run_to_end(predictor_program, {"--vision-address", vision, "--http-port", "8080"},
+                          dir.path(), "given", 10s);
   EXPECT_EQ(given.exit_code, 1) << given.err;
   EXPECT_NE(given.err.find("another program uses the port"), std::string::npos) << given.err;
 

@@ -17,9 +17,9 @@
 #include <optional>
 
 #include "child_process.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "web_test_support.hpp"
 
 namespace ssl_formation {
@@ -40,18 +40,17 @@ void start_producer(std::optional<ChildProcess>& out, const TempDir& dir, const 
   out.reset();
   out.emplace(producer_program,
               std::vector<std::string>{"--simulation", "paper", "--vision-address", group,
-                                       "--referee-address", referee, "--our-team",
-                                       "ssl-formation", "--seed", "5", "--period", "0.1",
-                                       "--cameras", "4", "--status-interval", "100"},
+                                       "--referee-address", referee, "--our-team", "ssl-formation",
+                                       "--seed", "5", "--period", "0.1", "--cameras", "4",
+                                       "--status-interval", "100"},
               dir.path(), name);
 }
 
 // Starts the predictor and waits until it serves the field view at `url` with its table loaded.
 void start_predictor(std::optional<ChildProcess>& out, const TempDir& dir,
                      const std::string& vision, const std::string& referee,
-                     const std::string& predictions,
-                     const std::filesystem::path& table, std::uint16_t port, const std::string& url,
-                     const std::string& name) {
+                     const std::string& predictions, const std::filesystem::path& table,
+                     std::uint16_t port, const std::string& url, const std::string& name) {
   out.reset();
   out.emplace(predictor_program,
               std::vector<std::string>{"--vision-address", vision, "--referee-address", referee,
@@ -82,7 +81,8 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
 
   std::optional<ChildProcess> predictor;
-  start_predictor(predictor, dir, vision, referee, predictions, table_path, port, url, "predictor1");
+  start_predictor(predictor, dir, vision, referee, predictions, table_path, port, url,
+                  "predictor1");
   if (HasFatalFailure()) return;
   std::optional<ChildProcess> producer;
   start_producer(producer, dir, vision, referee, "producer1");
@@ -114,7 +114,8 @@ TEST(FieldViewBrowser, DrawsRobotsAndPredictionsAndSurvivesRestarts) {
   ASSERT_EQ(predictor->wait(5s), 0) << predictor->stderr_text();
   // It comes back once the page has shown the loss, so the page really reconnects.
   ASSERT_TRUE(browser.wait_for_stdout("PHASE disconnected ok", 20s)) << report();
-  start_predictor(predictor, dir, vision, referee, predictions, table_path, port, url, "predictor2");
+  start_predictor(predictor, dir, vision, referee, predictions, table_path, port, url,
+                  "predictor2");
   if (HasFatalFailure()) return;
   ASSERT_TRUE(browser.wait_for_stdout("PHASE reconnected ok", 30s)) << report();
   const auto code = browser.wait(30s);

@@ -131,10 +131,9 @@ TEST(FieldViewJson, StatusCarriesTheStreamAndTheTable) {
   status.table_loaded_unix_ms = 1700000000123;
   status.table_error = "bad \"file\"";
   const std::string json = status_json(status);
-  EXPECT_NE(
-      json.find(R"("packets":1234,"packets_per_s":40.5,"since_packet_s":null,)"
-                R"("last_packet_unix_ms":null,"server_unix_ms":null,"parse_errors":2)"),
-      std::string::npos)
+  EXPECT_NE(json.find(R"("packets":1234,"packets_per_s":40.5,"since_packet_s":null,)"
+                      R"("last_packet_unix_ms":null,"server_unix_ms":null,"parse_errors":2)"),
+            std::string::npos)
       << json;
   EXPECT_NE(
       json.find(
@@ -232,8 +231,7 @@ TEST(FieldViewJson, MarkingsComeFromTheGeometryWhereTheyFitTheField) {
   EXPECT_EQ(stated.source, "geometry");
   // An older sender leaves the penalty area out, and a goal wider than the field is nonsense:
   // the rules' values stand in for both.
-  const ViewMarkings partly =
-      markings_for(division_a, FieldMarkings{20000, 180, 300, 0, 0, 500});
+  const ViewMarkings partly = markings_for(division_a, FieldMarkings{20000, 180, 300, 0, 0, 500});
   EXPECT_EQ(partly.goal_width_mm, 1800.0);
   EXPECT_EQ(partly.penalty_area_depth_mm, 1800.0);
   EXPECT_EQ(partly.penalty_area_width_mm, 3600.0);
@@ -245,9 +243,8 @@ TEST(FieldViewJson, TheAgeOfTheLastPacketIsTheServersOwnAndNeverNegative) {
   status.since_packet_s = 0.25;
   status.last_packet_unix_ms = 1700000000000;
   status.server_unix_ms = 1700000000250;
-  EXPECT_NE(status_json(status).find(
-                R"("since_packet_s":0.25,"last_packet_unix_ms":1700000000000,)"
-                R"("server_unix_ms":1700000000250,)"),
+  EXPECT_NE(status_json(status).find(R"("since_packet_s":0.25,"last_packet_unix_ms":1700000000000,)"
+                                     R"("server_unix_ms":1700000000250,)"),
             std::string::npos)
       << status_json(status);
   // Two clock reads racing each other: a hair below zero is written as zero.

@@ -86,11 +86,11 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   const std::string vision = testing::new_group();
   const std::string predictions = testing::new_group();
   const std::uint16_t port = web_testing::free_tcp_port();
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", vision, "--prediction-address", predictions,
-                          "--table", table_path.string(), "--model", "paper", "--http-port",
-                          std::to_string(port), "--quiet"},
-                         dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", vision, "--prediction-address", predictions, "--table",
+       table_path.string(), "--model", "paper", "--http-port", std::to_string(port), "--quiet"},
+      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   ASSERT_EQ(predictor.ready_fact("table_loaded"), "1") << predictor.stderr_text();
 
@@ -98,10 +98,11 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
   ASSERT_TRUE(view.upgrade());
   // The simulated feed: 2 s of data clock every 0.05 s of wall time, so an age taken from the
   // data's t_capture would be far off (and one from before a clock reset negative).
-  ChildProcess producer(producer_program,
-                        {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
-                         "60", "--period", "0.05", "--status-interval", "100"},
-                        dir.path(), "producer");
+  ChildProcess producer(
+      producer_program,
+      {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "5",
+       "--count", "60", "--period", "0.05", "--status-interval", "100"},
+      dir.path(), "producer");
   std::string bytes;
   std::vector<std::string> live_statuses;
   for (const auto deadline = std::chrono::steady_clock::now() + 15s;
@@ -128,11 +129,11 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
     EXPECT_NEAR(*server - *last, since * 1000.0, 2.0);
     EXPECT_NEAR(*server, static_cast<double>(unix_ms_now()), 60'000.0);
     // The loaded table: its transitions and the formations it was trained on.
-    EXPECT_NE(status.find(R"("table":{"loaded":true,"transitions":)" +
-                          std::to_string(reference.table.transitions()) + R"(,"formations":)" +
-                          std::to_string(reference.metadata.samples) +
-                          R"(,"motion_instances":null,)"),
-              std::string::npos);
+    EXPECT_NE(
+        status.find(R"("table":{"loaded":true,"transitions":)" +
+                    std::to_string(reference.table.transitions()) + R"(,"formations":)" +
+                    std::to_string(reference.metadata.samples) + R"(,"motion_instances":null,)"),
+        std::string::npos);
   }
 
   const std::vector<std::string> predictions_seen = json_messages(bytes, "prediction");
@@ -205,10 +206,11 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
 
   RawClient view(port);
   ASSERT_TRUE(view.upgrade());
-  ChildProcess producer(producer_program,
-                        {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "5", "--count",
-                         "40", "--period", "0.05", "--status-interval", "100"},
-                        dir.path(), "producer");
+  ChildProcess producer(
+      producer_program,
+      {"--simulation", "paper", "--referee", "off", "--vision-address", vision, "--seed", "5",
+       "--count", "40", "--period", "0.05", "--status-interval", "100"},
+      dir.path(), "producer");
   std::string bytes;
   for (const auto deadline = std::chrono::steady_clock::now() + 15s;
        std::chrono::steady_clock::now() < deadline;) {
@@ -265,12 +267,12 @@ namespace {
 TEST(FieldViewStatus, APageIsCountedAmongTheViewersInTheFirstStatusItGets) {
   TempDir dir;
   const std::uint16_t port = web_testing::free_tcp_port();
-  ChildProcess predictor(predictor_program,
-                         {"--vision-address", testing::new_group(), "--referee-address",
-                          testing::new_group(), "--prediction-address", testing::new_group(),
-                          "--table", (dir / "none.bin").string(), "--http-port",
-                          std::to_string(port), "--http-status-interval", "60", "--quiet"},
-                         dir.path(), "predictor", Readiness::ready_file);
+  ChildProcess predictor(
+      predictor_program,
+      {"--vision-address", testing::new_group(), "--referee-address", testing::new_group(),
+       "--prediction-address", testing::new_group(), "--table", (dir / "none.bin").string(),
+       "--http-port", std::to_string(port), "--http-status-interval", "60", "--quiet"},
+      dir.path(), "predictor", Readiness::ready_file);
   ASSERT_TRUE(predictor.wait_until_ready(10s)) << predictor.stderr_text();
   const auto first_status = [](RawClient& client) {
     std::string bytes;

@@ -35,8 +35,8 @@ TEST(ReportBrowser, DrawsEveryFigureWithTheCsvsNumbersOffline) {
   const auto report = dir / "report.html";
   const auto evaluated = testing::run_to_end(
       evaluate_program,
-      {"holdout", "--train-log", train_log.string(), "--test-log", test_log.string(),
-       "--horizons", "2", "--report", report.string(), "--output-dir", dir.path().string()},
+      {"holdout", "--train-log", train_log.string(), "--test-log", test_log.string(), "--horizons",
+       "2", "--report", report.string(), "--output-dir", dir.path().string()},
       dir.path(), "evaluate", 120s);
   ASSERT_EQ(evaluated.exit_code, 0) << evaluated.err;
   ASSERT_TRUE(std::filesystem::exists(report));
@@ -65,12 +65,12 @@ TEST(Report, ABadPathStopsTheRunBeforeAnyWorkAndOtherModesRefuseIt) {
       dir.path(), "bad-path", 60s);
   EXPECT_EQ(refused.exit_code, 1);
   EXPECT_NE(refused.err.find("cannot write the report"), std::string::npos) << refused.err;
-  EXPECT_EQ(testing::run_to_end(evaluate_program,
-                                {"grid-sweep", "--model", "paper", "--report",
-                                 (dir / "r.html").string()},
-                                dir.path(), "sweep", 60s)
-                .exit_code,
-            2);
+  EXPECT_EQ(
+      testing::run_to_end(evaluate_program,
+                          {"grid-sweep", "--model", "paper", "--report", (dir / "r.html").string()},
+                          dir.path(), "sweep", 60s)
+          .exit_code,
+      2);
   EXPECT_FALSE(std::filesystem::exists(dir / "r.html"));
 }
 

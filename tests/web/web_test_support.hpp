@@ -7,25 +7,25 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <boost/asio/io_context.hpp>
 #include <algorithm>
+#include <boost/asio/io_context.hpp>
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#include <optional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "formation_prediction.pb.h"
-#include "ssl_formation/net/proto_multicast.hpp"
-#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
 namespace ssl_formation::web_testing {

@@ -18,8 +18,7 @@ constexpr std::size_t max_kind_chars = 120;
 constexpr std::string_view shared_kind = "(other kinds)";
 
 double steady_now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
@@ -133,9 +132,8 @@ void LimitedSink::write_due(double now_s) { write_summaries(limiter_.due(now_s))
 
 void LimitedSink::write_summaries(const std::vector<RepeatLimiter::Summary>& summaries) {
   for (const RepeatLimiter::Summary& s : summaries) {
-    const std::string text =
-        fmt::format("{} more lines like '{}…' left out in the last {:.0f} s", s.left_out,
-                    s.kind, s.period_s);
+    const std::string text = fmt::format("{} more lines like '{}…' left out in the last {:.0f} s",
+                                         s.left_out, s.kind, s.period_s);
     spdlog::details::log_msg summary(spdlog::string_view_t(logger_name_), spdlog::level::warn,
                                      spdlog::string_view_t(text));
     target_->log(summary);

@@ -60,8 +60,8 @@ BlockResamples::BlockResamples(std::vector<DataBlock> universe, const BootstrapC
   // algorithm is the library's, and the intervals should not move between standard libraries.
   std::mt19937_64 random(config.seed);
   const std::uint64_t n = universe_.size();
-  const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                              std::numeric_limits<std::uint64_t>::max() % n;
+  const std::uint64_t limit =
+      std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % n;
   draws_.assign(static_cast<std::size_t>(config.resamples), std::vector<std::uint32_t>(n, 0));
   for (auto& draw : draws_) {
     for (std::uint64_t i = 0; i < n; ++i) {

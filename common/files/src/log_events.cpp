@@ -31,7 +31,8 @@ std::uint64_t replay_log(LogReader& reader, MatchEventSink& sink,
   MatchEvent event;
   while (events.next(event)) {
     sink.on_event(event);
-    if (on_progress && event.kind == MatchEventKind::vision && (events.vision_events() & 4095) == 0) {
+    if (on_progress && event.kind == MatchEventKind::vision &&
+        (events.vision_events() & 4095) == 0) {
       on_progress(events.vision_events());
     }
   }

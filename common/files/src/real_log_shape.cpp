@@ -55,7 +55,8 @@ std::optional<RealLogMess> parse_real_log_mess(std::string_view text) {
       } catch (const std::exception&) {
         return std::nullopt;
       }
-      if (used != value.size() || !std::isfinite(mm) || mm < 0.0 || mm > 1000.0) return std::nullopt;
+      if (used != value.size() || !std::isfinite(mm) || mm < 0.0 || mm > 1000.0)
+        return std::nullopt;
       mess.noise_mm = mm;
     } else {
       return std::nullopt;

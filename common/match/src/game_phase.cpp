@@ -39,10 +39,9 @@ std::optional<TeamColor> team_of_command(int command) {
 
 void GamePhaseTracker::on_command(int command, double time_s) {
   const bool kick_allowed = command == Referee::NORMAL_START || command == Referee::FORCE_START;
-  const bool prepared = command_ == Referee::PREPARE_KICKOFF_YELLOW ||
-                        command_ == Referee::PREPARE_KICKOFF_BLUE ||
-                        command_ == Referee::PREPARE_PENALTY_YELLOW ||
-                        command_ == Referee::PREPARE_PENALTY_BLUE;
+  const bool prepared =
+      command_ == Referee::PREPARE_KICKOFF_YELLOW || command_ == Referee::PREPARE_KICKOFF_BLUE ||
+      command_ == Referee::PREPARE_PENALTY_YELLOW || command_ == Referee::PREPARE_PENALTY_BLUE;
   restart_ = kick_allowed && prepared ? command_ : -1;
   command_ = command;
   command_start_s_ = time_s;
@@ -80,7 +79,8 @@ GamePhase GamePhaseTracker::phase(double time_s, TeamColor opponent) const {
     case Referee::NORMAL_START:
     case Referee::FORCE_START:
       if (!recent || restart_ < 0) return GamePhase::running;
-      if (restart_ == Referee::PREPARE_PENALTY_YELLOW || restart_ == Referee::PREPARE_PENALTY_BLUE) {
+      if (restart_ == Referee::PREPARE_PENALTY_YELLOW ||
+          restart_ == Referee::PREPARE_PENALTY_BLUE) {
         return GamePhase::penalty;
       }
       return by_team(restart_, GamePhase::kickoff_opponent, GamePhase::kickoff_us);

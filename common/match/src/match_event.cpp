@@ -49,8 +49,8 @@ void RecordedMatch::replay(MatchEventSink& sink) const {
 }
 
 std::pair<RecordedMatch, RecordedMatch> RecordedMatch::split(double fraction) const {
-  const auto head_vision = static_cast<std::size_t>(
-      std::clamp(fraction, 0.0, 1.0) * static_cast<double>(vision_events_));
+  const auto head_vision = static_cast<std::size_t>(std::clamp(fraction, 0.0, 1.0) *
+                                                    static_cast<double>(vision_events_));
   RecordedMatch head;
   RecordedMatch tail;
   std::size_t vision_seen = 0;

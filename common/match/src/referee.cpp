@@ -4,8 +4,8 @@
 #include <cmath>
 #include <utility>
 
-#include "ssl_gc_referee_message.pb.h"
 #include "ssl_formation/base/wire_text.hpp"
+#include "ssl_gc_referee_message.pb.h"
 
 namespace ssl_formation {
 
@@ -186,7 +186,8 @@ bool RefereeFollower::names_take_over(const std::string& yellow, const std::stri
     return false;
   }
   if (receive_s - candidate_->since_s < name_hold_s) return false;
-  while (!name_switches_s_.empty() && receive_s - name_switches_s_.front() >= name_switch_window_s) {
+  while (!name_switches_s_.empty() &&
+         receive_s - name_switches_s_.front() >= name_switch_window_s) {
     name_switches_s_.pop_front();
   }
   if (name_switches_s_.size() >= static_cast<std::size_t>(max_name_switches)) {
@@ -201,7 +202,7 @@ bool RefereeFollower::names_take_over(const std::string& yellow, const std::stri
 }
 
 RefereeFollower::Staleness RefereeFollower::staleness(const Referee& message,
-                                                     double receive_s) const {
+                                                      double receive_s) const {
   const bool silence = receive_s - last_used_s_ > source_timeout_s_ || receive_s < last_used_s_;
   if (silence) return Staleness::fresh;  // a new start of the game controller (or a new log file)
   if (last_timestamp_us_ && message.has_packet_timestamp()) {
@@ -216,16 +217,17 @@ RefereeFollower::Staleness RefereeFollower::staleness(const Referee& message,
     // and the timestamp is the clock's now. A message of an earlier stage sent again has an
     // older timestamp: a replay, not a restart.
     const bool new_stage = message.has_stage() && message.stage() != view_.stage;
-    const bool timestamp_goes_on =
-        !last_timestamp_us_ || !message.has_packet_timestamp() ||
-        message.packet_timestamp() >= *last_timestamp_us_;
+    const bool timestamp_goes_on = !last_timestamp_us_ || !message.has_packet_timestamp() ||
+                                   message.packet_timestamp() >= *last_timestamp_us_;
     if (!(new_stage && timestamp_goes_on)) return Staleness::behind;
   }
   return Staleness::fresh;
 }
 
 bool RefereeFollower::resync_due(const Referee& message, Staleness why, double receive_s) {
-  const auto old = [&](double at_s) { return receive_s - at_s > resync_window_s || at_s > receive_s; };
+  const auto old = [&](double at_s) {
+    return receive_s - at_s > resync_window_s || at_s > receive_s;
+  };
   while (!used_s_.empty() && old(used_s_.front())) used_s_.pop_front();
   while (!refused_.empty() && old(refused_.front().receive_s)) refused_.pop_front();
   const std::uint64_t timestamp = message.has_packet_timestamp() ? message.packet_timestamp() : 0;
@@ -244,7 +246,8 @@ bool RefereeFollower::resync_due(const Referee& message, Staleness why, double r
   }
   const bool counter_forged = counter_refusals_in_a_row_ >= resync_counter_refusals;
   const bool newer_clock = ahead >= resync_refusals;
-  const bool followed_gone = refused_.size() >= resync_refusals && used_s_.size() <= resync_max_used;
+  const bool followed_gone =
+      refused_.size() >= resync_refusals && used_s_.size() <= resync_max_used;
   // Taken up again with the newest of them, never with a replay older than the others.
   if (!(counter_forged || newer_clock || followed_gone) || timestamp < newest_us) return false;
   refused_.clear();

@@ -11,8 +11,7 @@ namespace {
 double mm(float metres) { return static_cast<double>(metres) * 1000.0; }
 }  // namespace
 
-void to_vision_frame(const TrackedFrame& tracked, VisionFrame& frame,
-                     std::uint64_t& without_team) {
+void to_vision_frame(const TrackedFrame& tracked, VisionFrame& frame, std::uint64_t& without_team) {
   frame.has_geometry = false;
   frame.has_detection = true;
   VisionDetection& d = frame.detection;

@@ -139,8 +139,8 @@ void BaselineForecaster::forecast(const MatchMoment& moment, int steps, Predicti
     const double n = std::max<double>(1.0, static_cast<double>(step.robots.size()));
     step.centroid = grid.cell_of(Point{sum.x / n, sum.y / n}, moment.field);
     for (RobotPrediction& predicted : step.robots) {
-      predicted.state = moment.codec.encode(RobotState{step.centroid, predicted.position,
-                                                       predicted.previous});
+      predicted.state =
+          moment.codec.encode(RobotState{step.centroid, predicted.position, predicted.previous});
     }
     step.centroid_probability = 0.0;
     step.centroid_unseen = false;

@@ -10,8 +10,8 @@ bool braking_advice_holds(GamePhase phase) {
          phase == GamePhase::ball_placement_us || phase == GamePhase::free_kick_opponent;
 }
 
-void advise_braking(const std::vector<MotionRobot>& robots, double velocity_window_s,
-                    double step_s, int steps, SetPlayAdvice& advice) {
+void advise_braking(const std::vector<MotionRobot>& robots, double velocity_window_s, double step_s,
+                    int steps, SetPlayAdvice& advice) {
   if (advice.robots.size() != robots.size()) {
     advice.robots.assign(robots.size(), SetPlayAdvice::Robot{});
     advice.any = false;

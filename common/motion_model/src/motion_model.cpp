@@ -219,7 +219,8 @@ std::uint32_t MotionFeatures::game_context(GamePhase phase, double since_command
     ++index;
   }
   std::uint32_t bucket = 0;
-  while (bucket < since_command_limits_s.size() && !(since_command_s < since_command_limits_s[bucket])) {
+  while (bucket < since_command_limits_s.size() &&
+         !(since_command_s < since_command_limits_s[bucket])) {
     ++bucket;
   }
   return 2 + index * since_command_buckets + bucket;
@@ -515,8 +516,7 @@ std::vector<HeldOutInstance> MotionTable::calibration(int horizon_index) const {
 
 bool operator==(const MotionTable& a, const MotionTable& b) {
   if (!(a.config_ == b.config_) || a.instances_ != b.instances_ ||
-      a.held_out_seen_ != b.held_out_seen_ || a.rows_ != b.rows_ ||
-      a.set_plays_ != b.set_plays_) {
+      a.held_out_seen_ != b.held_out_seen_ || a.rows_ != b.rows_ || a.set_plays_ != b.set_plays_) {
     return false;
   }
   for (int h = 0; h < a.config_.horizons; ++h) {
@@ -530,7 +530,7 @@ bool operator==(const MotionTable& a, const MotionTable& b) {
 namespace {
 // No robot data for this long: the play moved on.
 constexpr double forget_after_gap_s = RobotTracker::forget_after_s;
-}
+}  // namespace
 
 MotionHistory::MotionHistory(const MotionConfig& config)
     : config_(config),
@@ -771,7 +771,8 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   for (const FormationRobot& robot : now.robots) {
     for (int k = 1; k <= horizons; ++k) {
       const MotionHistory::Entry* then = thens[next_then++];
-      if (!then || !then->has_velocity || then->time_s >= now.time_s || then->time_s < learn_from_s) {
+      if (!then || !then->has_velocity || then->time_s >= now.time_s ||
+          then->time_s < learn_from_s) {
         continue;
       }
       MotionTable::Learned& learned = batch[pending++];

@@ -107,9 +107,9 @@ std::size_t OnlineCalibration::pending() const {
 void OnlineCalibration::observe(const Formation& formation) {
   const double t = formation.time_s;
   if (last_time_s_ && t < *last_time_s_) clear();
-  const double fade =
-      last_time_s_ && t > *last_time_s_ ? std::exp2(-(t - *last_time_s_) / settings_.half_life_s)
-                                        : 1.0;
+  const double fade = last_time_s_ && t > *last_time_s_
+                          ? std::exp2(-(t - *last_time_s_) / settings_.half_life_s)
+                          : 1.0;
   last_time_s_ = t;
   for (Step& step : steps_) {
     if (fade != 1.0) {
@@ -233,8 +233,7 @@ void OnlineCalibration::observe(const Formation& formation) {
       // formations lets a bin's rate count after about as many seconds of play.
       step.formation_correction[b] =
           formations.weight > 0.0
-              ? (formations.hits - formations.stated) /
-                    (formations.weight + settings_.prior_weight)
+              ? (formations.hits - formations.stated) / (formations.weight + settings_.prior_weight)
               : 0.0;
     }
   }
@@ -260,8 +259,7 @@ void OnlineCalibration::remember(const Prediction& prediction, double time_s, do
       step.push({due_s, number, robot.robot_id, static_cast<float>(robot.probability),
                  static_cast<std::int16_t>(robot.position.x),
                  static_cast<std::int16_t>(robot.position.y),
-                 static_cast<std::uint8_t>(bin_of(robot.probability)), attacks,
-                 group,
+                 static_cast<std::uint8_t>(bin_of(robot.probability)), attacks, group,
                  static_cast<float>(robot.normalised_position.x),
                  static_cast<float>(robot.normalised_position.y),
                  static_cast<float>(robot.radius50_mm), static_cast<float>(robot.radius90_mm)});

@@ -27,9 +27,9 @@ std::uint32_t SetPlayMemory::index_key(SetPlayStage stage, std::int32_t since_co
 }
 
 void SetPlayMemory::add(SetPlayEpisode episode) {
-  const bool before_over = std::any_of(
-      episode.snapshots.begin(), episode.snapshots.end(),
-      [](const SetPlaySnapshot& s) { return s.stage != SetPlayStage::over; });
+  const bool before_over =
+      std::any_of(episode.snapshots.begin(), episode.snapshots.end(),
+                  [](const SetPlaySnapshot& s) { return s.stage != SetPlayStage::over; });
   if (!before_over || !valid_episode(episode)) return;
   const auto at = std::upper_bound(episodes_.begin(), episodes_.end(), episode);
   const auto position = static_cast<std::uint16_t>(at - episodes_.begin());
@@ -41,8 +41,8 @@ void SetPlayMemory::add(SetPlayEpisode episode) {
   for (std::size_t i = 0; i < episode.snapshots.size(); ++i) {
     const SetPlaySnapshot& s = episode.snapshots[i];
     if (s.stage == SetPlayStage::over) continue;
-    index_.push_back({index_key(s.stage, s.since_command_ms), position,
-                      static_cast<std::uint16_t>(i)});
+    index_.push_back(
+        {index_key(s.stage, s.since_command_ms), position, static_cast<std::uint16_t>(i)});
   }
   std::sort(index_.begin() + old_end, index_.end());
   std::inplace_merge(index_.begin(), index_.begin() + old_end, index_.end());
@@ -65,8 +65,8 @@ std::size_t SetPlayMemory::snapshots() const {
 }
 
 std::size_t SetPlayMemory::memory_bytes() const {
-  std::size_t bytes = episodes_.capacity() * sizeof(SetPlayEpisode) +
-                      index_.capacity() * sizeof(IndexEntry);
+  std::size_t bytes =
+      episodes_.capacity() * sizeof(SetPlayEpisode) + index_.capacity() * sizeof(IndexEntry);
   for (const SetPlayEpisode& episode : episodes_) {
     bytes += episode.snapshots.capacity() * sizeof(SetPlaySnapshot);
   }
@@ -86,9 +86,8 @@ bool SetPlayMemory::valid_episode(const SetPlayEpisode& episode) {
   return true;
 }
 
-void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
-                           double since_command_s, double step_s, int steps,
-                           SetPlayAdvice& out) const {
+void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage, double since_command_s,
+                           double step_s, int steps, SetPlayAdvice& out) const {
   out.robots.assign(formation.robots.size(), SetPlayAdvice::Robot{});
   out.any = false;
   if (episodes_.empty() || !std::isfinite(since_command_s)) return;
@@ -112,12 +111,11 @@ void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
   std::vector<Candidate> candidates;
   const std::int32_t since_ms = whole_ms(since_command_s);
   const auto tolerance_ms = static_cast<std::int32_t>(std::lround(since_tolerance_s * 1000.0));
-  const auto first = std::lower_bound(
-      index_.begin(), index_.end(),
-      IndexEntry{index_key(stage, since_ms - tolerance_ms), 0, 0});
-  const auto last = std::upper_bound(
-      index_.begin(), index_.end(),
-      IndexEntry{index_key(stage, since_ms + tolerance_ms), 0xffff, 0xffff});
+  const auto first = std::lower_bound(index_.begin(), index_.end(),
+                                      IndexEntry{index_key(stage, since_ms - tolerance_ms), 0, 0});
+  const auto last =
+      std::upper_bound(index_.begin(), index_.end(),
+                       IndexEntry{index_key(stage, since_ms + tolerance_ms), 0xffff, 0xffff});
   for (auto entry = first; entry < last; ++entry) {
     const SetPlayEpisode& episode = episodes_[entry->episode];
     const SetPlaySnapshot& s = episode.snapshots[entry->snapshot];
@@ -135,8 +133,8 @@ void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
   if (candidates.empty()) return;
   // Each robot's own ranking adds its own distance; the nearest few teams are enough to rank.
   const std::size_t shortlist = std::min<std::size_t>(candidates.size(), 4 * analogs);
-  std::partial_sort(candidates.begin(),
-                    candidates.begin() + static_cast<std::ptrdiff_t>(shortlist), candidates.end(),
+  std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(shortlist),
+                    candidates.end(),
                     [](const Candidate& a, const Candidate& b) { return a.team_mm2 < b.team_mm2; });
   candidates.resize(shortlist);
   const int reach = std::min(steps, static_cast<int>(SetPlaySnapshot::robot_slots));
@@ -187,9 +185,8 @@ void SetPlayMemory::recall(const Formation& formation, SetPlayStage stage,
   }
 }
 
-void SetPlayRecorder::record(double time_s, GamePhase phase, bool preparing,
-                             double since_command_s, const Formation& formation,
-                             SetPlayMemory& memory) {
+void SetPlayRecorder::record(double time_s, GamePhase phase, bool preparing, double since_command_s,
+                             const Formation& formation, SetPlayMemory& memory) {
   const bool kickoff = phase == GamePhase::kickoff_opponent;
   if (open_ && (time_s < last_s_ || time_s > last_s_ + 1.0)) finish(memory);  // a break
   if (!open_) {
@@ -216,7 +213,7 @@ void SetPlayRecorder::record(double time_s, GamePhase phase, bool preparing,
   SetPlaySnapshot s;
   s.offset_ms = whole_ms(time_s - start_s_);
   s.since_command_ms = whole_ms(std::isfinite(since_command_s) ? since_command_s : 0.0);
-  s.stage = !kickoff ? SetPlayStage::over
+  s.stage = !kickoff    ? SetPlayStage::over
             : preparing ? SetPlayStage::preparation
                         : SetPlayStage::taken;
   for (const FormationRobot& robot : formation.robots) {

@@ -12,8 +12,7 @@ void AttackInference::reset() {
   switches_ = 0;
 }
 
-bool AttackInference::add(double time_s, const std::vector<Robot>& robots,
-                          const FieldSize& field) {
+bool AttackInference::add(double time_s, const std::vector<Robot>& robots, const FieldSize& field) {
   // Each robot's recent mean position: an exponential average over a quarter of the window
   // (O(1) a robot and sample; it follows a keeper to the other goal within seconds, and the
   // window-long hold below keeps a corner from flipping the direction).

@@ -34,9 +34,10 @@ void RobotTracker::observe(double time_s, Point position) {
     const double a0 = settings_.initial_acceleration_mm_s2;
     // The difference's velocity is the one half-way between the two: an acceleration a makes
     // it a dt / 2 short of the velocity now.
-    covariance_ = {{{noise, noise / dt, 0.0},
-                    {noise / dt, 2.0 * noise / (dt * dt) + a0 * a0 * dt * dt / 4.0, a0 * a0 * dt / 2.0},
-                    {0.0, a0 * a0 * dt / 2.0, a0 * a0}}};
+    covariance_ = {
+        {{noise, noise / dt, 0.0},
+         {noise / dt, 2.0 * noise / (dt * dt) + a0 * a0 * dt * dt / 4.0, a0 * a0 * dt / 2.0},
+         {0.0, a0 * a0 * dt / 2.0, a0 * a0}}};
     return;
   }
   ++observations_;
@@ -52,8 +53,7 @@ void RobotTracker::observe(double time_s, Point position) {
                c22 = c[2][2];
   const double p00 = c00 + 2.0 * dt * c01 + 2.0 * h * c02 + dt2 * c11 + 2.0 * dt * h * c12 +
                      h * h * c22 + q * dt5 / 20.0;
-  const double p01 =
-      c01 + dt * (c02 + c11) + (dt2 + h) * c12 + h * dt * c22 + q * dt4 / 8.0;
+  const double p01 = c01 + dt * (c02 + c11) + (dt2 + h) * c12 + h * dt * c22 + q * dt4 / 8.0;
   const double p02 = c02 + dt * c12 + h * c22 + q * dt3 / 6.0;
   const double p11 = c11 + 2.0 * dt * c12 + dt2 * c22 + q * dt3 / 3.0;
   const double p12 = c12 + dt * c22 + q * dt2 / 2.0;

@@ -164,10 +164,9 @@ bool robot_common_layout(const Reader& in, VisionRobot& out) {
   if (size != with_height && size != without_height) return false;
   const unsigned char* p = in.position();
   constexpr Type f32 = fixed32_type;
-  if (p[0] != tag(1, f32) || p[5] != tag(2, varint_type) || p[6] >= 0x80U ||
-      p[7] != tag(3, f32) || p[12] != tag(4, f32) || p[17] != tag(5, f32) ||
-      p[22] != tag(6, f32) || p[27] != tag(7, f32) ||
-      (size == with_height && p[32] != tag(8, f32))) {
+  if (p[0] != tag(1, f32) || p[5] != tag(2, varint_type) || p[6] >= 0x80U || p[7] != tag(3, f32) ||
+      p[12] != tag(4, f32) || p[17] != tag(5, f32) || p[22] != tag(6, f32) ||
+      p[27] != tag(7, f32) || (size == with_height && p[32] != tag(8, f32))) {
     return false;
   }
   out.confidence = Reader::load_fixed<float>(p + 1);

@@ -51,8 +51,8 @@ TEST(BlockBootstrap, ABlocksSumsCountEveryRobotAddedToIt) {
 }
 
 TEST(BlockBootstrap, EqualBlocksGiveAnIntervalOfTheMeanAlone) {
-  const BlockedErrors blocks =
-      blocks_of(20, [](int) { return 30.0; }, [](int) { return 40.0; });
+  const BlockedErrors blocks = blocks_of(
+      20, [](int) { return 30.0; }, [](int) { return 40.0; });
   const BlockResamples draws(keys(blocks), BootstrapConfig{});
   const RowIntervals row = bootstrap_row(blocks, draws, 1);
   ASSERT_EQ(row.mean.size(), 2u);
@@ -69,8 +69,8 @@ TEST(BlockBootstrap, EqualBlocksGiveAnIntervalOfTheMeanAlone) {
 TEST(BlockBootstrap, TheMeansIntervalIsAsWideAsTheBlocksSpreadSays) {
   // Blocks with errors 0..19: mean 9.5, standard deviation of the mean of 20 draws
   // sqrt(33.25 / 20) = 1.289, so a 95% interval of about 9.5 -+ 2.53.
-  const BlockedErrors blocks =
-      blocks_of(20, [](int i) { return double(i); }, [](int i) { return 2.0 * i; });
+  const BlockedErrors blocks = blocks_of(
+      20, [](int i) { return double(i); }, [](int i) { return 2.0 * i; });
   const BlockResamples draws(keys(blocks), BootstrapConfig{});
   const RowIntervals row = bootstrap_row(blocks, draws, 1);
   ASSERT_EQ(row.mean.size(), 2u);
@@ -89,7 +89,8 @@ TEST(BlockBootstrap, ARatioKeepsThePairingOfMethodsScoredOnTheSameRobots) {
   // 10 mm better throughout. Drawn apart the two means' intervals would overlap; drawn together
   // the ratio stays clear of 1.
   const BlockedErrors blocks = blocks_of(
-      30, [](int i) { return 100.0 + 50.0 * (i % 5); }, [](int i) { return 110.0 + 50.0 * (i % 5); });
+      30, [](int i) { return 100.0 + 50.0 * (i % 5); },
+      [](int i) { return 110.0 + 50.0 * (i % 5); });
   const BlockResamples draws(keys(blocks), BootstrapConfig{});
   const RowIntervals row = bootstrap_row(blocks, draws, 1);
   ASSERT_EQ(row.mean.size(), 2u);
@@ -99,8 +100,8 @@ TEST(BlockBootstrap, ARatioKeepsThePairingOfMethodsScoredOnTheSameRobots) {
 }
 
 TEST(BlockBootstrap, TheSameSeedDrawsTheSameIntervalsAndAnotherSeedOthers) {
-  const BlockedErrors blocks =
-      blocks_of(25, [](int i) { return double(i * i % 17); }, [](int i) { return 10.0 + i; });
+  const BlockedErrors blocks = blocks_of(
+      25, [](int i) { return double(i * i % 17); }, [](int i) { return 10.0 + i; });
   BootstrapConfig config;
   const RowIntervals a = bootstrap_row(blocks, BlockResamples(keys(blocks), config), 1);
   const RowIntervals b = bootstrap_row(blocks, BlockResamples(keys(blocks), config), 1);
@@ -113,8 +114,8 @@ TEST(BlockBootstrap, TheSameSeedDrawsTheSameIntervalsAndAnotherSeedOthers) {
 }
 
 TEST(BlockBootstrap, ARowOverFewBlocksHasNoIntervalButSaysHowManyItHad) {
-  const BlockedErrors blocks =
-      blocks_of(4, [](int i) { return double(i); }, [](int i) { return 1.0 + i; });
+  const BlockedErrors blocks = blocks_of(
+      4, [](int i) { return double(i); }, [](int i) { return 1.0 + i; });
   const BlockResamples draws(keys(blocks), BootstrapConfig{});  // at least 5 blocks
   const RowIntervals row = bootstrap_row(blocks, draws, 1);
   EXPECT_TRUE(row.mean.empty());

@@ -10,8 +10,8 @@
 #include <cmath>
 #include <optional>
 
-#include "ssl_formation/vision/robot_tracker.hpp"
 #include "ssl_formation/pipeline/training.hpp"
+#include "ssl_formation/vision/robot_tracker.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::evaluation {
@@ -73,7 +73,8 @@ double distance(Point a, Point b) { return std::hypot(a.x - b.x, a.y - b.y); }
 // the stream's start up to t, once its track has gone on for more than half the window.
 std::optional<RobotTracker> tracker_at(std::uint32_t id, double t, double window) {
   RobotTracker tracker;
-  for (int i = 0; frame_s * i <= t + 1e-9; ++i) tracker.observe(frame_s * i, position_of(id, frame_s * i));
+  for (int i = 0; frame_s * i <= t + 1e-9; ++i)
+    tracker.observe(frame_s * i, position_of(id, frame_s * i));
   if (tracker.observations() < 2 || !(t - tracker.first_s() > window / 2.0)) return std::nullopt;
   return tracker;
 }

@@ -20,14 +20,14 @@
 #include <tuple>
 #include <vector>
 
-#include "ssl_formation/motion_model/motion_model.hpp"
-#include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/pipeline/training.hpp"
 #include "circling_robots.hpp"
 #include "motion_section_bytes.hpp"
-#include "table_bytes.hpp"
+#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/motion_model/motion_model.hpp"
+#include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
+#include "table_bytes.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -70,8 +70,8 @@ MotionConfig small_calibration_config(double step_s) {
   MotionConfig config;
   config.step_s = step_s;
   config.horizons = 3;
-  config.calibration_one_in = 4;      // many held-out blocks in a short stream
-  config.calibration_capacity = 40;   // full, so merging has to pick the same instances
+  config.calibration_one_in = 4;     // many held-out blocks in a short stream
+  config.calibration_capacity = 40;  // full, so merging has to pick the same instances
   return config;
 }
 
@@ -268,7 +268,9 @@ SetPlayEpisode made_up_kickoff(std::int32_t shift_mm) {
   for (int i = 0; i < 40; ++i) {
     SetPlaySnapshot s;
     s.offset_ms = 100 * i;
-    s.stage = i < 10 ? SetPlayStage::preparation : i < 30 ? SetPlayStage::taken : SetPlayStage::over;
+    s.stage = i < 10   ? SetPlayStage::preparation
+              : i < 30 ? SetPlayStage::taken
+                       : SetPlayStage::over;
     s.since_command_ms = i < 10 ? 100 * i : 100 * (i - 10);
     for (std::uint32_t id = 0; id < 6; ++id) {
       s.seen |= 1U << id;
@@ -286,10 +288,10 @@ TEST_F(MotionTableFile, VersionFiveIsVersionOneWithTheMotionSectionAppended) {
   EXPECT_EQ(get_u32(saved.bytes, version_offset), table_file_compact_motion_version);
   // Everything but the version, the header checksum and the file checksum is v1's, in place.
   ASSERT_GT(saved.bytes.size(), v1.size());
-  EXPECT_TRUE(std::equal(v1.begin() + 12, v1.begin() + header_checksum_offset,
-                         saved.bytes.begin() + 12));
-  EXPECT_TRUE(std::equal(v1.begin() + header_size, v1.end() - 4,
-                         saved.bytes.begin() + header_size));
+  EXPECT_TRUE(
+      std::equal(v1.begin() + 12, v1.begin() + header_checksum_offset, saved.bytes.begin() + 12));
+  EXPECT_TRUE(
+      std::equal(v1.begin() + header_size, v1.end() - 4, saved.bytes.begin() + header_size));
   // The motion section is the layout table_file.hpp documents, field by field.
   const std::size_t m = saved.motion_begin;
   const MotionTable& motion = *saved.stored.motion;
@@ -399,7 +401,8 @@ TEST_F(MotionTableFile, KickOffsRoundTripExactly) {
 
   // Cut anywhere in the kick-offs: truncated; a byte flipped there: corrupt.
   for (std::size_t n = saved.bytes.size() - 8; n < bytes.size(); n += 97) {
-    const LoadResult cut = load_bytes(Bytes(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n)));
+    const LoadResult cut =
+        load_bytes(Bytes(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n)));
     ASSERT_EQ(kind_of(cut), TableFileError::truncated) << n << ": " << message_of(cut);
   }
   for (std::size_t at = saved.bytes.size() - 4; at < bytes.size() - 4; at += 131) {
@@ -429,7 +432,8 @@ TEST_F(MotionTableFile, FlippedByteInTheMotionSectionIsDetected) {
   std::vector<std::size_t> sizes;
   for (std::size_t i = 0; i < 4; ++i) sizes.push_back(m + 8 + i);  // horizons
   for (std::size_t i = 0; i < 8; ++i) sizes.push_back(m + rows_length_offset + i);
-  const std::size_t calibration_length_at = m + rows_offset + get_u64(saved.bytes, m + rows_length_offset);
+  const std::size_t calibration_length_at =
+      m + rows_offset + get_u64(saved.bytes, m + rows_length_offset);
   for (std::size_t i = 0; i < 8; ++i) sizes.push_back(calibration_length_at + i);
   for (std::size_t i = 0; i < 4; ++i) sizes.push_back(size - 8 + i);  // the kick-off count
   // Every byte of the section's start, then about 300 flips spread over the rest (an odd
@@ -585,8 +589,8 @@ TEST_F(MotionTableFile, InconsistentMotionSectionUnderValidChecksumsIsCorrupt) {
     MotionKeyParts parts = decode_motion_key(c.rows.back().first);
     parts.context = MotionFeatures::context_count;
     c.rows.back().first = encode_motion_key(parts);
-    expect_corrupt(planted(c), "motion row " + std::to_string(c.rows.size() - 1) +
-                                   ": feature out of range");
+    expect_corrupt(planted(c),
+                   "motion row " + std::to_string(c.rows.size() - 1) + ": feature out of range");
   }
   {
     MotionSectionContent c = content;  // a row with a count of 0

@@ -269,9 +269,9 @@ TEST_F(TableFileBytes, VersionThreeBytesStillLoad) {
   EXPECT_EQ(loaded->format_version, table_file_motion_version);
   ASSERT_TRUE(loaded->motion.has_value());
   EXPECT_TRUE(*loaded->motion == motion_table(0.5, 2, 2, 1));
-  EXPECT_EQ(saved_bytes(*loaded), saved_bytes(StoredTable{tiny_table(TableStorage::sparse),
-                                                          metadata_of(0.5),
-                                                          motion_table(0.5, 2, 2, 1)}));
+  EXPECT_EQ(saved_bytes(*loaded),
+            saved_bytes(StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5),
+                                    motion_table(0.5, 2, 2, 1)}));
 }
 
 TEST_F(TableFileBytes, LargerTablesAreTheBytesTheyWere) {

@@ -1,5 +1,5 @@
-// Tracked vision (common/match/src/tracked_vision.cpp): a tracker's frames in millimetres, one tracker
-// followed by its uuid, another taking over only once the first falls silent for a second.
+// Tracked vision (common/match/src/tracked_vision.cpp): a tracker's frames in millimetres, one
+// tracker followed by its uuid, another taking over only once the first falls silent for a second.
 
 #include "ssl_formation/match/tracked_vision.hpp"
 

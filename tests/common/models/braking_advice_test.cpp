@@ -56,7 +56,7 @@ TEST(BrakingPath, NoAdviceForARobotStandingTurningSpeedingUpBrakingGentlyOrUnsee
       moving({0.0, 0.0}, {1000.0, 0.0}, {0.0, -300.0}),  // turning: the change is across
       moving({0.0, 0.0}, {1000.0, 0.0}, {300.0, 0.0}),   // speeding up
       moving({0.0, 0.0}, {1000.0, 0.0}, {-50.0, 0.0}),   // slowing at 0.5 m/s² only
-      unseen_moving,                                       // no velocity yet
+      unseen_moving,                                     // no velocity yet
   };
   SetPlayAdvice advice;
   advise_braking(robots, velocity_window_s, 0.5, 3, advice);

@@ -6,8 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include "match_logs.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -18,6 +16,7 @@
 #include <random>
 #include <vector>
 
+#include "match_logs.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/pipeline/match_front_end.hpp"
@@ -135,15 +134,15 @@ struct Forecasting {
   std::unique_ptr<Forecaster> forecaster;
   std::vector<Forecast> seen;
   GameController game_controller;
-  MatchFrontEnd front{front_config(),
-                      {[this](const MatchMoment& m) {
-                         forecaster->observe(m);
-                         Forecast f{m.formation().time_s, m.game_state, m.ball,
-                                    m.formation().robots, {}};
-                         forecaster->forecast(m, steps, f.prediction);
-                         seen.push_back(std::move(f));
-                       },
-                       [this] { forecaster->forget_match(); }}};
+  MatchFrontEnd front{
+      front_config(),
+      {[this](const MatchMoment& m) {
+         forecaster->observe(m);
+         Forecast f{m.formation().time_s, m.game_state, m.ball, m.formation().robots, {}};
+         forecaster->forecast(m, steps, f.prediction);
+         seen.push_back(std::move(f));
+       },
+       [this] { forecaster->forget_match(); }}};
 };
 
 const FormationRobot& robot_of(const Forecast& f, std::uint32_t id) {
@@ -158,8 +157,8 @@ double largest_move(const Forecast& f) {
   double largest = 0.0;
   for (const PredictedStep& step : f.prediction.steps) {
     for (const RobotPrediction& p : step.robots) {
-      largest = std::max(largest,
-                         distance(p.normalised_position, robot_of(f, p.robot_id).position));
+      largest =
+          std::max(largest, distance(p.normalised_position, robot_of(f, p.robot_id).position));
     }
   }
   return largest;
@@ -244,7 +243,8 @@ TEST(GameRules, InHaltARobotThatHasStoodIsForecastWhereItStandsNotWhereItWasLast
       sighting_off += distance(robot.position, spot);
       for (std::size_t k = 0; k < f.prediction.steps.size(); ++k) {
         for (const RobotPrediction& p : f.prediction.steps[k].robots) {
-          if (p.robot_id == robot.robot_id) forecast_off[k] += distance(p.normalised_position, spot);
+          if (p.robot_id == robot.robot_id)
+            forecast_off[k] += distance(p.normalised_position, spot);
         }
       }
       ++seen;
@@ -254,18 +254,21 @@ TEST(GameRules, InHaltARobotThatHasStoodIsForecastWhereItStandsNotWhereItWasLast
   sighting_off /= seen;
   EXPECT_GT(sighting_off, 3.0);  // the noise is there to average
   for (int k = 0; k < steps; ++k) {
-    EXPECT_LT(forecast_off[static_cast<std::size_t>(k)] / seen, 0.4 * sighting_off) << "step " << k + 1;
+    EXPECT_LT(forecast_off[static_cast<std::size_t>(k)] / seen, 0.4 * sighting_off)
+        << "step " << k + 1;
   }
 }
 
 TEST(GameRules, TheHaltRowsOfATeamThatKeepsMovingTakeOverFromThePrior) {
   // A team whose robots creep on through every HALT: its own rows say so, and outweigh the prior.
   Script halted;
-  halted.command = [](double t) { return std::fmod(t, 20.0) < 10.0 ? Referee::NORMAL_START
-                                                                    : Referee::HALT; };
+  halted.command = [](double t) {
+    return std::fmod(t, 20.0) < 10.0 ? Referee::NORMAL_START : Referee::HALT;
+  };
   const auto slow_circle = [](int id, double t) {
     const Point centre{-2500.0 + 1000.0 * id, 0.0};
-    return Point{centre.x + 1200.0 * std::cos(0.35 * t + id), centre.y + 1200.0 * std::sin(0.35 * t + id)};
+    return Point{centre.x + 1200.0 * std::cos(0.35 * t + id),
+                 centre.y + 1200.0 * std::sin(0.35 * t + id)};
   };
   halted.robot = [slow_circle](int id, double t) {
     return std::fmod(t, 20.0) < 10.0 ? circling(id, t) : slow_circle(id, t);
@@ -341,7 +344,8 @@ Point running_and_braking(int id, double t) {
     x += run_speed_mm_s * within;
   } else {
     const double braking = std::min(within - run_s, brake_s);
-    x += run_speed_mm_s * run_s + run_speed_mm_s * braking - 0.5 * braking_mm_s2 * braking * braking;
+    x +=
+        run_speed_mm_s * run_s + run_speed_mm_s * braking - 0.5 * braking_mm_s2 * braking * braking;
   }
   return {x, -2000.0};
 }
@@ -412,8 +416,8 @@ TEST(GameRules, AtOurBallPlacementTheOpponentIsForecastClearOfThePathAtAnySpeed)
         EXPECT_GE(distance_to_segment(p.normalised_position, *f.ball, Point{0.0, 1500.0}),
                   500.0 - 1e-6);
         const Point from = robot_of(f, p.robot_id).position;
-        fastest_mm_s = std::max(fastest_mm_s,
-                                distance(p.normalised_position, from) / ((k + 1) * step_s));
+        fastest_mm_s =
+            std::max(fastest_mm_s, distance(p.normalised_position, from) / ((k + 1) * step_s));
         ++checked;
       }
     }

@@ -5,11 +5,10 @@
 
 #include <gtest/gtest.h>
 
-#include "hand_built_motion.hpp"
-
 #include <array>
 #include <cstdint>
 
+#include "hand_built_motion.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
@@ -177,8 +176,7 @@ double radius90(const MotionModel& model, GamePhase phase) {
 TEST(MotionPhaseRadii, APhaseWhoseHeldOutPlayStraysFurtherGetsWiderRadiiNeverNarrower) {
   MotionTable table(config());
   // Every phase's rows learned robots 100 mm either way.
-  for (const GamePhase phase :
-       {GamePhase::running, GamePhase::kickoff_opponent, GamePhase::stop}) {
+  for (const GamePhase phase : {GamePhase::running, GamePhase::kickoff_opponent, GamePhase::stop}) {
     add_spread(table, phase, 2000, 100, false, 0.0);
   }
   // Held out: running play as learned, the kick-offs 400 mm either way, STOP 10 mm.

@@ -2,14 +2,12 @@
 
 #include <gtest/gtest.h>
 
-#include "hand_built_motion.hpp"
-
-#include "scratch_dir.hpp"
-
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
+#include "hand_built_motion.hpp"
+#include "scratch_dir.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
@@ -100,8 +98,7 @@ TEST(MotionPrior, APriorOfOtherSettingsIsRefused) {
   add(every_team, 100, 400);
   const MotionModel prior(every_team, grid, field);
   const MotionTable own(config());
-  EXPECT_THROW(MotionModel(own, grid, field, MotionModelSettings{}, &prior),
-               std::invalid_argument);
+  EXPECT_THROW(MotionModel(own, grid, field, MotionModelSettings{}, &prior), std::invalid_argument);
 }
 
 TEST(MotionPrior, ATableUnderAPriorMergesAndReloadsExactly) {

@@ -4,14 +4,13 @@
 
 #include <gtest/gtest.h>
 
-#include "match_logs.hpp"
-
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "match_logs.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper_tracked.pb.h"

@@ -1,7 +1,8 @@
 #include "ssl_formation/pipeline/prediction_message.hpp"
-#include "ssl_formation/paper_model/predictor.hpp"
 
 #include <gtest/gtest.h>
+
+#include "ssl_formation/paper_model/predictor.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -126,8 +127,8 @@ TEST(PredictionMessage, TheMotionModelsRobotsCarryTheirPositionsAndRadii) {
     EXPECT_EQ(step.horizon_seconds(), static_cast<double>(k + 1) * 0.1);  // 3 x 0.1, not 0.3
     ASSERT_EQ(step.robots_size(), 2);
     for (int i = 0; i < 2; ++i) {
-      const RobotPrediction& robot = prediction.steps[static_cast<std::size_t>(k)]
-                                         .robots[static_cast<std::size_t>(i)];
+      const RobotPrediction& robot =
+          prediction.steps[static_cast<std::size_t>(k)].robots[static_cast<std::size_t>(i)];
       const proto::PredictedRobot& r = step.robots(i);
       ASSERT_TRUE(r.has_position());
       EXPECT_EQ(r.position().x(), static_cast<float>(robot.feed_position.x));
@@ -183,25 +184,26 @@ TEST(PredictionMessage, DirectEncodingEqualsTheGeneratedSerialiserOnRandomPredic
     motion.steps[2].robots[0].feed_position = Point{-1e9, 3e8};
     for (const auto& [model, prediction] :
          {std::pair{ModelKind::paper, paper}, std::pair{ModelKind::motion, motion}})
-    for (const AttackDirection side : {AttackDirection::positive_x, AttackDirection::negative_x}) {
-      PredictionContext context;
-      context.model = model;
-      context.codec = &codec;
-      context.field = field;
-      context.opponent_attacks = side;
-      context.opponent_color = TeamColor::blue;
-      context.step_s = 0.25;
-      context.table_transitions = 1ull << 40;
-      proto::FormationPrediction message;
-      fill_prediction_message(formation, prediction, context, message);
-      std::string direct = "left over from before";
-      encode_prediction(formation, prediction, context, direct);
-      ASSERT_EQ(direct, message.SerializeAsString()) << grid.to_string();
-      proto::FormationPrediction decoded;
-      ASSERT_TRUE(decoded.ParseFromString(direct));
-      EXPECT_EQ(decoded.steps(1).robots(2).has_position(), false);
-      EXPECT_EQ(decoded.steps(1).robots(1).has_position(), model == ModelKind::motion);
-    }
+      for (const AttackDirection side :
+           {AttackDirection::positive_x, AttackDirection::negative_x}) {
+        PredictionContext context;
+        context.model = model;
+        context.codec = &codec;
+        context.field = field;
+        context.opponent_attacks = side;
+        context.opponent_color = TeamColor::blue;
+        context.step_s = 0.25;
+        context.table_transitions = 1ull << 40;
+        proto::FormationPrediction message;
+        fill_prediction_message(formation, prediction, context, message);
+        std::string direct = "left over from before";
+        encode_prediction(formation, prediction, context, direct);
+        ASSERT_EQ(direct, message.SerializeAsString()) << grid.to_string();
+        proto::FormationPrediction decoded;
+        ASSERT_TRUE(decoded.ParseFromString(direct));
+        EXPECT_EQ(decoded.steps(1).robots(2).has_position(), false);
+        EXPECT_EQ(decoded.steps(1).robots(1).has_position(), model == ModelKind::motion);
+      }
   }
 }
 

@@ -207,7 +207,8 @@ TEST(PredictionPipeline, TheContextCarriesTheOptionsAndTheFieldOfTheOptionsWitho
 
 TEST(PredictionPipeline, ATableOfAnotherGridIsRefused) {
   Recorder out;
-  PredictionPipeline pipeline(PredictionConfig{sampler_config(Grid(3, 2)), 2, ModelKind::paper}, out.handler());
+  PredictionPipeline pipeline(PredictionConfig{sampler_config(Grid(3, 2)), 2, ModelKind::paper},
+                              out.handler());
   const auto wrong = trained_table(sampler_config(Grid(4, 3)), 10);
   EXPECT_THROW(pipeline.set_table(wrong), std::invalid_argument);
   EXPECT_EQ(pipeline.table(), nullptr);
@@ -258,17 +259,21 @@ TEST(PredictionPipeline, HorizonBounds) {
                std::invalid_argument);
   EXPECT_THROW(PredictionPipeline(PredictionConfig{sampler_config(), -1, ModelKind::paper}, ignore),
                std::invalid_argument);
-  EXPECT_THROW(PredictionPipeline(
-                   PredictionConfig{sampler_config(), PredictionConfig::max_horizon + 1, ModelKind::paper}, ignore),
-               std::invalid_argument);
+  EXPECT_THROW(
+      PredictionPipeline(
+          PredictionConfig{sampler_config(), PredictionConfig::max_horizon + 1, ModelKind::paper},
+          ignore),
+      std::invalid_argument);
   SamplerConfig bad_step = sampler_config();
   bad_step.step_s = 0.0;
-  EXPECT_THROW(PredictionPipeline(PredictionConfig{bad_step, 2, ModelKind::paper}, ignore), std::invalid_argument);
+  EXPECT_THROW(PredictionPipeline(PredictionConfig{bad_step, 2, ModelKind::paper}, ignore),
+               std::invalid_argument);
 
   const auto table = trained_table(sampler_config(), 20);
   for (int horizon : {1, PredictionConfig::max_horizon}) {
     Recorder out;
-    PredictionPipeline pipeline(PredictionConfig{sampler_config(), horizon, ModelKind::paper}, out.handler());
+    PredictionPipeline pipeline(PredictionConfig{sampler_config(), horizon, ModelKind::paper},
+                                out.handler());
     EXPECT_EQ(pipeline.config().horizon, horizon);
     pipeline.set_table(table);
     for (int k = 0; k < 4; ++k) pipeline.add(detection(2.0 * k, play(k)));
@@ -285,7 +290,8 @@ TEST(PredictionPipeline, HorizonBounds) {
 // if `break_at_6`.
 std::vector<Seen> run_with_break(const std::shared_ptr<const StoredTable>& table, bool break_at_6) {
   Recorder out;
-  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 2, ModelKind::paper}, out.handler());
+  PredictionPipeline pipeline(PredictionConfig{sampler_config(), 2, ModelKind::paper},
+                              out.handler());
   pipeline.set_table(table);
   pipeline.add(geometry(12000, 9000));
   for (int k = 0; k < 5; ++k) {
@@ -354,18 +360,20 @@ TEST(PredictionPipeline, SetTableFromInsideTheHandlerIsSafe) {
   std::vector<Seen> seen;
   std::vector<Prediction> expected;
   bool alive_during_call = false;
-  PredictionPipeline pipeline(PredictionConfig{config, 2, ModelKind::paper}, [&](const PredictedFormation& p) {
-    if (seen.empty()) {
-      self->set_table(second);
-      // What this call was handed still refers to the first table, which must still exist.
-      alive_during_call = !first_destroyed;
-      EXPECT_EQ(p.context.table_transitions, first_transitions);
-      EXPECT_EQ(p.context.codec->grid(), config.grid);
-    } else if (seen.size() == 3) {
-      self->set_table(nullptr);
-    }
-    seen.push_back(Seen{p.sample, p.prediction, p.context});
-  });
+  PredictionPipeline pipeline(PredictionConfig{config, 2, ModelKind::paper},
+                              [&](const PredictedFormation& p) {
+                                if (seen.empty()) {
+                                  self->set_table(second);
+                                  // What this call was handed still refers to the first table,
+                                  // which must still exist.
+                                  alive_during_call = !first_destroyed;
+                                  EXPECT_EQ(p.context.table_transitions, first_transitions);
+                                  EXPECT_EQ(p.context.codec->grid(), config.grid);
+                                } else if (seen.size() == 3) {
+                                  self->set_table(nullptr);
+                                }
+                                seen.push_back(Seen{p.sample, p.prediction, p.context});
+                              });
   self = &pipeline;
   pipeline.set_table(std::move(first));
   pipeline.add(geometry(12000, 9000));

@@ -1,5 +1,5 @@
-// The robot tracker (common/vision/src/robot_tracker.cpp): exact on exact motion, about as steady as
-// differences under the vision's noise, and starting over where a track breaks.
+// The robot tracker (common/vision/src/robot_tracker.cpp): exact on exact motion, about as steady
+// as differences under the vision's noise, and starting over where a track breaks.
 
 #include "ssl_formation/vision/robot_tracker.hpp"
 
@@ -122,9 +122,10 @@ struct ReferenceFilter {
     }
     const Matrix f{{{1, dt, dt * dt / 2}, {0, 1, dt}, {0, 0, 1}}};
     const double q = settings.jerk_density;
-    const Matrix noise{{{q * std::pow(dt, 5) / 20, q * std::pow(dt, 4) / 8, q * std::pow(dt, 3) / 6},
-                        {q * std::pow(dt, 4) / 8, q * std::pow(dt, 3) / 3, q * dt * dt / 2},
-                        {q * std::pow(dt, 3) / 6, q * dt * dt / 2, q * dt}}};
+    const Matrix noise{
+        {{q * std::pow(dt, 5) / 20, q * std::pow(dt, 4) / 8, q * std::pow(dt, 3) / 6},
+         {q * std::pow(dt, 4) / 8, q * std::pow(dt, 3) / 3, q * dt * dt / 2},
+         {q * std::pow(dt, 3) / 6, q * dt * dt / 2, q * dt}}};
     Matrix predicted = product(product(f, p), transposed(f));
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) predicted[i][j] += noise[i][j];
@@ -153,9 +154,13 @@ TEST(RobotTracker, ItIsTheFullKalmanFilterThroughChangesOfPace) {
   ReferenceFilter reference;
   double t = 100.0;
   for (int i = 0; i < 1200; ++i) {
-    const double dt = i < 400 ? 1.0 / 60.0 : i < 700 ? 1.0 / 45.0 : i < 800 ? jitter(random) : 1.0 / 90.0;
+    const double dt = i < 400   ? 1.0 / 60.0
+                      : i < 700 ? 1.0 / 45.0
+                      : i < 800 ? jitter(random)
+                                : 1.0 / 90.0;
     t += dt;
-    const sf::Point z{1000.0 * std::sin(0.7 * t) + noise(random), 500.0 * std::cos(t) + noise(random)};
+    const sf::Point z{1000.0 * std::sin(0.7 * t) + noise(random),
+                      500.0 * std::cos(t) + noise(random)};
     tracker.observe(t, z);
     reference.observe(t, z);
     if (i < 2) continue;

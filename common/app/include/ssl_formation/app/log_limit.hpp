@@ -25,10 +25,10 @@
 namespace ssl_formation::app {
 
 struct LogLimitSettings {
-  std::size_t burst = 5;                   // lines of one kind written in full per period
-  double period_s = 60.0;                  // of the steady clock
-  std::size_t max_line_chars = 1000;       // a longer line is cut, and says by how much
-  std::size_t max_kinds = 512;             // kinds followed at once; the rest share one
+  std::size_t burst = 5;              // lines of one kind written in full per period
+  double period_s = 60.0;             // of the steady clock
+  std::size_t max_line_chars = 1000;  // a longer line is cut, and says by how much
+  std::size_t max_kinds = 512;        // kinds followed at once; the rest share one
   bool valid() const;
 };
 

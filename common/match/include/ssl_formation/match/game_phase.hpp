@@ -38,12 +38,16 @@ enum class GamePhase : std::uint8_t {
   free_kick_us,
   penalty,
 };
-inline constexpr std::array<GamePhase, 10> all_game_phases{
-    GamePhase::running,           GamePhase::stop,
-    GamePhase::halt,              GamePhase::ball_placement_opponent,
-    GamePhase::ball_placement_us, GamePhase::kickoff_opponent,
-    GamePhase::kickoff_us,        GamePhase::free_kick_opponent,
-    GamePhase::free_kick_us,      GamePhase::penalty};
+inline constexpr std::array<GamePhase, 10> all_game_phases{GamePhase::running,
+                                                           GamePhase::stop,
+                                                           GamePhase::halt,
+                                                           GamePhase::ball_placement_opponent,
+                                                           GamePhase::ball_placement_us,
+                                                           GamePhase::kickoff_opponent,
+                                                           GamePhase::kickoff_us,
+                                                           GamePhase::free_kick_opponent,
+                                                           GamePhase::free_kick_us,
+                                                           GamePhase::penalty};
 std::string_view to_string(GamePhase phase);  // "ball_placement_opponent", ...
 
 // The team a command is for (a kick-off, a free kick, a placement, a timeout: yellow's have even

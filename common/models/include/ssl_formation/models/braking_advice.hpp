@@ -45,7 +45,7 @@ bool braking_advice_holds(GamePhase phase);
 // kinematics' change of velocity spans) that is braking and has no advice in `advice` yet:
 // at each of `steps` steps of `step_s`, where it is at constant deceleration until it stands.
 // `advice` must have one entry per robot, or none (then it is made so).
-void advise_braking(const std::vector<MotionRobot>& robots, double velocity_window_s,
-                    double step_s, int steps, SetPlayAdvice& advice);
+void advise_braking(const std::vector<MotionRobot>& robots, double velocity_window_s, double step_s,
+                    int steps, SetPlayAdvice& advice);
 
 }  // namespace ssl_formation::models

@@ -86,9 +86,8 @@ class OnlineCalibration {
   // one was remembered less than the remember interval before.
   // `phase` is the game's when it was made: its robots' radii are checked as that phase's (the
   // opponent's kick-off: its preparation, `preparing`, apart from after the kick).
-  void remember(const Prediction& prediction, double time_s, double step_s,
-                AttackDirection attacks, GamePhase phase = GamePhase::running,
-                bool preparing = false);
+  void remember(const Prediction& prediction, double time_s, double step_s, AttackDirection attacks,
+                GamePhase phase = GamePhase::running, bool preparing = false);
   // Moves every robot probability of `prediction` towards its bin's recent hit rate, and the
   // steps' formation probabilities and confidences with them; scales its radii by what `phase`
   // (the game's now) lately showed.
@@ -124,8 +123,8 @@ class OnlineCalibration {
     std::int16_t cell_x = 0, cell_y = 0;  // grids have at most a few hundred cells
     std::uint8_t bin = 0;                 // bin_of the stated probability, as a double
     AttackDirection attacks = AttackDirection::positive_x;
-    std::uint8_t group = 0;  // radius_group of the phase it was made in
-    float x = 0.0f, y = 0.0f;  // the predicted position, normalised (mm)
+    std::uint8_t group = 0;                  // radius_group of the phase it was made in
+    float x = 0.0f, y = 0.0f;                // the predicted position, normalised (mm)
     float radius50 = 0.0f, radius90 = 0.0f;  // as stated; 0: none to check
   };
   // The radii's evidence is kept per game phase, and apart for the preparation of the
@@ -140,7 +139,7 @@ class OnlineCalibration {
   // -max_log_radius_scale to +max_log_radius_scale (beyond: the edge bins), so that a radius is
   // scaled by at most e^max_log_radius_scale either way.
   static constexpr double max_log_radius_scale = 6.9;  // about 1,000
-  static constexpr double radius_bin_width = 0.05;    // 5%
+  static constexpr double radius_bin_width = 0.05;     // 5%
   static constexpr std::size_t radius_bins =
       static_cast<std::size_t>(2.0 * max_log_radius_scale / radius_bin_width) + 1;
   // Faded weights: a check adds the current boost, which then grows by 2^(1 / half count),
@@ -169,7 +168,7 @@ class OnlineCalibration {
   // its cell, nothing if one passed unseen (or the ends changed).
   struct FormationCheck {
     double due_s = 0.0;
-    double stated = 0.0;   // the product of the robots' stated probabilities
+    double stated = 0.0;          // the product of the robots' stated probabilities
     std::uint32_t remaining = 0;  // robots not yet checked
     bool all_hit = true;
     bool decidable = true;
@@ -215,7 +214,7 @@ class OnlineCalibration {
   OnlineCalibrationSettings settings_;
   std::vector<Step> steps_;
   std::optional<double> last_time_s_;
-  IntervalGate correcting_;    // when the corrections are worked out
+  IntervalGate correcting_;   // when the corrections are worked out
   IntervalGate remembering_;  // when predictions are remembered
   std::uint64_t checked_ = 0;
   std::uint64_t formations_checked_ = 0;

@@ -7,10 +7,9 @@
 //   net::LiveMatchEvents events(io, feeds, clock);
 //   events.start(sink);  // sink.on_event(...) runs on the io_context's thread
 
+#include <boost/asio/io_context.hpp>
 #include <functional>
 #include <optional>
-
-#include <boost/asio/io_context.hpp>
 
 #include "ssl_formation/match/match_event.hpp"
 #include "ssl_formation/net/multicast.hpp"

@@ -38,10 +38,10 @@ class ReportSamples {
 };
 
 struct ReportInput {
-  std::string title;        // what was evaluated, for the page's heading
-  std::string command;      // how to run it again
-  std::string grid;         // "12x9"
-  double step_s = 0.5;      // the section's step
+  std::string title;    // what was evaluated, for the page's heading
+  std::string command;  // how to run it again
+  std::string grid;     // "12x9"
+  double step_s = 0.5;  // the section's step
   // The section drawn (the predictor's chain of steps, or score's file) and its samples.
   const evaluation::PositionEvaluation* evaluation = nullptr;
   const ReportSamples* samples = nullptr;
