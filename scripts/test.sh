@@ -2,7 +2,8 @@
 # Builds the project and runs every test (ctest), then runs the unit tests and the daemon tests
 # again under AddressSanitizer and UndefinedBehaviorSanitizer in a second build folder (the daemon
 # tests then start the sanitizer-built programs), and checks the installed programs, package and
-# client library (scripts/test-install.sh). Installs missing Debian packages first. Exit
+# client library (scripts/test-install.sh). Checks first that every C++ file follows
+# .clang-format (scripts/check-format.sh). Installs missing Debian packages first. Exit
 # status is non-zero if anything fails.
 #   SSLF_BUILD_DIR        build folder (default: build)
 #   SSLF_SKIP_SANITIZERS  set to 1 to skip the sanitizer pass
@@ -13,8 +14,9 @@ build_dir="${SSLF_BUILD_DIR:-$SSLF_ROOT/build}"
 # The field view's browser test drives Debian's Chromium with playwright-core from npm (it
 # downloads no browser). It needs node 20 or newer; where there is none, that test is skipped
 # and says why.
-SSLF_PACKAGES+=(chromium fonts-dejavu-core python3 python3-protobuf)
+SSLF_PACKAGES+=(chromium fonts-dejavu-core python3 python3-protobuf clang-format)
 sslf_install_packages
+"$SSLF_ROOT/scripts/check-format.sh"
 if command -v node >/dev/null && command -v npm >/dev/null &&
   [ "$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)" -ge 20 ]; then
   if [ ! -d "$SSLF_ROOT/tests/web/node_modules/playwright-core" ]; then
