@@ -28,13 +28,14 @@ else
 fi
 mkdir -p "$(dirname "$build_dir")"
 sslf_build "$build_dir" -DCMAKE_BUILD_TYPE=Release
-ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600
-echo "== Installed: cmake --install, find_package(ssl_formation), cpack -G DEB"
-SSLF_BUILD_DIR="$build_dir" "$SSLF_ROOT/scripts/test-install.sh"
 
+# The unit and daemon tests again, under AddressSanitizer and UndefinedBehaviorSanitizer. The
+# reliability (load, SIGKILL timing) and browser tests are left to the Release build.
+sanitized=(common_tests app_tests simulation_tests producer_tests trainer_tests predictor_tests
+  net_tests daemon_tests)
+sanitize_dir="$build_dir-sanitize"
+sanitize_build=""
 if [ "${SSLF_SKIP_SANITIZERS:-0}" != 1 ]; then
-  sanitize_dir="$build_dir-sanitize"
-  echo "== Unit and daemon tests under AddressSanitizer and UndefinedBehaviorSanitizer ($sanitize_dir)"
   # -O1 and line tables only: the sanitized build is half the suite's time, and -O1 halves it
   # (10 instead of 20 minutes on 2 cores) while the sanitizers still see everything they check.
   # GCC's -Wmaybe-uninitialized misfires at -O1 under the sanitizers (std::optional copies).
@@ -42,10 +43,28 @@ if [ "${SSLF_SKIP_SANITIZERS:-0}" != 1 ]; then
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG -Wno-maybe-uninitialized" \
     -DSSLF_SANITIZE=ON -DSSLF_BUILD_BENCHMARKS=OFF >"$sanitize_dir.configure.log" 2>&1 ||
     { cat "$sanitize_dir.configure.log" >&2; exit 1; }
-  # The reliability (load, SIGKILL timing) and browser tests are left to the Release build.
-  sanitized=(common_tests app_tests simulation_tests producer_tests trainer_tests predictor_tests
-    net_tests daemon_tests)
-  cmake --build "$sanitize_dir" -j "$(nproc)" --target "${sanitized[@]}"
+  # Built while the Release tests and the install check run, at a lower priority: those wait on
+  # sockets and timers much of the time, and the build takes what they leave of the cores.
+  echo "== Building the sanitized tests in the background ($sanitize_dir.build.log)"
+  nice -n 10 ninja -C "$sanitize_dir" -j "$(nproc)" "${sanitized[@]}" \
+    >"$sanitize_dir.build.log" 2>&1 &
+  sanitize_build=$!
+  trap '[ -n "$sanitize_build" ] && kill "$sanitize_build" 2>/dev/null || true' EXIT
+fi
+
+ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600
+echo "== Installed: cmake --install, find_package(ssl_formation), cpack -G DEB"
+SSLF_BUILD_DIR="$build_dir" "$SSLF_ROOT/scripts/test-install.sh"
+
+if [ -n "$sanitize_build" ]; then
+  echo "== Unit and daemon tests under AddressSanitizer and UndefinedBehaviorSanitizer ($sanitize_dir)"
+  if ! wait "$sanitize_build"; then
+    sanitize_build=""
+    tail -50 "$sanitize_dir.build.log" >&2
+    echo "error: the sanitized build failed ($sanitize_dir.build.log)" >&2
+    exit 1
+  fi
+  sanitize_build=""
   export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
   # Each binary's tests in one shard per core, side by side (the tests already run in parallel
