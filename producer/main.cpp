@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
         ("count", po::value(&o.count)->default_value(o.count),
          "formations (paper) or frames (match) to send or write, then exit; 0 = no limit. With "
          "--replay: packets to send")
-        ("seed", po::value(&o.seed)->default_value(o.seed), "random seed: the same seed sends the same packets")
+        ("seed", po::value(&o.seed)->default_value(o.seed),
+         "random seed: the same seed sends the same packets")
         ("cameras", po::value(&o.cameras)->default_value(o.cameras),
          "cameras the field is split among (1-8); robots in overlaps are reported by both")
         ("camera-overlap", po::value(&o.camera_overlap_mm)->default_value(o.camera_overlap_mm),
@@ -95,7 +96,8 @@ int main(int argc, char** argv) {
          "simulation; the simulation options are ignored")
         ("speed", po::value(&o.speed)->default_value(o.speed),
          "replay speed: 1 = as recorded, 10 = ten times faster, 0 = as fast as possible")
-        ("loop", po::bool_switch(&o.loop), "replay: start over at the end (until a signal or --count)")
+        ("loop", po::bool_switch(&o.loop),
+         "replay: start over at the end (until a signal or --count)")
         ("start", po::value(&o.replay_start_s)->default_value(o.replay_start_s),
          "replay: seconds from the log's first packet to start at")
         ("end", po::value(&o.replay_end_s)->default_value(o.replay_end_s),

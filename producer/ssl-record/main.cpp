@@ -25,7 +25,8 @@ int main(int argc, char** argv) {
          "vision packets to record, then stop; 0 = no limit")
         ("index", po::bool_switch(&o.index),
          "end the file with an index message (as ssl-go-tools' indexer writes it)")
-        ("receive-buffer", po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
+        ("receive-buffer",
+         po::value(&o.receive_buffer_bytes)->default_value(o.receive_buffer_bytes),
          "SO_RCVBUF to request, bytes")
         ("status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
          "seconds between status lines on stderr (recorded, bytes, skipped, kernel drops)")

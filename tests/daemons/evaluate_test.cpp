@@ -396,9 +396,8 @@ TEST(Evaluate, HoldoutOnASimulatedMatchFollowsItsRefereeByGameState) {
     }
   }
   EXPECT_TRUE(std::regex_search(
-      run.out,
-      std::regex(
-          R"(1\.00 s\s+1 all\s+\d+ damped constant (velocity|acceleration)\s+[\d.]+\s+\[[\d.]+, [\d.]+\])")))
+      run.out, std::regex(R"(1\.00 s\s+1 all\s+\d+ damped constant (velocity|acceleration))"
+                          R"(\s+[\d.]+\s+\[[\d.]+, [\d.]+\])")))
       << run.out;
 
   // --bootstrap 0: the same means, no intervals.

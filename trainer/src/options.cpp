@@ -19,8 +19,8 @@ bool parse_trainer_options(int argc, const char* const argv[], TrainerOptions& o
        "referee names it (unknown.bin for an unnamed one); the trainer switches tables when the "
        "referee names another opponent, saving the old one first")
       ("reset", po::bool_switch(&o.reset),
-       "start an empty table even if --table holds one of another grid, step, model or motion-model "
-       "settings (an older version's)")
+       "start an empty table even if --table holds one of another grid, step, model or "
+       "motion-model settings (an older version's)")
       ("flush-interval", po::value(&o.flush_interval_s)->default_value(o.flush_interval_s),
        "seconds between saves of the table (it is also saved on SIGINT/SIGTERM)")
       ("status-interval", po::value(&o.status_interval_s)->default_value(o.status_interval_s),
