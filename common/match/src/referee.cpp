@@ -142,7 +142,10 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
   const std::string yellow = printable_wire_text(message.yellow().name());
   const std::string blue = printable_wire_text(message.blue().name());
   if (yellow.empty() && blue.empty()) ++counters_.unnamed_teams;
-  if (names_take_over(yellow, blue, receive_s)) {
+  const bool take_over =
+      names_.take_over(view_.yellow_name, view_.blue_name, yellow, blue, receive_s);
+  counters_.refused_name_switches = names_.refused();
+  if (take_over) {
     change.teams = true;
     view_.yellow_name = yellow;
     view_.blue_name = blue;
@@ -161,44 +164,6 @@ RefereeChange RefereeFollower::add(const Referee& message, double receive_s) {
     }
   }
   return change;
-}
-
-bool RefereeFollower::names_take_over(const std::string& yellow, const std::string& blue,
-                                      double receive_s) {
-  // A receive clock that went back (another log): what was held or counted is of the other one.
-  if (candidate_ && receive_s < candidate_->since_s) candidate_.reset();
-  if (!name_switches_s_.empty() && receive_s < name_switches_s_.back()) name_switches_s_.clear();
-  if (yellow == view_.yellow_name && blue == view_.blue_name) {
-    // The names followed again: a candidate in between did not hold.
-    if (candidate_) ++counters_.refused_name_switches;
-    candidate_.reset();
-    return false;
-  }
-  // The first names heard since the start (or reset()) take over at once; after that, names
-  // that go empty and come back must hold like any others.
-  if (!named_) {
-    named_ = true;
-    return true;
-  }
-  if (!candidate_ || candidate_->yellow != yellow || candidate_->blue != blue) {
-    if (candidate_) ++counters_.refused_name_switches;  // another candidate came in between
-    candidate_ = NameCandidate{yellow, blue, receive_s};
-    return false;
-  }
-  if (receive_s - candidate_->since_s < name_hold_s) return false;
-  while (!name_switches_s_.empty() &&
-         receive_s - name_switches_s_.front() >= name_switch_window_s) {
-    name_switches_s_.pop_front();
-  }
-  if (name_switches_s_.size() >= static_cast<std::size_t>(max_name_switches)) {
-    // Held, but too many switches lately: refused, and it must hold anew after the window.
-    ++counters_.refused_name_switches;
-    candidate_->since_s = receive_s;
-    return false;
-  }
-  name_switches_s_.push_back(receive_s);
-  candidate_.reset();
-  return true;
 }
 
 RefereeFollower::Staleness RefereeFollower::staleness(const Referee& message,

@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "ssl_formation/base/grid.hpp"
+#include "ssl_formation/match/team_name_gate.hpp"
 
 class Referee;
 
@@ -118,12 +119,10 @@ class RefereeFollower {
   static constexpr double resync_window_s = 2.0;
   static constexpr std::size_t resync_refusals = 10;
   static constexpr std::size_t resync_max_used = 2;
-  // Team names other than the ones followed take over only once every message of the followed
-  // game controller has said them for this long, and at most max_name_switches times within
-  // name_switch_window_s. The first names heard take over at once.
-  static constexpr double name_hold_s = 1.0;
-  static constexpr int max_name_switches = 3;
-  static constexpr double name_switch_window_s = 60.0;
+  // When new team names take over (team_name_gate.hpp).
+  static constexpr double name_hold_s = TeamNameGate::name_hold_s;
+  static constexpr int max_name_switches = TeamNameGate::max_name_switches;
+  static constexpr double name_switch_window_s = TeamNameGate::name_switch_window_s;
 
   explicit RefereeFollower(double source_timeout_s = default_source_timeout_s);
 
@@ -139,9 +138,7 @@ class RefereeFollower {
     view_ = RefereeView{};
     last_timestamp_us_.reset();
     conflicting_source_.clear();
-    candidate_.reset();
-    named_ = false;
-    name_switches_s_.clear();
+    names_.reset();
     used_s_.clear();
     refused_.clear();
     counter_refusals_in_a_row_ = 0;
@@ -161,22 +158,12 @@ class RefereeFollower {
   Staleness staleness(const Referee& message, double receive_s) const;
   // Notes a refused message and says whether it is to be used after all (resync_window_s).
   bool resync_due(const Referee& message, Staleness why, double receive_s);
-  // Whether the names `yellow` and `blue` of a used message take over now (see name_hold_s).
-  bool names_take_over(const std::string& yellow, const std::string& blue, double receive_s);
 
   double source_timeout_s_;
   bool heard_ = false;
   double last_used_s_ = 0.0;
   std::optional<std::uint64_t> last_timestamp_us_;  // packet_timestamp of the last message used
-  // Names other than the view's, said by every message since `since_s`.
-  struct NameCandidate {
-    std::string yellow;
-    std::string blue;
-    double since_s = 0.0;
-  };
-  std::optional<NameCandidate> candidate_;
-  bool named_ = false;                  // names were taken over since the start or reset()
-  std::deque<double> name_switches_s_;  // when names took over, within the window
+  TeamNameGate names_;
   // The followed game controller's messages within resync_window_s: when each used one came,
   // and each refused one's arrival, timestamp and why.
   struct Refused {
