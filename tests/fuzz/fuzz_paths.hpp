@@ -47,6 +47,7 @@
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/match/referee.hpp"
+#include "ssl_formation/match/team_name_gate.hpp"
 #include "ssl_formation/match/tracked_vision.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 #include "ssl_formation/paper_model/transition_table.hpp"
@@ -771,19 +772,15 @@ inline bool same_view(const RefereeView& a, const RefereeView& b) {
 inline constexpr std::size_t describe_max_bytes_besides_names = 150;
 
 // The promises of referee.hpp, message by message. Team names are checked against what the
-// message said (read here once more, as add() reads it): the first names since the follower
-// began or was reset take over at once; every later switch needs names that every message used
-// since at least name_hold_s said, and at most max_name_switches of them fit in any
-// name_switch_window_s of receive time.
+// message said (read here once more, as add() reads it) and against the product's own rule
+// (TeamNameGate, fed the same names and times): they take over exactly when it says, and then
+// as the message said them.
 inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t size) {
   RefereeOutcome out;
   Violations v;
   RefereeFollower referee;
   Referee message;
-  bool named = false;
-  std::optional<std::pair<std::string, std::string>> held_names;
-  double held_since_s = 0.0;
-  std::deque<double> switches_s;  // the later switches within the window
+  TeamNameGate names_rule;
   TimedDatagrams records(data, size);
   TimedDatagram d;
   while (records.next(d)) {
@@ -791,14 +788,9 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
       referee.reset();
       if (referee.heard() || !same_view(referee.view(), RefereeView{}))
         v.fail("reset() kept something of the view");
-      named = false;
-      held_names.reset();
-      switches_s.clear();
+      names_rule.reset();
       continue;
     }
-    // A window of receive time means nothing across a clock that went back: it starts anew
-    // (the follower's own window only gets stricter, holding switches "from the future").
-    if (d.clock_back) switches_s.clear();
     ++out.datagrams;
     const RefereeCounters before = referee.counters();
     const RefereeView view_before = referee.view();
@@ -859,28 +851,13 @@ inline RefereeOutcome run_referee_path(const std::uint8_t* data, std::size_t siz
       v.fail("the view is not what the message used said");
     std::pair<std::string, std::string> names{printable_wire_text(message.yellow().name()),
                                               printable_wire_text(message.blue().name())};
-    // Names held "since" a time the clock went back before hold from now, as the follower has
-    // them.
-    if (held_names != names || d.receive_s < held_since_s) {
-      held_names = names;
-      held_since_s = d.receive_s;
-    }
+    const bool take_over = names_rule.take_over(view_before.yellow_name, view_before.blue_name,
+                                                names.first, names.second, d.receive_s);
+    if (change.teams != take_over) v.fail("team names took over other than TeamNameGate says");
     if (!change.teams) continue;
     ++out.name_changes;
     if (view.yellow_name != names.first || view.blue_name != names.second)
       v.fail("names taken over other than the message's");
-    if (named) {
-      if (d.receive_s - held_since_s < RefereeFollower::name_hold_s)
-        v.fail("new team names took over before they held for name_hold_s");
-      while (!switches_s.empty() &&
-             d.receive_s - switches_s.front() >= RefereeFollower::name_switch_window_s) {
-        switches_s.pop_front();
-      }
-      if (switches_s.size() >= static_cast<std::size_t>(RefereeFollower::max_name_switches))
-        v.fail("more than max_name_switches team-name switches within name_switch_window_s");
-      switches_s.push_back(d.receive_s);
-    }
-    named = true;
   }
   out.counters = referee.counters();
   out.violation = v.first;
@@ -955,8 +932,6 @@ inline TrackerOutcome run_tracker_path(const std::uint8_t* data, std::size_t siz
     check_wire_text(tracked.source_name(), v, "source_name");
 
     const bool switched = tracked.source_uuid() != uuid_before;
-    if (tracked.take_source_change() != switched || tracked.take_source_change())
-      v.fail("take_source_change() is not true once after the tracker followed changed");
     if (switched && !uuid_before.empty() &&
         !(d.receive_s - followed_heard_s > TrackedVision::source_timeout_s ||
           d.receive_s < followed_heard_s)) {

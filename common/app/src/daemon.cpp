@@ -93,10 +93,6 @@ std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& te
   return parse_group_option("tracker-address", text);
 }
 
-double steady_seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 void MatchLog::update(const MatchFrontEnd& front_end, const RefereeChange& change) {
   const MatchFollower& match = front_end.match();
   const std::optional<AttackDirection> attacks_now = front_end.sampler().attacks();

@@ -80,7 +80,6 @@ bool TrackedVision::add(std::string_view payload, double receive_s, VisionFrame&
     if (!uuid_.empty()) ++counters_.source_switches;
     uuid_ = std::move(uuid);
     name_ = printable_wire_text(packet_.source_name());
-    source_changed_ = true;
   }
   last_s_ = receive_s;
   if (!packet_.has_tracked_frame()) {

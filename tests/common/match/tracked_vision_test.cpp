@@ -65,26 +65,21 @@ TEST(TrackedVision, FramesComeInMillimetresByTeamOnCameraZero) {
   EXPECT_EQ(tracked.counters().robots_without_team, 1u);
   EXPECT_EQ(tracked.source_uuid(), "a");
   EXPECT_EQ(tracked.source_name(), "name of a");
-  EXPECT_TRUE(tracked.take_source_change());
-  EXPECT_FALSE(tracked.take_source_change());
 }
 
 TEST(TrackedVision, ASecondTrackerIsIgnoredUntilTheFirstFallsSilentForASecond) {
   TrackedVision tracked;
   VisionFrame frame;
   ASSERT_TRUE(tracked.add(packet("a", 1, 10.0, 1.0F), 100.0, frame));
-  tracked.take_source_change();
   EXPECT_FALSE(tracked.add(packet("b", 1, 10.0, 2.0F), 100.01, frame));
   EXPECT_TRUE(tracked.add(packet("a", 2, 10.016, 1.0F), 100.5, frame));
   EXPECT_FALSE(tracked.add(packet("b", 2, 10.016, 2.0F), 101.4, frame));  // a spoke 0.9 s ago
   EXPECT_EQ(tracked.counters().other_source, 2u);
   EXPECT_EQ(tracked.source_uuid(), "a");
-  EXPECT_FALSE(tracked.take_source_change());
   // a silent for more than a second: b takes over, and from then on a is the other one.
   ASSERT_TRUE(tracked.add(packet("b", 3, 10.032, 2.0F), 101.6, frame));
   EXPECT_FLOAT_EQ(frame.detection.robots_blue[0].x, 2000.0F);
   EXPECT_EQ(tracked.source_uuid(), "b");
-  EXPECT_TRUE(tracked.take_source_change());
   EXPECT_EQ(tracked.counters().source_switches, 1u);
   EXPECT_FALSE(tracked.add(packet("a", 3, 10.032, 1.0F), 101.7, frame));
   EXPECT_EQ(tracked.counters().frames, 3u);

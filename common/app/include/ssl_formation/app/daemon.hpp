@@ -40,9 +40,6 @@ net::InterfaceChoice parse_interface_option(const std::string& text, bool allow_
 std::optional<net::MulticastEndpoint> parse_referee_option(const std::string& text);
 std::optional<net::MulticastEndpoint> parse_tracker_option(const std::string& text);
 
-// Seconds on the steady clock: the receive time the referee follower takes from a live feed.
-double steady_seconds();
-
 // The network feeds the options ask for (--vision-address, --referee-address, --vision-source
 // and --tracker-address, --interface). Throws UsageError naming the option.
 net::LiveFeeds live_feeds(const NetworkOptions& network, int receive_buffer_bytes);

@@ -46,12 +46,6 @@ class TrackedVision {
   // The tracker followed: its uuid and its source_name; empty before the first.
   const std::string& source_uuid() const { return uuid_; }
   const std::string& source_name() const { return name_; }
-  // True once after the tracker followed changed (the first, or a switch), for a log line.
-  bool take_source_change() {
-    const bool changed = source_changed_;
-    source_changed_ = false;
-    return changed;
-  }
   const TrackerCounters& counters() const { return counters_; }
   // Forgets the tracker followed (a new log file): the next one heard is followed.
   void reset() {
@@ -66,7 +60,6 @@ class TrackedVision {
   std::string uuid_;
   std::string name_;
   double last_s_ = 0.0;
-  bool source_changed_ = false;
   std::optional<BallState> ball_;
   TrackerCounters counters_;
 };
