@@ -4,10 +4,8 @@
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 
-#include <chrono>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include "ssl_vision_wrapper_tracked.pb.h"
 
@@ -72,7 +70,8 @@ TEST(LimitedSink, AFloodOfOneWarningBecomesABurstAndASummaryAndLibprotobufGoesTh
   std::ostringstream out;
   auto target = std::make_shared<spdlog::sinks::ostream_sink_mt>(out);
   // A period long enough for a slow (sanitised, busy) machine to write the flood within it.
-  auto sink = std::make_shared<LimitedSink>(target, LogLimitSettings{5, 1.0, 1000, 512});
+  auto clock = std::make_shared<ManualClock>();
+  auto sink = std::make_shared<LimitedSink>(target, LogLimitSettings{5, 1.0, 1000, 512}, clock);
   auto logger = std::make_shared<spdlog::logger>("test", sink);
   logger->set_pattern("%n %l: %v");
   const auto previous = spdlog::default_logger();
@@ -85,7 +84,7 @@ TEST(LimitedSink, AFloodOfOneWarningBecomesABurstAndASummaryAndLibprotobufGoesTh
   TrackerWrapperPacket packet;
   for (int i = 0; i < 200; ++i) EXPECT_FALSE(packet.ParseFromString(std::string()));
   spdlog::info("opponent: '{}'", std::string(59814, 'Y'));
-  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  clock->advance(1.1);
   spdlog::info("status: after the period");
   spdlog::set_default_logger(previous);
   google::protobuf::SetLogHandler(nullptr);

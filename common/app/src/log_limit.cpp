@@ -17,10 +17,6 @@ namespace {
 constexpr std::size_t max_kind_chars = 120;
 constexpr std::string_view shared_kind = "(other kinds)";
 
-double steady_now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 }  // namespace
 
 bool LogLimitSettings::valid() const {
@@ -110,8 +106,11 @@ std::vector<RepeatLimiter::Summary> RepeatLimiter::due(double now_s) {
   return out;
 }
 
-LimitedSink::LimitedSink(spdlog::sink_ptr target, LogLimitSettings settings)
-    : target_(std::move(target)), limiter_(settings) {}
+LimitedSink::LimitedSink(spdlog::sink_ptr target, LogLimitSettings settings,
+                         std::shared_ptr<const Clock> clock)
+    : target_(std::move(target)),
+      clock_(clock ? std::move(clock) : std::make_shared<const SystemClock>()),
+      limiter_(settings) {}
 
 void LimitedSink::forward(const spdlog::details::log_msg& message, std::string_view text) {
   spdlog::details::log_msg copy = message;
@@ -122,7 +121,7 @@ void LimitedSink::forward(const spdlog::details::log_msg& message, std::string_v
 LimitedSink::~LimitedSink() {
   // What was left out in the last period is said too, not lost with the program.
   try {
-    write_summaries(limiter_.pending(steady_now_s()));
+    write_summaries(limiter_.pending(clock_->steady_s()));
     target_->flush();
   } catch (...) {  // NOLINT(bugprone-empty-catch): nothing left to tell it to at exit
   }
@@ -141,7 +140,7 @@ void LimitedSink::write_summaries(const std::vector<RepeatLimiter::Summary>& sum
 }
 
 void LimitedSink::sink_it_(const spdlog::details::log_msg& message) {
-  const double now = steady_now_s();
+  const double now = clock_->steady_s();
   logger_name_.assign(message.logger_name.data(), message.logger_name.size());
   write_due(now);
   const std::string_view payload(message.payload.data(), message.payload.size());

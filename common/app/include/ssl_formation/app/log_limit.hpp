@@ -22,6 +22,8 @@
 #include <string_view>
 #include <vector>
 
+#include "ssl_formation/app/clock.hpp"
+
 namespace ssl_formation::app {
 
 struct LogLimitSettings {
@@ -77,7 +79,9 @@ class RepeatLimiter {
 // when the flood stopped), and at exit for what is still left out.
 class LimitedSink : public spdlog::sinks::base_sink<std::mutex> {
  public:
-  LimitedSink(spdlog::sink_ptr target, LogLimitSettings settings = {});
+  // Periods are timed on `clock` (the process's steady clock when none is given).
+  LimitedSink(spdlog::sink_ptr target, LogLimitSettings settings = {},
+              std::shared_ptr<const Clock> clock = nullptr);
   ~LimitedSink() override;
   LimitedSink(const LimitedSink&) = delete;
   LimitedSink& operator=(const LimitedSink&) = delete;
@@ -95,6 +99,7 @@ class LimitedSink : public spdlog::sinks::base_sink<std::mutex> {
   void forward(const spdlog::details::log_msg& message, std::string_view text);
 
   spdlog::sink_ptr target_;
+  std::shared_ptr<const Clock> clock_;
   RepeatLimiter limiter_;
   std::string logger_name_;  // of the last line, for summaries
 };
