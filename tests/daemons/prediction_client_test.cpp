@@ -5,11 +5,11 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <boost/asio/io_context.hpp>
 #include <fstream>
 #include <set>
 #include <span>
-#include <thread>
 
 #include "child_process.hpp"
 #include "formation_prediction.pb.h"
@@ -170,10 +170,12 @@ TEST(PredictionClient, DecodesEveryMessageOfTheLivePredictorAndWritesTheFromLogC
 TEST(PredictionClient, SkipsWhatIsNotAPredictionAndStopsOnSigterm) {
   TempDir dir;
   const std::string group = new_group();
-  ChildProcess client(python, {client_script.string(), "--group", group, "--count", "1"},
+  ChildProcess client(python, {client_script.string(), "--group", group, "--count", "2"},
                       dir.path(), "client");
   ASSERT_TRUE(client.wait_for_stderr("listening on " + group, 20s)) << client.stderr_text();
-  // Text, nothing, a truncated message: none is a prediction, and none uses up --count 1.
+  // Text, nothing, a truncated message: none is a prediction, and none uses up --count. A
+  // prediction after them says, once printed, that the client has read them all (one sender on
+  // loopback: they arrive in order).
   boost::asio::io_context io;
   net::MulticastSender sender(io, net::parse_multicast_endpoint(group).value());
   sender.open();
@@ -182,19 +184,31 @@ TEST(PredictionClient, SkipsWhatIsNotAPredictionAndStopsOnSigterm) {
   whole.set_t_capture(1.5);
   whole.mutable_centroid_cell()->set_x(1);
   whole.mutable_centroid_cell()->set_y(0);
+  proto::PredictedStep& step = *whole.add_steps();
+  step.set_step(1);
+  step.mutable_centroid_cell()->set_x(1);
+  step.mutable_centroid_cell()->set_y(0);
+  step.set_centroid_probability(1.0);
+  step.set_centroid_unseen(false);
+  step.set_formation_probability(0.25);
+  step.set_confidence(0.5);
   const std::string bytes = whole.SerializeAsString();
   const std::string hello = "hello world";
   for (const std::string& junk : {hello, std::string(), bytes.substr(0, 3)}) {
     ASSERT_TRUE(sender.send(std::as_bytes(std::span(junk.data(), junk.size()))));
   }
-  std::this_thread::sleep_for(1s);
-  EXPECT_TRUE(client.running()) << client.stderr_text();
+  ASSERT_TRUE(sender.send(std::as_bytes(std::span(bytes.data(), bytes.size()))));
+  ASSERT_TRUE(client.wait_for_stdout("frame=7", 20s)) << client.stderr_text();
+  EXPECT_TRUE(client.running()) << client.stderr_text();  // --count 2: one prediction so far
   client.signal(SIGTERM);
   ASSERT_EQ(client.wait(10s), 0) << client.stderr_text();
-  EXPECT_NE(client.stderr_text().find("0 predictions received, 3 datagrams that did not decode"),
+  EXPECT_NE(client.stderr_text().find("1 predictions received, 3 datagrams that did not decode"),
             std::string::npos)
       << client.stderr_text();
-  EXPECT_EQ(client.stdout_text(), "");
+  // The one prediction, on one line.
+  const std::string printed = client.stdout_text();
+  EXPECT_EQ(std::count(printed.begin(), printed.end(), '\n'), 1) << printed;
+  EXPECT_NE(printed.find("t=1.50 frame=7 step 1 p(formation)=0.250"), std::string::npos) << printed;
 }
 
 TEST(PredictionClient, SaysWhatIsWrongWithItsOptionsAndStopsWhenTold) {

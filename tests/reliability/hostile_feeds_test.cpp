@@ -207,6 +207,17 @@ HostileCounts flood_referee(const std::string& group, RefereeTap& tap,
   return counts;
 }
 
+// Waits until the trainer's status line shows 150 formations more than `before`: what a second
+// and a half of the 60 frames/s feed gives, and what each test expects at the end.
+bool learned_on(ChildProcess& trainer, const testing::Status& before,
+                std::chrono::milliseconds timeout) {
+  const std::uint64_t from = before.at("formations");
+  return testing::wait_for_status_where(
+      trainer,
+      [from](const testing::Status& status) { return status.at("formations") > from + 150; },
+      timeout);
+}
+
 TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
   TempDir dir;
   const std::string vision = new_group();
@@ -249,7 +260,8 @@ TEST(HostileFeeds, ARefereeGroupFloodNeitherStallsFloodsNorSteersTheDaemons) {
   const std::uint64_t real_changes_before = tap.command_changes();
   const HostileCounts sent = flood_referee(referee, tap, hostile_for, hostile_per_second);
   const std::size_t predictions_during = listener.count() - predictions_before;
-  std::this_thread::sleep_for(1500ms);  // a status line after the flood
+  // A status line after the flood that shows the trainer learning on.
+  EXPECT_TRUE(learned_on(trainer, before, 30s)) << trainer.stderr_text();
   const std::uint64_t real_changes = tap.command_changes() - real_changes_before;
   ASSERT_TRUE(trainer.running()) << trainer.stderr_text();
   ASSERT_TRUE(predictor.running()) << predictor.stderr_text();
@@ -393,7 +405,7 @@ TEST(HostileFeeds, ATrackerGroupFloodNeitherStallsNorFloodsTheDaemons) {
     }
   }
   const std::size_t predictions_during = listener.count() - predictions_before;
-  std::this_thread::sleep_for(1500ms);
+  EXPECT_TRUE(learned_on(trainer, before, 30s)) << trainer.stderr_text();
   stop = true;
   real.join();
   ASSERT_TRUE(trainer.running()) << trainer.stderr_text();
