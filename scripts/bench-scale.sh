@@ -67,7 +67,7 @@ for seconds in $lengths; do
   measure "train$seconds" "$trainer" --from-log "$log" --table "$work/t$seconds.bin" \
     --our-team ssl-formation
   measure "load$seconds" "$predictor" --from-log "$work/second.log" --table "$work/t$seconds.bin" \
-    --our-team ssl-formation -o "$work/second.csv"
+    --our-team ssl-formation -o "$work/second.csv" --overwrite
   printf '| %s s | %s MB | %s MB | %s | %s s | %s MB | %s s | %s MB |\n' "$seconds" \
     "$(size_mb "$log")" "$(size_mb "$work/t$seconds.bin")" "$(rows_of "train$seconds")" \
     "$(wall "train$seconds")" "$(peak_mb "train$seconds")" "$(wall "load$seconds")" \
@@ -108,7 +108,7 @@ for playbook in wings centre "$work/flanks.txt"; do
 done
 measure merge "$trainer" merge "${generic[@]}" -o "$work/generic.bin"
 measure generic-load "$predictor" --from-log "$work/second.log" --table "$work/generic.bin" \
-  --our-team ssl-formation -o "$work/second.csv"
+  --our-team ssl-formation -o "$work/second.csv" --overwrite
 printf '| generic: 3 x %s s merged | | %s MB | %s | | %s MB (merge) | %s s | %s MB |\n' \
   "$generic_seconds" "$(size_mb "$work/generic.bin")" \
   "$(sed -n 's/.*motion_rows=\([0-9]*\).*/\1/p' "$work/merge.err" | tail -1)" \
