@@ -8,9 +8,9 @@
 #include <memory>
 #include <random>
 
+#include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/motion_model/set_play_memory.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/vision/sampler.hpp"
@@ -213,7 +213,7 @@ void BM_RollingPrediction(benchmark::State& state) {
     }
   }
   state.SetLabel(std::string(motion ? "motion, " : "paper, ") + grid.to_string() + ", " +
-                 std::to_string(training.table().transitions()) + " transitions");
+                 std::to_string(training.table_summary().transitions) + " transitions");
   benchmark::DoNotOptimize(predictions);
 }
 // Args: grid (0 = 3x2, 1 = 12x9), horizon in steps, model (0 = paper, 1 = motion).

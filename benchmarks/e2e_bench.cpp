@@ -52,7 +52,7 @@
 #include "formation_prediction.pb.h"
 #include "ssl_formation/app/daemon.hpp"
 #include "ssl_formation/app/options.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/pipeline/prediction_message.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
@@ -143,9 +143,7 @@ int make_table(const std::string& path, std::uint64_t formations, std::uint64_t 
   metadata.field = training.sampler().field();
   metadata.step_s = config.step_s;
   metadata.samples = training.samples();
-  const auto saved = training.motion()
-                         ? sf::save_table(path, training.table(), metadata, *training.motion())
-                         : sf::save_table(path, training.table(), metadata);
+  const auto saved = sf::save_table(path, training.stored_table(metadata));
   if (!saved) {
     std::cerr << "e2e_bench make-table: " << saved.error().message << '\n';
     return 1;
@@ -153,9 +151,9 @@ int make_table(const std::string& path, std::uint64_t formations, std::uint64_t 
   if (!saved->durable) std::cerr << "e2e_bench make-table: " << saved->warning << '\n';
   std::cout << "make-table path=" << path << " model=" << sf::to_string(model)
             << " formations=" << training.samples()
-            << " transitions=" << training.table().transitions()
-            << " states_seen=" << training.table().rows_seen()
-            << " motion_instances=" << (training.motion() ? training.motion()->instances() : 0)
+            << " transitions=" << training.table_summary().transitions
+            << " states_seen=" << training.table_summary().states_seen << " motion_instances="
+            << (training.table_summary().motion ? training.table_summary().motion->instances : 0)
             << '\n';
   return 0;
 }

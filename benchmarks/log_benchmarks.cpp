@@ -150,7 +150,7 @@ void BM_OfflineTraining(benchmark::State& state) {
       training.add(frame);
       ++frames;
     }
-    transitions = training.table().transitions();
+    transitions = training.table_summary().transitions;
   }
   state.SetItemsProcessed(frames);
   benchmark::DoNotOptimize(transitions);
@@ -191,7 +191,7 @@ void BM_OfflineTrainingRecorded(benchmark::State& state, const std::filesystem::
       training.add(frame);
       ++frames;
     }
-    instances = training.motion()->instances();
+    instances = training.table_summary().motion->instances;
   }
   state.SetItemsProcessed(frames);
   // The log's length, for figures per frame from counts over the whole run

@@ -14,7 +14,7 @@
 #include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/files/replacing_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/prediction_csv.hpp"
 #include "ssl_formation/predictor/predictor_options.hpp"
 

@@ -15,7 +15,7 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 #include "ssl_formation/pipeline/training.hpp"
@@ -50,7 +50,7 @@ TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
     for (const auto& packet : vision.next().packets) training.add(packet);
   }
   if (samples) *samples = training.samples();
-  return training.table();
+  return training.stored_table().table;
 }
 
 const auto entries = testing::table_entries;

@@ -13,7 +13,7 @@
 #include "motion_table_sums.hpp"
 #include "moving_robots.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
 namespace ssl_formation {

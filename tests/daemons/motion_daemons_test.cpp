@@ -19,7 +19,7 @@
 #include "pipeline_support.hpp"
 #include "prediction_rows.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "status_lines.hpp"
 
@@ -115,7 +115,7 @@ TEST_F(MotionDaemons, TrainerWritesAMotionTableAndTheDaemonMulticastsTheCsvsPosi
   EXPECT_EQ(table_version(table), table_file_compact_motion_version);
   const auto loaded = load_table(table, Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.error().message;
-  ASSERT_TRUE(loaded->motion.has_value());
+  ASSERT_TRUE(loaded->motion != nullptr);
   EXPECT_EQ(loaded->metadata.step_s, 0.5);
   EXPECT_EQ(loaded->motion->config().step_s, 0.5);
   EXPECT_EQ(loaded->motion->config().horizons, 3);
@@ -129,11 +129,12 @@ TEST_F(MotionDaemons, TrainerWritesAMotionTableAndTheDaemonMulticastsTheCsvsPosi
   const auto read = read_vision_log(train_log);
   ASSERT_TRUE(read) << read.error().message;
   for (const auto& packet : read->packets) library.add(packet);
-  ASSERT_NE(library.motion(), nullptr);
-  EXPECT_GT(library.motion()->instances(), 5000u);
-  EXPECT_GT(library.motion()->held_out(), 1000u);
-  EXPECT_TRUE(*loaded->motion == testing::as_saved(*library.motion()));
-  EXPECT_EQ(testing::table_entries(loaded->table), testing::table_entries(library.table()));
+  ASSERT_NE(library.stored_table().motion, nullptr);
+  EXPECT_GT(library.stored_table().motion->instances(), 5000u);
+  EXPECT_GT(library.stored_table().motion->held_out(), 1000u);
+  EXPECT_TRUE(*loaded->motion == testing::as_saved(*library.stored_table().motion));
+  EXPECT_EQ(testing::table_entries(loaded->table),
+            testing::table_entries(library.stored_table().table));
   EXPECT_EQ(loaded->metadata.samples, library.samples());
 
   // Its predictions: a position and 0 < r50 < r90 for every robot at every step.

@@ -9,7 +9,7 @@
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "status_lines.hpp"
@@ -55,7 +55,7 @@ TransitionTable library_table(const std::vector<std::filesystem::path>& logs,
     for (const auto& packet : read.packets) training.add(packet);
   }
   if (samples) *samples = training.samples();
-  return training.table();
+  return training.stored_table().table;
 }
 
 const auto entries = testing::table_entries;

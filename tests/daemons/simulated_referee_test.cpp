@@ -10,8 +10,8 @@
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/match/referee.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_gc_referee_message.pb.h"
 #include "status_lines.hpp"
 

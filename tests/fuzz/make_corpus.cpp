@@ -23,7 +23,7 @@
 #include "fuzz_paths.hpp"
 #include "match_logs.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 #include "tracked_frames.hpp"
@@ -243,7 +243,7 @@ void write_table_corpus(const fs::path& dir, const std::vector<SSL_WrapperPacket
                         const std::vector<SSL_WrapperPacket>& packets) {
     Training training(config, std::move(table));
     for (const auto& packet : packets) training.add(packet);
-    return TransitionTable(training.table());
+    return TransitionTable(training.stored_table().table);
   };
   SamplerConfig config;
   config.step_s = 0.5;

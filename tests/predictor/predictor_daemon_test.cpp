@@ -18,7 +18,7 @@
 #include "moving_robots.hpp"
 #include "recorded_output.hpp"
 #include "scratch_dir.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 

@@ -17,8 +17,8 @@
 #include "scratch_dir.hpp"
 #include "ssl_formation/evaluation/position_evaluation.hpp"
 #include "ssl_formation/files/log_events.hpp"
-#include "ssl_formation/files/table_budget.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_budget.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/prediction_csv.hpp"
 #include "ssl_formation/pipeline/prediction_message.hpp"
 #include "ssl_formation/predictor/predictor_daemon.hpp"
@@ -91,7 +91,7 @@ TEST(SameEvents, FromLogMemoryTheDaemonAndTheEvaluationPredictTheSame) {
     StoredTable stored = training.stored_table();
     auto fit = fit_table_to_budget(stored.table, stored.metadata, *stored.motion, TableBudget{});
     ASSERT_TRUE(fit) << fit.error().message;
-    stored.motion = std::move(fit->pruned.table);
+    stored.motion = std::make_shared<const MotionTable>(std::move(fit->pruned.table));
     ASSERT_TRUE(save_table(options.table, stored));
   }
   const auto table =

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "scratch_dir.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 namespace ssl_formation::predictor {
 namespace {

@@ -185,13 +185,15 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
   // library (what the daemons must count).
   const auto clean_training = train(clean);
   const auto dirty_training = train(dirty.decodable);
-  ASSERT_EQ(entries(dirty_training->table()), entries(clean_training->table()))
+  ASSERT_EQ(entries(dirty_training->stored_table().table),
+            entries(clean_training->stored_table().table))
       << "the library itself is disturbed by the bad input";
   const SamplerCounters& expected = dirty_training->sampler().counters();
   sim::SimulationConfig table_simulation;
   table_simulation.seed = 3;
   const auto predictor_training = train(simulated_packets(table_simulation, 2000));
-  const TransitionTable& predictor_table = predictor_training->table();
+  const StoredTable predictor_stored = predictor_training->stored_table();
+  const TransitionTable& predictor_table = predictor_stored.table;
   ASSERT_TRUE(save_table(dir / "fixed.bin", predictor_table, TableMetadata{}));
   const std::vector<std::string> expected_predictions = library_predictions(clean, predictor_table);
   ASSERT_EQ(expected_predictions.size(), clean_training->sampler().counters().samples);
@@ -252,7 +254,7 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
   // The trainer's table is the clean stream's.
   const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.error().message;
-  EXPECT_EQ(entries(loaded->table), entries(clean_training->table()));
+  EXPECT_EQ(entries(loaded->table), entries(clean_training->stored_table().table));
   EXPECT_EQ(loaded->metadata.samples, clean_training->samples());
 
   // The predictor's predictions are the clean stream's.
@@ -277,7 +279,7 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
                    std::accumulate(dirty.sent.begin(), dirty.sent.end(), std::size_t{0})
             << " (of which duplicate-id frames=" << dirty.duplicate_id_packets << ")"
             << " parse_errors=" << dirty.parse_errors << " formations=" << expected.samples
-            << " transitions=" << clean_training->table().transitions() << "\n";
+            << " transitions=" << clean_training->stored_table().table.transitions() << "\n";
 }
 
 }  // namespace

@@ -55,19 +55,19 @@ TransitionTable separately(std::initializer_list<std::vector<SSL_WrapperPacket>>
     training.start_new_stream();
     for (const auto& packet : segment) training.add(packet);
   }
-  return training.table();
+  return training.stored_table().table;
 }
 
 TEST(ReliabilityFeedFaults, FeedStoppingForThirtySecondsOfDataTimeCountsNothingAcrossTheGap) {
   const auto before = flat(formations(61, 40, 0.0));   // t = 0 .. 78
   const auto after = flat(formations(62, 40, 110.0));  // t = 110 .. 188: 30 s missing
   const auto training = train(concat({before, after}));
-  EXPECT_EQ(entries(training->table()), entries(separately({before, after})));
+  EXPECT_EQ(entries(training->stored_table().table), entries(separately({before, after})));
   EXPECT_EQ(training->sampler().counters().clock_resets, 1u);
   EXPECT_EQ(training->sampler().counters().samples, 80u);  // nothing after the gap is lost
   // A gap shorter than two steps (one missing formation) is a chain break, not a new clock.
   const auto short_gap = train(concat({before, flat(formations(62, 40, 82.0))}));
-  EXPECT_EQ(entries(short_gap->table()),
+  EXPECT_EQ(entries(short_gap->stored_table().table),
             entries(separately({before, flat(formations(62, 40, 82.0))})));
   EXPECT_EQ(short_gap->sampler().counters().clock_resets, 0u);
 }
@@ -76,7 +76,7 @@ TEST(ReliabilityFeedFaults, DivisionBToDivisionAGeometryMidStreamCountsNothingAc
   const auto division_b = flat(formations(61, 40, 0.0));
   const auto then_a = flat(formations(63, 40, 80.0, division_a));
   const auto training = train(concat({division_b, then_a}));
-  EXPECT_EQ(entries(training->table()), entries(separately({division_b, then_a})));
+  EXPECT_EQ(entries(training->stored_table().table), entries(separately({division_b, then_a})));
   EXPECT_EQ(training->sampler().counters().field_changes, 1u);
   EXPECT_EQ(training->sampler().field(), division_a);
   EXPECT_EQ(training->sampler().counters().samples, 80u);
@@ -86,7 +86,7 @@ TEST(ReliabilityFeedFaults, TimeJumpingBackwardsStartsANewStream) {
   const auto first = flat(formations(61, 40, 1000.0));  // t = 1000 .. 1078
   const auto back = flat(formations(64, 40, 900.0));    // jumps back 178 s
   const auto training = train(concat({first, back}));
-  EXPECT_EQ(entries(training->table()), entries(separately({first, back})));
+  EXPECT_EQ(entries(training->stored_table().table), entries(separately({first, back})));
   EXPECT_EQ(training->sampler().counters().clock_resets, 1u);
   EXPECT_EQ(training->sampler().counters().samples, 80u);
   // A step back of less than two steps looks like reordering: the frames older than the last
@@ -94,7 +94,7 @@ TEST(ReliabilityFeedFaults, TimeJumpingBackwardsStartsANewStream) {
   const auto slightly = train(concat({first, flat(formations(64, 40, 1077.0))}));
   EXPECT_EQ(slightly->sampler().counters().clock_resets, 0u);
   EXPECT_GE(slightly->sampler().counters().frames_late, 1u);
-  EXPECT_LE(slightly->table().transitions(),
+  EXPECT_LE(slightly->stored_table().table.transitions(),
             separately({first, flat(formations(64, 40, 1077.0))}).transitions());
 }
 
@@ -141,7 +141,8 @@ TEST(ReliabilityFeedFaults, ASecondSenderIsAClockConflictThatCountsNoTransition)
   EXPECT_EQ(quiet, 42u);
   EXPECT_EQ(c.samples_in_conflict, 42u);
   // Only A was counted, and less of it than A alone holds (the conflict's samples count nothing).
-  EXPECT_LT(training.table().transitions(), train(flat(a))->table().transitions());
+  EXPECT_LT(training.stored_table().table.transitions(),
+            train(flat(a))->stored_table().table.transitions());
 }
 
 TEST(ReliabilityFeedFaults, AStrayOldFrameIsNeitherARestartNorAConflict) {
@@ -153,7 +154,7 @@ TEST(ReliabilityFeedFaults, AStrayOldFrameIsNeitherARestartNorAConflict) {
   const auto rest = flat(a, 20);
   stream.insert(stream.end(), rest.begin(), rest.end());
   const auto training = train(stream);
-  EXPECT_EQ(entries(training->table()), entries(train(flat(a))->table()));
+  EXPECT_EQ(entries(training->stored_table().table), entries(train(flat(a))->stored_table().table));
   EXPECT_EQ(training->sampler().counters().frames_other_clock, 3u);
   EXPECT_EQ(training->sampler().counters().clock_resets, 0u);
   EXPECT_EQ(training->sampler().counters().clock_conflicts, 0u);
@@ -180,8 +181,8 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   sim::SimulationConfig table_simulation;
   table_simulation.seed = 3;
   const auto fixed = train(simulated_packets(table_simulation, 2000));
-  ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->table(), TableMetadata{}));
-  const auto expected_predictions = library_predictions(stream, fixed->table());
+  ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->stored_table().table, TableMetadata{}));
+  const auto expected_predictions = library_predictions(stream, fixed->stored_table().table);
 
   RunningPipeline pipeline(dir, dir / "fixed.bin");
   ASSERT_TRUE(pipeline.ready());
@@ -206,13 +207,14 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   EXPECT_NE(trainer.stderr_text().find("[clock_conflicts]"), std::string::npos);
   const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.error().message;
-  EXPECT_EQ(entries(loaded->table), entries(expected->table()));
+  EXPECT_EQ(entries(loaded->table), entries(expected->stored_table().table));
   ASSERT_EQ(received.size(), expected_predictions.size());
   for (std::size_t i = 0; i < received.size(); ++i)
     ASSERT_EQ(received[i], expected_predictions[i]) << i;
   std::cout << "[ figures  ] faults: gap 30 s, Division B->A, back 168 s, second sender for 40 "
                "formations; "
-            << "formations=" << c.samples << " transitions=" << expected->table().transitions()
+            << "formations=" << c.samples
+            << " transitions=" << expected->stored_table().table.transitions()
             << " clock_resets=" << c.clock_resets << " clock_conflicts=" << c.clock_conflicts
             << " set_aside=" << c.frames_other_clock
             << " samples_in_conflict=" << c.samples_in_conflict << "\n";
@@ -261,10 +263,12 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   EXPECT_GE(status.at("clock_conflicts"), 1u) << trainer.stderr_text();
   const auto loaded = load_table(dir / "trainer.bin", Grid(3, 2));
   ASSERT_TRUE(loaded) << loaded.error().message;
-  EXPECT_LT(loaded->table.transitions(), a->table().transitions() + b->table().transitions());
+  EXPECT_LT(loaded->table.transitions(),
+            a->stored_table().table.transitions() + b->stored_table().table.transitions());
   std::cout << "[ figures  ] two producers: packets=" << status.at("packets")
             << " transitions=" << loaded->table.transitions()
-            << " (alone: " << a->table().transitions() << " + " << b->table().transitions()
+            << " (alone: " << a->stored_table().table.transitions() << " + "
+            << b->stored_table().table.transitions()
             << ") clock_conflicts=" << status.at("clock_conflicts")
             << " clock_resets=" << status.at("clock_resets")
             << " other_clock=" << status.at("other_clock") << "\n";

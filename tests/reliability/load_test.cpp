@@ -96,7 +96,7 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   sim::SimulationConfig table_simulation;
   table_simulation.seed = 3;
   const auto fixed = train(simulated_packets(table_simulation, 2000));
-  ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->table(), TableMetadata{}));
+  ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->stored_table().table, TableMetadata{}));
   const std::string group = new_group();
   ChildProcess trainer(trainer_program,
                        {"--vision-address", group, "--table", (dir / "trainer.bin").string(),

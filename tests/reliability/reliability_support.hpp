@@ -20,7 +20,7 @@
 
 #include "child_process.hpp"
 #include "pipeline_support.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/pipeline/prediction_message.hpp"

@@ -16,8 +16,8 @@
 
 #include "child_process.hpp"
 #include "formation_prediction.pb.h"
+#include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
 
 namespace ssl_formation::testing {
 

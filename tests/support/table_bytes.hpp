@@ -14,7 +14,7 @@
 #include <tuple>
 #include <vector>
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 namespace ssl_formation::testing {
 

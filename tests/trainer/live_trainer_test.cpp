@@ -13,7 +13,7 @@
 #include "match_logs.hpp"
 #include "moving_robots.hpp"
 #include "scratch_dir.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::trainer {
@@ -191,7 +191,7 @@ TEST(LiveTrainer, AFeedOfFormationsSecondsApartIsNamedAsWhyNothingIsLearned) {
   const auto problem = live.trainer.training().feed_problem();
   ASSERT_TRUE(problem);
   EXPECT_NE(problem->find("--model paper"), std::string::npos) << *problem;
-  EXPECT_EQ(live.trainer.training().motion()->instances(), 0u);
+  EXPECT_EQ(live.trainer.training().stored_table().motion->instances(), 0u);
 }
 
 TEST(LiveTrainer, ATableFolderThatDoesNotExistIsRefusedAtStart) {

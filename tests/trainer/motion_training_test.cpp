@@ -21,7 +21,7 @@
 #include "motion_table_sums.hpp"
 #include "scratch_dir.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
@@ -130,14 +130,14 @@ TEST_F(MotionTraining, FromLogWritesAMotionTableByDefault) {
             0);
   EXPECT_EQ(version_of(at("t.bin")), table_file_compact_motion_version);
   const StoredTable stored = load(at("t.bin"));
-  ASSERT_TRUE(stored.motion.has_value());
+  ASSERT_TRUE(stored.motion != nullptr);
   EXPECT_EQ(stored.motion->config().horizons, 3) << "--horizon defaults to 3";
   EXPECT_EQ(stored.motion->config().step_s, 0.5) << "--step auto is 0.5 s for the motion model";
   EXPECT_GT(stored.motion->instances(), 0u);
 
   const auto expected = library_training(parse({}), {a_});
-  EXPECT_TRUE(*stored.motion == as_saved(*expected->motion()));
-  EXPECT_EQ(entries(stored.table), entries(expected->table()));
+  EXPECT_TRUE(*stored.motion == as_saved(*expected->stored_table().motion));
+  EXPECT_EQ(entries(stored.table), entries(expected->stored_table().table));
   EXPECT_EQ(stored.metadata.samples, expected->samples());
 }
 
@@ -147,13 +147,13 @@ TEST_F(MotionTraining, ModelPaperWritesTheVersionOneTableOfBefore) {
             0);
   EXPECT_EQ(version_of(at("t.bin")), table_file_version);
   const StoredTable stored = load(at("t.bin"));
-  EXPECT_FALSE(stored.motion.has_value());
+  EXPECT_FALSE(stored.motion != nullptr);
 
   // The bytes the paper's training saves: step sampling, counts only.
   const TrainerOptions paper = parse({"--model", "paper"});
   EXPECT_EQ(paper.model.sampler_config().sampling, Sampling::step);
   const auto expected = library_training(paper, {a_});
-  ASSERT_GT(expected->table().transitions(), 0u);
+  ASSERT_GT(expected->stored_table().table.transitions(), 0u);
   ASSERT_TRUE(save_training(at("expected.bin"), *expected));
   EXPECT_EQ(read_bytes(at("t.bin")), read_bytes(at("expected.bin")));
 }
@@ -163,11 +163,11 @@ TEST_F(MotionTraining, HorizonOption) {
                              "--horizon", "5", "--step", "1"}),
             0);
   const StoredTable stored = load(at("t.bin"));
-  ASSERT_TRUE(stored.motion.has_value());
+  ASSERT_TRUE(stored.motion != nullptr);
   EXPECT_EQ(stored.motion->config().horizons, 5);
   EXPECT_EQ(stored.motion->config().step_s, 1.0);
   const auto expected = library_training(parse({"--horizon", "5", "--step", "1"}), {a_});
-  EXPECT_TRUE(*stored.motion == as_saved(*expected->motion()));
+  EXPECT_TRUE(*stored.motion == as_saved(*expected->stored_table().motion));
 
   EXPECT_THROW((void)motion_config(parse({"--horizon", "0"})), app::UsageError);
   EXPECT_THROW((void)motion_config(parse({"--horizon", "17"})), app::UsageError);
@@ -187,10 +187,10 @@ TEST_F(MotionTraining, ResumesASavedTableAndGoesOn) {
   ASSERT_EQ(
       train_from_logs({"--from-log", at("b.log.gz").string(), "--table", at("t.bin").string()}), 0);
   const StoredTable stored = load(at("t.bin"));
-  ASSERT_TRUE(stored.motion.has_value());
+  ASSERT_TRUE(stored.motion != nullptr);
   const auto expected = library_training(parse({}), {a_, b_});
-  EXPECT_TRUE(same_coarse_evidence(*stored.motion, *expected->motion()));
-  EXPECT_EQ(entries(stored.table), entries(expected->table()));
+  EXPECT_TRUE(same_coarse_evidence(*stored.motion, *expected->stored_table().motion));
+  EXPECT_EQ(entries(stored.table), entries(expected->stored_table().table));
   EXPECT_EQ(stored.metadata.samples, expected->samples());
 }
 
@@ -224,7 +224,7 @@ TEST_F(MotionTraining, RefusesToResumeAVersionOneTableWithTheMotionModel) {
   // --reset replaces it at the first save.
   auto training =
       open_training(at("t.bin"), parse({}).model.sampler_config(), true, motion_config(parse({})));
-  EXPECT_TRUE(training->motion() != nullptr);
+  EXPECT_TRUE(training->stored_table().motion != nullptr);
 }
 
 TEST_F(MotionTraining, RefusesToResumeAVersionTwoTableWithThePaperModel) {
@@ -244,7 +244,7 @@ TEST_F(MotionTraining, SavesAndResumesInProcess) {
   const TrainerOptions options = parse({"--horizon", "2"});
   auto training =
       open_training(at("t.bin"), options.model.sampler_config(), false, motion_config(options));
-  ASSERT_TRUE(training->motion() != nullptr);
+  ASSERT_TRUE(training->stored_table().motion != nullptr);
   for (const auto& packet : a_) training->add(packet);
   ASSERT_TRUE(training->changed_since_save());
   ASSERT_TRUE(save_training(at("t.bin"), *training));
@@ -253,9 +253,9 @@ TEST_F(MotionTraining, SavesAndResumesInProcess) {
 
   auto resumed =
       open_training(at("t.bin"), options.model.sampler_config(), false, motion_config(options));
-  ASSERT_TRUE(resumed->motion() != nullptr);
-  EXPECT_TRUE(*resumed->motion() == as_saved(*training->motion()));
-  EXPECT_EQ(entries(resumed->table()), entries(training->table()));
+  ASSERT_TRUE(resumed->stored_table().motion != nullptr);
+  EXPECT_TRUE(*resumed->stored_table().motion == as_saved(*training->stored_table().motion));
+  EXPECT_EQ(entries(resumed->stored_table().table), entries(training->stored_table().table));
   EXPECT_FALSE(resumed->changed_since_save());
 }
 
@@ -282,10 +282,10 @@ TEST_F(MotionTraining, FramesReadFromALogTrainWhatItsPacketsTrain) {
   }
   ASSERT_EQ(streams[0].size(), a_.size());
   const auto from_packets = library_training(options, streams);
-  ASSERT_TRUE(from_frames.motion() != nullptr);
-  EXPECT_GT(from_frames.motion()->instances(), 0u);
-  EXPECT_TRUE(*from_frames.motion() == *from_packets->motion());
-  EXPECT_EQ(entries(from_frames.table()), entries(from_packets->table()));
+  ASSERT_TRUE(from_frames.stored_table().motion != nullptr);
+  EXPECT_GT(from_frames.stored_table().motion->instances(), 0u);
+  EXPECT_TRUE(*from_frames.stored_table().motion == *from_packets->stored_table().motion);
+  EXPECT_EQ(entries(from_frames.stored_table().table), entries(from_packets->stored_table().table));
   EXPECT_EQ(from_frames.samples(), from_packets->samples());
 }
 
@@ -311,19 +311,20 @@ TEST_F(MotionTraining, ALearnerBoundedInMemoryKeepsTheEvidenceOfOneThatIsNot) {
     return training;
   };
   const auto unbounded = learn(0);
-  const MotionTable& all_rows = *unbounded->learner().motion();
+  const StoredTable unbounded_table = unbounded->stored_table();
+  const MotionTable& all_rows = *unbounded_table.motion;
   const std::size_t saved_rows = as_saved(all_rows).rows();
   ASSERT_LT(4 * saved_rows, 3 * all_rows.rows()) << "the logs must give rows a pruning folds";
 
   const std::size_t bound = all_rows.rows() / 4;
   const auto bounded = learn(bound);
-  const MotionTable& held = *bounded->learner().motion();
+  const StoredTable bounded_table = bounded->stored_table();
+  const MotionTable& held = *bounded_table.motion;
   EXPECT_LT(held.rows(), all_rows.rows() / 2)
       << "pruned " << held.rows() << " of " << all_rows.rows();
   EXPECT_TRUE(same_coarse_evidence(held, all_rows));
   EXPECT_EQ(held.instances(), all_rows.instances());
-  EXPECT_EQ(entries(*bounded->learner().transitions()),
-            entries(*unbounded->learner().transitions()));
+  EXPECT_EQ(entries(bounded_table.table), entries(unbounded_table.table));
 }
 
 // Two tables trained from two logs and merged hold what the table trained on both logs at once
@@ -349,7 +350,7 @@ TEST_F(MotionTraining, MergeOfMotionTablesEqualsTrainingOnBothLogs) {
   EXPECT_EQ(entries(merged.table), entries(together.table));
   EXPECT_EQ(merged.metadata.samples, together.metadata.samples);
   const auto expected = library_training(parse({}), {a_, b_});
-  EXPECT_TRUE(same_coarse_evidence(*merged.motion, *expected->motion()));
+  EXPECT_TRUE(same_coarse_evidence(*merged.motion, *expected->stored_table().motion));
 }
 
 TEST_F(MotionTraining, MergeOfVersionOneTablesStaysVersionOne) {
@@ -360,7 +361,7 @@ TEST_F(MotionTraining, MergeOfVersionOneTablesStaysVersionOne) {
   }
   merge_tables({at("ta.bin").string(), at("tb.bin").string()}, at("merged.bin"));
   EXPECT_EQ(version_of(at("merged.bin")), table_file_version);
-  EXPECT_FALSE(load(at("merged.bin")).motion.has_value());
+  EXPECT_FALSE(load(at("merged.bin")).motion != nullptr);
 }
 
 TEST_F(MotionTraining, MergeRefusesToMixTheModels) {

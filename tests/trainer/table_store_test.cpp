@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "scratch_dir.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
@@ -101,7 +101,7 @@ StoredTable load(const fs::path& path, Grid grid) {
 void save_trained_table(const fs::path& path, const SamplerConfig& config) {
   Training training(config, TransitionTable(config.grid));
   feed_walk(training, 100.0, 6);
-  ASSERT_GT(training.table().transitions(), 0u);
+  ASSERT_GT(training.stored_table().table.transitions(), 0u);
   ASSERT_TRUE(save_training(path, training));
 }
 
@@ -110,8 +110,8 @@ TEST(OpenTraining, NoFileStartsEmpty) {
   const fs::path path = dir.path() / "table.sslf";
   const auto training = open_training(path, config_of(Grid(3, 2)), false);
   ASSERT_NE(training, nullptr);
-  EXPECT_EQ(training->table().grid(), Grid(3, 2));
-  EXPECT_EQ(training->table().transitions(), 0u);
+  EXPECT_EQ(training->stored_table().table.grid(), Grid(3, 2));
+  EXPECT_EQ(training->stored_table().table.transitions(), 0u);
   EXPECT_EQ(training->samples(), 0u);
   EXPECT_FALSE(training->changed_since_save());
   EXPECT_FALSE(fs::exists(path)) << "opening must not create the file";
@@ -125,7 +125,7 @@ TEST(SaveTraining, RoundTripsCountsAndMetadata) {
   auto training = open_training(path, config, false);
   training->add(geometry(12000, 9000));
   feed_walk(*training, 50.0, 7);
-  ASSERT_GT(training->table().transitions(), 0u);
+  ASSERT_GT(training->stored_table().table.transitions(), 0u);
   ASSERT_GT(training->samples(), 0u);
   EXPECT_TRUE(training->changed_since_save());
 
@@ -136,8 +136,8 @@ TEST(SaveTraining, RoundTripsCountsAndMetadata) {
   EXPECT_EQ(stored.metadata.field, (FieldSize{12000.0, 9000.0})) << "the field from geometry";
   EXPECT_EQ(stored.metadata.step_s, 1.5);
   EXPECT_EQ(stored.metadata.samples, training->samples());
-  EXPECT_EQ(stored.table.transitions(), training->table().transitions());
-  EXPECT_EQ(entries(stored.table), entries(training->table()));
+  EXPECT_EQ(stored.table.transitions(), training->stored_table().table.transitions());
+  EXPECT_EQ(entries(stored.table), entries(training->stored_table().table));
 }
 
 TEST(SaveTraining, TheFieldOfTheOptionsWithoutGeometry) {
@@ -182,24 +182,24 @@ TEST(OpenTraining, ResumesCountsAndSamples) {
     auto first = open_training(path, config, false);
     feed_walk(*first, 100.0, 6);
     ASSERT_TRUE(save_training(path, *first));
-    saved_entries = entries(first->table());
+    saved_entries = entries(first->stored_table().table);
     saved_samples = first->samples();
   }
   ASSERT_FALSE(saved_entries.empty());
   ASSERT_GT(saved_samples, 0u);
 
   auto resumed = open_training(path, config, false);
-  EXPECT_EQ(entries(resumed->table()), saved_entries);
+  EXPECT_EQ(entries(resumed->stored_table().table), saved_entries);
   EXPECT_EQ(resumed->samples(), saved_samples);
   EXPECT_FALSE(resumed->changed_since_save()) << "nothing new since the file";
 
   // Training goes on from there: the samples add up and so do the counts.
-  const std::uint64_t transitions_before = resumed->table().transitions();
+  const std::uint64_t transitions_before = resumed->stored_table().table.transitions();
   feed_walk(*resumed, 500.0, 5);
   const std::uint64_t new_samples = resumed->sampler().counters().samples;
   ASSERT_GT(new_samples, 0u);
   EXPECT_EQ(resumed->samples(), saved_samples + new_samples);
-  EXPECT_EQ(resumed->table().transitions(),
+  EXPECT_EQ(resumed->stored_table().table.transitions(),
             transitions_before + resumed->sampler().counters().transitions);
   EXPECT_TRUE(resumed->changed_since_save());
   ASSERT_TRUE(save_training(path, *resumed));
@@ -262,8 +262,8 @@ TEST(OpenTraining, ResetLeavesTheOldFileUntilTheFirstSave) {
   const SamplerConfig config = config_of(Grid(4, 3), 1.0);
   auto training = open_training(path, config, true);
   ASSERT_NE(training, nullptr);
-  EXPECT_EQ(training->table().grid(), Grid(4, 3));
-  EXPECT_EQ(training->table().transitions(), 0u);
+  EXPECT_EQ(training->stored_table().table.grid(), Grid(4, 3));
+  EXPECT_EQ(training->stored_table().table.transitions(), 0u);
   EXPECT_EQ(training->samples(), 0u);
   EXPECT_EQ(read_bytes(path), old_bytes) << "--reset must not touch the file before a save";
 
@@ -273,7 +273,7 @@ TEST(OpenTraining, ResetLeavesTheOldFileUntilTheFirstSave) {
   const StoredTable stored = load(path, Grid(4, 3));
   EXPECT_EQ(stored.metadata.step_s, 1.0);
   EXPECT_EQ(stored.metadata.samples, training->samples());
-  EXPECT_EQ(entries(stored.table), entries(training->table()));
+  EXPECT_EQ(entries(stored.table), entries(training->stored_table().table));
 }
 
 TEST(OpenTraining, ResetAcceptsACorruptFile) {
@@ -281,7 +281,7 @@ TEST(OpenTraining, ResetAcceptsACorruptFile) {
   const fs::path path = dir.path() / "table.sslf";
   write_bytes(path, "garbage");
   auto training = open_training(path, config_of(Grid(3, 2)), true);
-  EXPECT_EQ(training->table().transitions(), 0u);
+  EXPECT_EQ(training->stored_table().table.transitions(), 0u);
   EXPECT_EQ(read_bytes(path), "garbage");
 }
 

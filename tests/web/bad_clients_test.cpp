@@ -13,7 +13,7 @@
 
 #include "child_process.hpp"
 #include "raw_client.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "status_lines.hpp"
 #include "web_test_support.hpp"
 

@@ -17,7 +17,7 @@
 #include <optional>
 
 #include "child_process.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "web_test_support.hpp"

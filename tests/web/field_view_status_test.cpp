@@ -15,7 +15,7 @@
 
 #include "child_process.hpp"
 #include "raw_client.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "web_test_support.hpp"
 
 namespace ssl_formation {
@@ -191,7 +191,7 @@ TEST(FieldViewStatus, AMotionTableShowsItsInstancesAndEveryRobotItsPositionAndRa
   TempDir dir;
   const auto table_path = dir / "motion.bin";
   const StoredTable table = motion_reference_table(3, 300);
-  ASSERT_TRUE(table.motion.has_value());
+  ASSERT_TRUE(table.motion != nullptr);
   ASSERT_TRUE(save_table(table_path, table));
   const std::string vision = testing::new_group();
   const std::string predictions = testing::new_group();

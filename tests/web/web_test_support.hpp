@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "formation_prediction.pb.h"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/net/proto_multicast.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
@@ -88,7 +88,7 @@ inline TransitionTable reference_table(std::uint64_t seed, int count) {
   for (int i = 0; i < count; ++i) {
     for (const auto& packet : vision.next().packets) training.add(packet);
   }
-  return training.table();
+  return training.stored_table().table;
 }
 
 // The same table with its metadata as the trainer would save it: the formations it sampled.
@@ -108,7 +108,7 @@ inline ReferenceTable reference_stored_table(std::uint64_t seed, int count) {
   metadata.field = training.sampler().field();
   metadata.step_s = training.sampler().config().step_s;
   metadata.samples = training.samples();
-  return ReferenceTable{training.table(), metadata};
+  return ReferenceTable{training.stored_table().table, metadata};
 }
 
 // How many datagrams the simulated producer with `seed` sends for `count` formations (geometry

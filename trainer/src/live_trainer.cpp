@@ -22,11 +22,11 @@ LiveTrainer::LiveTrainer(const TrainerOptions& options, const app::Clock& clock,
   }
   const Training& training = tables_.training();
   const SamplerConfig& config = training.sampler().config();
-  const MotionTable* motion = training.motion();
+  const std::optional<TableSummary::Motion> motion = training.table_summary().motion;
   spdlog::info(
       "training: model {}; grid {}, step {} s, {} sampling; learning {}; vision {}; referee {}; "
       "{} {}, saved when it first learns, then every {} s",
-      motion ? fmt::format("motion ({} steps ahead)", motion->config().horizons)
+      motion ? fmt::format("motion ({} steps ahead)", motion->horizons)
              : std::string(to_string(training.model())),
       config.grid.to_string(), config.step_s, to_string(config.sampling),
       training.learn_during() == LearnDuring::all ? "in every game state"
@@ -76,24 +76,25 @@ bool LiveTrainer::save_at_exit() { return tables_.save_at_exit(); }
 void LiveTrainer::log_status(const net::LiveMatchEvents* live, app::StatusMoment moment) {
   const Training& training = tables_.training();
   const SamplerCounters& c = training.sampler().counters();
-  const MotionTable* motion = training.motion();
+  const TableSummary table = training.table_summary();
+  const std::optional<TableSummary::Motion>& motion = table.motion;
   app::StatusLine status;
   app::add_reception(status, live, training.front_end());
   status.figure("formations", c.samples);
   // What was learned: the motion model's instances, or the paper's transitions.
   if (motion) {
-    status.figure("motion_instances", motion->instances());
+    status.figure("motion_instances", motion->instances);
   } else {
-    status.figure("table_transitions", training.table().transitions());
+    status.figure("table_transitions", table.transitions);
   }
   app::add_match(status, training.front_end());
   status.detail("transitions", c.transitions)
       .detail("referee_messages", training.match().referee().counters().messages);
-  if (motion) status.detail("table_transitions", training.table().transitions());
-  status.detail("states_seen", training.table().rows_seen()).detail("saves", saves_);
+  if (motion) status.detail("table_transitions", table.transitions);
+  status.detail("states_seen", table.states_seen).detail("saves", saves_);
   app::add_sampler_counters(status, c);
   if (motion) {
-    status.detail("motion_rows", motion->rows()).detail("motion_held_out", motion->held_out());
+    status.detail("motion_rows", motion->rows).detail("motion_held_out", motion->held_out);
   }
   app::add_reception_details(status, live, training.front_end());
   status.log("status", moment);

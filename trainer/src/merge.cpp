@@ -6,9 +6,9 @@
 
 #include <stdexcept>
 
-#include "ssl_formation/files/table_budget.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/files/table_lock.hpp"
+#include "ssl_formation/models/table_budget.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
 namespace ssl_formation::trainer {
@@ -27,6 +27,10 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
   auto first = load_table(inputs.front());
   if (!first) throw std::runtime_error(first.error().message);
   StoredTable merged = std::move(*first);
+  // The sum of the motion sections is a table of its own (a loaded section is shared read-only).
+  const std::shared_ptr<MotionTable> motion_sum =
+      merged.motion ? std::make_shared<MotionTable>(*merged.motion) : nullptr;
+  merged.motion = motion_sum;
   for (std::size_t i = 1; i < inputs.size(); ++i) {
     auto next = load_table(inputs[i], merged.table.grid());
     if (!next) {
@@ -36,7 +40,7 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
                ? " (the grid of " + inputs.front() + "): tables of different grids cannot be merged"
                : std::string()));
     }
-    if (next->motion.has_value() != merged.motion.has_value()) {
+    if ((next->motion != nullptr) != (merged.motion != nullptr)) {
       throw std::runtime_error(fmt::format(
           "{} is {}, {} is {}: tables of the two models cannot be merged (train them with the "
           "same --model)",
@@ -62,7 +66,7 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
     }
     merged.table.merge(next->table);
     merged.metadata.samples += next->metadata.samples;
-    if (merged.motion) merged.motion->merge(*next->motion);
+    if (motion_sum) motion_sum->merge(*next->motion);
   }
   // No live trainer may be writing the output meanwhile: its next save would undo the merge.
   const TableWriterLock lock(TableWriterLock::lock_path_for_table(output),
@@ -75,7 +79,7 @@ void merge_tables(const std::vector<std::string>& inputs, const std::filesystem:
     if (!fit)
       throw std::runtime_error("cannot save " + output.string() + ": " + fit.error().message);
     rows_saved = fit->pruned.rows_after;
-    merged.motion = std::move(fit->pruned.table);
+    merged.motion = std::make_shared<const MotionTable>(std::move(fit->pruned.table));
   }
   const auto saved = save_table(output, merged);
   if (!saved) throw std::runtime_error(saved.error().message);

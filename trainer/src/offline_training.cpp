@@ -24,7 +24,7 @@
 #include "ssl_formation/app/progress.hpp"
 #include "ssl_formation/files/log_events.hpp"
 #include "ssl_formation/files/log_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 #include "ssl_formation/trainer/trainer.hpp"
 
@@ -73,9 +73,7 @@ std::unique_ptr<Training> new_training(const Destination& to, const OpponentChoi
   config.sampler = to.config;
   config.rules = MatchRules{opponent, to.rules.learn_during};
   config.tracked_vision = to.tracked;
-  ResumedLearner empty =
-      resume_learner(TransitionTable(to.config.grid),
-                     to.motion ? std::optional<MotionTable>(*to.motion) : std::nullopt);
+  ResumedLearner empty = empty_table_learner(to.config.grid, to.motion);
   return std::make_unique<Training>(config, empty.kind, std::move(empty.learner));
 }
 
@@ -157,8 +155,10 @@ std::string describe_team(const TeamOfLog& team) {
       "; {} changes of colour, {} changes of ends; {} formations ({} outside "
       "running play), {} transitions",
       c.opponent_switches, c.attack_switches, t.samples(), t.samples_outside_play(),
-      t.table().transitions());
-  if (t.motion()) out += fmt::format(", {} motion instances", t.motion()->instances());
+      t.table_summary().transitions);
+  if (const auto motion = t.table_summary().motion) {
+    out += fmt::format(", {} motion instances", motion->instances);
+  }
   return out;
 }
 
@@ -333,15 +333,16 @@ int run_offline(const TrainerOptions& options) {
     const auto saved =
         save_training(path, *training, app::table_budget_option(options.max_table_mb));
     if (!saved) return 1;
+    const TableSummary table = training->table_summary();
     spdlog::info("saved {}: {} transitions from {} formations, {} states seen ({:.2f} MB)",
-                 path.string(), training->table().transitions(), training->samples(),
-                 training->table().rows_seen(), static_cast<double>(saved->bytes) / 1e6);
-    if (const auto& motion = training->motion()) {
+                 path.string(), table.transitions, training->samples(), table.states_seen,
+                 static_cast<double>(saved->bytes) / 1e6);
+    if (const auto& motion = table.motion) {
       spdlog::info(
           "saved {}: motion model, {} horizons: motion_instances={} motion_held_out={} "
           "motion_rows={} (of {} learned; the others add nothing over coarser rows)",
-          path.string(), motion->config().horizons, motion->instances(), motion->held_out(),
-          saved->motion_rows, motion->rows());
+          path.string(), motion->horizons, motion->instances, motion->held_out, saved->motion_rows,
+          motion->rows);
     }
   }
   return every_file_whole ? 0 : 1;

@@ -4,7 +4,7 @@
 
 #include <stdexcept>
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 
 namespace ssl_formation::trainer {
@@ -63,9 +63,7 @@ RefereeChange OpponentTables::handle(const MatchEvent& event) {
     config.sampler = config_;
     config.rules = rules_;
     config.tracked_vision = tracked_vision_;
-    ResumedLearner empty =
-        resume_learner(TransitionTable(config_.grid),
-                       motion_ ? std::optional<MotionTable>(*motion_) : std::nullopt);
+    ResumedLearner empty = empty_table_learner(config_.grid, motion_);
     next = std::make_unique<Training>(config, empty.kind, std::move(empty.learner));
     saving_ = false;
   }

@@ -56,8 +56,6 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
   training.rules = rules;
   training.tracked_vision = tracked_vision;
   remove_stale_temporaries(table_path);
-  std::optional<MotionTable> empty_motion;
-  if (motion) empty_motion.emplace(*motion);
   std::error_code ignored;
   if (reset || !std::filesystem::exists(table_path, ignored)) {
     const std::string what =
@@ -67,7 +65,7 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                    table_path.string());
     else if (!reset)
       spdlog::info("no table at {} yet: starting an empty {}", table_path.string(), what);
-    ResumedLearner empty = resume_learner(TransitionTable(config.grid), std::move(empty_motion));
+    ResumedLearner empty = empty_table_learner(config.grid, motion);
     return std::make_unique<Training>(training, empty.kind, std::move(empty.learner));
   }
   auto loaded = load_table(table_path, config.grid);
@@ -129,7 +127,7 @@ std::unique_ptr<Training> open_training(const std::filesystem::path& table_path,
                  table_path.string(), stored.table.grid().to_string(), stored.table.transitions(),
                  stored.metadata.samples, stored.table.rows_seen());
   }
-  ResumedLearner resumed = resume_learner(std::move(stored.table), std::move(stored.motion));
+  ResumedLearner resumed = resume_learner(std::move(stored));
   return std::make_unique<Training>(training, resumed.kind, std::move(resumed.learner),
                                     stored.metadata.samples);
 }
@@ -145,9 +143,7 @@ TableMetadata metadata_of(const Training& training) {
 }  // namespace
 
 TableSnapshot snapshot_training(const Training& training) {
-  return TableSnapshot{
-      training.table(), metadata_of(training),
-      training.motion() ? std::optional<MotionTable>(*training.motion()) : std::nullopt};
+  return training.stored_table(metadata_of(training));
 }
 
 std::optional<TableSaveReport> save_training(const std::filesystem::path& table_path,

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <vector>
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 namespace ssl_formation::app {
 

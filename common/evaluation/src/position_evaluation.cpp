@@ -155,8 +155,8 @@ Evaluation::Evaluation(const PositionEvaluationConfig& config) : config_(config)
   result.model_states_cells = !recorded || recorded->has_cells;
   result.model_states_states = !recorded || recorded->has_states;
   for (const ModelKind kind : config.baselines) result.labels.emplace_back(describe(kind).label);
-  if (config.pooled_ablation && config.model == ModelKind::motion && !recorded) {
-    result.methods.push_back(ModelKind::motion);
+  if (config.pooled_ablation && describe(config.model).has_pooled_ablation && !recorded) {
+    result.methods.push_back(config.model);
     result.labels.emplace_back("pooled model");
   }
   ModelSettings settings;
@@ -205,7 +205,7 @@ Evaluation::Evaluation(const PositionEvaluationConfig& config) : config_(config)
 void Evaluation::end_training() {
   PositionEvaluation& result = result_;
   const PositionEvaluationConfig& config = config_;
-  const Training& model = *methods_.front().training;
+  Training& model = *methods_.front().training;
   TableMetadata metadata;
   metadata.field = model.sampler().field();
   metadata.step_s = config.sampler.step_s;
@@ -213,25 +213,22 @@ void Evaluation::end_training() {
   result.train_formations = model.samples();
   result.feed_problem = model.feed_problem();
   // Each table-keeping method's table as the programs save it, pruned to the budget: what a
-  // team's predictor would read.
-  const auto as_saved = [&config](const Training& trained,
+  // team's predictor would read. Its training is done: the table is taken, not copied.
+  const auto as_saved = [&config](Training& trained,
                                   const TableMetadata& own) -> std::shared_ptr<const StoredTable> {
-    const TransitionTable* transitions = trained.learner().transitions();
-    if (!transitions) return nullptr;
-    const MotionTable* motion = trained.learner().motion();
-    std::optional<MotionTable> saved;
-    if (motion) {
-      auto fit = fit_table_to_budget(*transitions, own, *motion, config.table_budget);
+    StoredTable saved = trained.release_table(own);
+    if (saved.motion) {
+      auto fit = fit_table_to_budget(saved.table, own, *saved.motion, config.table_budget);
       if (!fit) throw std::invalid_argument(fit.error().message);
-      saved = std::move(fit->pruned.table);
+      saved.motion = std::make_shared<const MotionTable>(std::move(fit->pruned.table));
     }
-    return std::make_shared<const StoredTable>(StoredTable{*transitions, own, std::move(saved)});
+    return std::make_shared<const StoredTable>(std::move(saved));
   };
-  if (const TransitionTable* transitions = model.learner().transitions()) {
-    const MotionTable* motion = model.learner().motion();
+  if (model.keeps_table()) {
+    const TableSummary summary = model.table_summary();
+    result.transitions = summary.transitions;
+    result.table_memory_bytes = summary.memory_bytes;
     result.table = as_saved(model, metadata);
-    result.transitions = transitions->transitions();
-    result.table_memory_bytes = transitions->memory_bytes() + (motion ? motion->memory_bytes() : 0);
   }
 
   result.rows.assign(state_rows, std::vector<HorizonScore>(static_cast<std::size_t>(config.steps)));
@@ -251,9 +248,10 @@ void Evaluation::end_training() {
     std::shared_ptr<const MotionTable> prior =
         m == 0 || m >= result.baselines_end ? config.prior_table : nullptr;
     std::unique_ptr<Forecaster> forecaster;
-    if (method.kind == ModelKind::motion) {
-      // The model and its ablation predict from the very table the result keeps, built once
-      // (the learner's own forecaster would first build one of the rows before pruning).
+    if (describe(method.kind).keeps_table) {
+      // A table model and its ablation predict from the very table the result keeps, as the
+      // programs save it (the learner's own forecaster would first build one of the rows before
+      // pruning).
       ModelSettings own_settings = method.settings;
       own_settings.prior_table = std::move(prior);
       own_settings.prior_field = own.field;
@@ -262,7 +260,6 @@ void Evaluation::end_training() {
                                                        : as_saved(*method.training, own));
     } else {
       forecaster = method.training->learner().forecaster(own, std::move(prior));
-      if (m == 0 && result.table) forecaster->set_table(result.table);
     }
     method.pipeline = std::make_unique<PredictionPipeline>(
         method.prediction, std::move(forecaster),
@@ -273,7 +270,7 @@ void Evaluation::end_training() {
   // built its index of them; a season's rows are tens of megabytes per section).
   if (result.table && result.table->motion) {
     result.table = std::make_shared<const StoredTable>(
-        StoredTable{result.table->table, result.table->metadata, std::nullopt});
+        StoredTable{result.table->table, result.table->metadata, nullptr});
   }
   training_front_ends_.clear();
   for (Method& method : methods_) method.training.reset();  // (the ablation had none)

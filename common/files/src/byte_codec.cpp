@@ -1,4 +1,4 @@
-#include "byte_codec.hpp"
+#include "ssl_formation/files/byte_codec.hpp"
 
 #include <zlib.h>
 

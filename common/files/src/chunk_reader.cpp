@@ -1,4 +1,4 @@
-#include "chunk_reader.hpp"
+#include "ssl_formation/files/chunk_reader.hpp"
 
 #include <unistd.h>
 

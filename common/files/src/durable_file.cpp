@@ -1,4 +1,4 @@
-#include "durable_file.hpp"
+#include "ssl_formation/files/durable_file.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -8,7 +8,7 @@
 #include <cerrno>
 #include <utility>
 
-#include "file_descriptor.hpp"
+#include "ssl_formation/files/file_descriptor.hpp"
 #include "ssl_formation/files/replacing_file.hpp"
 
 namespace ssl_formation::detail {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
 namespace ssl_formation::models {

@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "ssl_formation/models/model.hpp"
+#include "ssl_formation/model_api/model.hpp"
 #include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/vision/robot_tracker.hpp"
 

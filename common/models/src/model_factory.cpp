@@ -6,7 +6,8 @@
 #include <string>
 
 #include "baselines.hpp"
-#include "table_models.hpp"
+#include "ssl_formation/motion_model/motion_learning.hpp"
+#include "ssl_formation/paper_model/paper_learning.hpp"
 
 namespace ssl_formation {
 
@@ -17,15 +18,18 @@ namespace {
 constexpr double max_frame_gap_for_velocities_s = 0.25;
 
 const std::array<ModelDescription, all_model_kinds.size()> descriptions{{
-    // name, label, states positions, keeps a table, its motion rows, learns, every frame, step
-    {"paper", "paper", false, true, false, true, false, 2.0},
-    {"motion", "model", true, true, true, true, true, 0.5},
-    {"persistence", "persistence", true, false, false, false, true, 0.5},
-    {"constant-velocity", "constant velocity", true, false, false, false, true, 0.5},
-    {"damped-constant-velocity", "damped constant velocity", true, false, false, true, true, 0.5},
-    {"constant-acceleration", "constant acceleration", true, false, false, false, true, 0.5},
+    // name, label, states positions, keeps a table, its motion rows, learns, every frame, step,
+    // takes a prior table, has a pooled ablation
+    {"paper", "paper", false, true, false, true, false, 2.0, false, false},
+    {"motion", "model", true, true, true, true, true, 0.5, true, true},
+    {"persistence", "persistence", true, false, false, false, true, 0.5, false, false},
+    {"constant-velocity", "constant velocity", true, false, false, false, true, 0.5, false, false},
+    {"damped-constant-velocity", "damped constant velocity", true, false, false, true, true, 0.5,
+     false, false},
+    {"constant-acceleration", "constant acceleration", true, false, false, false, true, 0.5, false,
+     false},
     {"damped-constant-acceleration", "damped constant acceleration", true, false, false, true, true,
-     0.5},
+     0.5, false, false},
 }};
 
 }  // namespace
@@ -107,14 +111,14 @@ models::Extrapolation extrapolation_of(ModelKind kind) {
 std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& settings) {
   switch (kind) {
     case ModelKind::paper:
-      return std::make_unique<models::PaperLearner>(TransitionTable(settings.grid));
+      return std::make_unique<PaperLearner>(TransitionTable(settings.grid));
     case ModelKind::motion: {
       const MotionConfig config = settings.motion_config();
       if (!config.valid())
         throw std::invalid_argument("invalid step or horizon for the motion model");
-      return std::make_unique<models::MotionLearner>(
-          TransitionTable(settings.grid), MotionTable(config), settings.recalibration,
-          settings.pooled_motion, settings.motion_rows_in_memory);
+      return std::make_unique<MotionLearner>(TransitionTable(settings.grid), MotionTable(config),
+                                             settings.recalibration, settings.pooled_motion,
+                                             settings.motion_rows_in_memory);
     }
     case ModelKind::persistence:
     case ModelKind::constant_velocity:
@@ -127,20 +131,44 @@ std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& setti
   throw std::invalid_argument("unknown model");
 }
 
-ResumedLearner resume_learner(TransitionTable table, std::optional<MotionTable> motion) {
-  if (motion) {
-    return {ModelKind::motion,
-            std::make_unique<models::MotionLearner>(std::move(table), std::move(*motion))};
+ModelKind model_of_table(const StoredTable& table) {
+  return table.motion ? ModelKind::motion : ModelKind::paper;
+}
+
+ResumedLearner resume_learner(StoredTable stored) {
+  const ModelKind kind = model_of_table(stored);
+  if (kind == ModelKind::motion) {
+    // The learner goes on from its own copy: a loaded section is shared by whoever read it.
+    MotionTable motion = *stored.motion;
+    stored.motion.reset();
+    return {kind, std::make_unique<MotionLearner>(std::move(stored.table), std::move(motion))};
   }
-  return {ModelKind::paper, std::make_unique<models::PaperLearner>(std::move(table))};
+  return {kind, std::make_unique<PaperLearner>(std::move(stored.table))};
+}
+
+ResumedLearner empty_table_learner(const Grid& grid, const std::optional<MotionConfig>& motion) {
+  return resume_learner(
+      StoredTable{TransitionTable(grid), TableMetadata{},
+                  motion ? std::make_shared<const MotionTable>(*motion) : nullptr});
+}
+
+MotionForecastSettings motion_forecast_settings(const ModelSettings& settings) {
+  MotionForecastSettings motion;
+  motion.grid = settings.grid;
+  motion.step_s = settings.step_s;
+  motion.recalibration = settings.recalibration;
+  motion.prior_table = settings.prior_table;
+  motion.prior_field = settings.prior_field;
+  motion.pooled = settings.pooled_motion;
+  return motion;
 }
 
 std::unique_ptr<Forecaster> make_forecaster(ModelKind kind, const ModelSettings& settings) {
   switch (kind) {
     case ModelKind::paper:
-      return std::make_unique<models::PaperForecaster>();
+      return std::make_unique<PaperForecaster>();
     case ModelKind::motion:
-      return std::make_unique<models::MotionForecaster>(settings);
+      return std::make_unique<MotionForecaster>(motion_forecast_settings(settings));
     case ModelKind::persistence:
     case ModelKind::constant_velocity:
     case ModelKind::damped_constant_velocity:

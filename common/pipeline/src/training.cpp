@@ -25,13 +25,12 @@ std::unique_ptr<Learner> checked(const TrainingConfig& config, ModelKind model,
   if (const auto problem = sampling_problem(model, config.sampler.sampling)) {
     throw std::invalid_argument(*problem);
   }
-  if (const TransitionTable* table = learner->transitions();
-      table && table->grid() != config.sampler.grid) {
-    throw std::invalid_argument("the table's grid " + table->grid().to_string() +
+  const std::optional<TableSummary> table = learner->table_summary();
+  if (table && table->grid != config.sampler.grid) {
+    throw std::invalid_argument("the table's grid " + table->grid.to_string() +
                                 " differs from the sampler's " + config.sampler.grid.to_string());
   }
-  if (const MotionTable* motion = learner->motion();
-      motion && std::abs(motion->config().step_s - config.sampler.step_s) > 1e-9) {
+  if (table && table->motion && std::abs(table->motion->step_s - config.sampler.step_s) > 1e-9) {
     throw std::invalid_argument("the motion table's step differs from the sampler's");
   }
   return learner;
@@ -79,23 +78,36 @@ TrainingConfig table_training_config(SamplerConfig sampler, std::optional<MatchR
 Training::Training(SamplerConfig config, TransitionTable table, std::uint64_t samples_before,
                    std::optional<MotionTable> motion, std::optional<MatchRules> rules)
     : Training(table_training_config(std::move(config), std::move(rules)),
-               resume_learner(std::move(table), std::move(motion)), samples_before) {}
+               resume_learner(StoredTable{
+                   std::move(table), TableMetadata{},
+                   motion ? std::make_shared<const MotionTable>(std::move(*motion)) : nullptr}),
+               samples_before) {}
 
 Training::Training(TrainingConfig config, ResumedLearner resumed, std::uint64_t samples_before)
     : Training(std::move(config), resumed.kind, std::move(resumed.learner), samples_before) {}
 
-const TransitionTable& Training::table() const {
-  const TransitionTable* table = learner_->transitions();
-  if (!table) {
+TableSummary Training::table_summary() const {
+  std::optional<TableSummary> summary = learner_->table_summary();
+  if (!summary) {
     throw std::logic_error("--model " + std::string(to_string(model_)) + " keeps no table");
   }
-  return *table;
+  return *summary;
 }
 
 StoredTable Training::stored_table(const TableMetadata& metadata) const {
-  const MotionTable* motion = learner_->motion();
-  return StoredTable{table(), metadata,
-                     motion ? std::optional<MotionTable>(*motion) : std::nullopt};
+  std::optional<StoredTable> stored = learner_->stored(metadata);
+  if (!stored) {
+    throw std::logic_error("--model " + std::string(to_string(model_)) + " keeps no table");
+  }
+  return std::move(*stored);
+}
+
+StoredTable Training::release_table(const TableMetadata& metadata) {
+  std::optional<StoredTable> stored = learner_->release_table(metadata);
+  if (!stored) {
+    throw std::logic_error("--model " + std::string(to_string(model_)) + " keeps no table");
+  }
+  return std::move(*stored);
 }
 
 StoredTable Training::stored_table() const {

@@ -20,7 +20,7 @@
 #include "ssl_formation/evaluation/position_evaluation.hpp"
 #include "ssl_formation/files/real_log_shape.hpp"
 #include "ssl_formation/files/replacing_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/simulation/playbook.hpp"
 #include "ssl_formation/simulation/simulated_events.hpp"
@@ -218,7 +218,8 @@ int run_paper(const EvaluateOptions& options) {
   const std::size_t packets = counted.packets();
   const FieldSize field = training.sampler().field();
   const std::uint64_t training_samples = training.samples();
-  const TransitionTable& table = training.table();
+  const StoredTable stored = training.stored_table();
+  const TransitionTable& table = stored.table;
 
   std::vector<ev::PlayStates> plays;
   for (int p = 0; p < sim::play_count; ++p) {

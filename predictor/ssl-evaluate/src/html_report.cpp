@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "ssl_formation/files/replacing_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation::evaluate {

@@ -199,7 +199,7 @@ TEST(PositionEvaluation, TheModelIsScoredAtTheCentreOfItsPredictedCell) {
   for (const Formation& now : formations) {
     const Formation* truth = formation_near(formations, now.time_s + 1.0, 0.05);
     if (!truth) continue;
-    const Prediction prediction = predict(training.table(), now, 1);
+    const Prediction prediction = predict(training.stored_table().table, now, 1);
     for (const RobotPrediction& robot : prediction.steps[0].robots) {
       const FormationRobot* actual = truth->find(robot.robot_id);
       sum += distance(grid.centre_of(robot.position, field), actual->feed_position);

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "ssl_formation/files/table_file.hpp"  // still declares it, for the callers
 #include "ssl_formation/match/match.hpp"
+#include "ssl_formation/models/table_file.hpp"  // still declares it, for the callers
 
 namespace ssl_formation {
 namespace {

@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 namespace ssl_formation {
 namespace {
@@ -115,8 +115,8 @@ std::shared_ptr<const StoredTable> motion_table(double step_s) {
   config.step_s = step_s;
   TableMetadata metadata;
   metadata.step_s = step_s;
-  return std::make_shared<const StoredTable>(
-      StoredTable{TransitionTable(Grid(3, 2)), metadata, MotionTable(config)});
+  return std::make_shared<const StoredTable>(StoredTable{
+      TransitionTable(Grid(3, 2)), metadata, std::make_shared<const MotionTable>(config)});
 }
 
 TEST(ModelForecaster, BaselinesAreReadyWithoutATable) {
@@ -207,12 +207,16 @@ TEST(ModelLearner, NewLearnersKeepWhatTheirModelKeeps) {
     SCOPED_TRACE(std::string(to_string(kind)));
     const auto learner = make_learner(kind, settings);
     EXPECT_EQ(learner->progress(), 0u);
-    EXPECT_EQ(learner->transitions() != nullptr, describe(kind).keeps_table);
-    EXPECT_EQ(learner->motion() != nullptr, kind == ModelKind::motion);
+    EXPECT_EQ(learner->table_summary().has_value(), describe(kind).keeps_table);
+    EXPECT_EQ(learner->stored(TableMetadata{}).has_value(), describe(kind).keeps_table);
+    EXPECT_EQ(learner->table_summary() && learner->table_summary()->motion,
+              describe(kind).keeps_motion_rows);
   }
   const auto motion = make_learner(ModelKind::motion, settings);
-  EXPECT_DOUBLE_EQ(motion->motion()->config().step_s, 0.5);
-  EXPECT_EQ(motion->motion()->config().horizons, 3);
+  const auto stored = motion->stored(TableMetadata{});
+  ASSERT_TRUE(stored && stored->motion);
+  EXPECT_DOUBLE_EQ(stored->motion->config().step_s, 0.5);
+  EXPECT_EQ(stored->motion->config().horizons, 3);
 }
 
 TEST(ModelLearner, AResumedTableIsTheMotionModelsOnlyWithMotionRows) {
@@ -220,18 +224,20 @@ TEST(ModelLearner, AResumedTableIsTheMotionModelsOnlyWithMotionRows) {
   config.step_s = 0.5;
   TransitionTable counts(Grid(3, 2));
   counts.add(5, 7);
-  ResumedLearner with_motion = resume_learner(counts, MotionTable(config));
+  ResumedLearner with_motion = resume_learner(
+      StoredTable{counts, TableMetadata{}, std::make_shared<const MotionTable>(config)});
   EXPECT_EQ(with_motion.kind, ModelKind::motion);
-  ASSERT_NE(with_motion.learner->motion(), nullptr);
-  EXPECT_DOUBLE_EQ(with_motion.learner->motion()->config().step_s, 0.5);
-  ASSERT_NE(with_motion.learner->transitions(), nullptr);
-  EXPECT_EQ(with_motion.learner->transitions()->transitions(), 1u);
+  const auto resumed = with_motion.learner->table_summary();
+  ASSERT_TRUE(resumed && resumed->motion);
+  EXPECT_DOUBLE_EQ(resumed->motion->step_s, 0.5);
+  EXPECT_EQ(resumed->transitions, 1u);
 
-  ResumedLearner paper = resume_learner(counts, std::nullopt);
+  ResumedLearner paper = resume_learner(StoredTable{counts, TableMetadata{}, nullptr});
   EXPECT_EQ(paper.kind, ModelKind::paper);
-  EXPECT_EQ(paper.learner->motion(), nullptr);
-  ASSERT_NE(paper.learner->transitions(), nullptr);
-  EXPECT_EQ(paper.learner->transitions()->transitions(), 1u);
+  const auto paper_table = paper.learner->table_summary();
+  ASSERT_TRUE(paper_table);
+  EXPECT_FALSE(paper_table->motion);
+  EXPECT_EQ(paper_table->transitions, 1u);
   EXPECT_EQ(paper.learner->progress(), 1u);
 }
 

@@ -624,8 +624,8 @@ TEST(MotionPipeline, PredictsPositionsWithRadiiFromATrainedTable) {
   motion.step_s = 0.5;
   sf::Training training(config.sampler, sf::TransitionTable(grid), 0, sf::MotionTable(motion));
   for (int i = 0; i < 60 * 120; ++i) training.add(straight_lines(i));
-  ASSERT_TRUE(training.motion());
-  EXPECT_GT(training.motion()->instances(), 10000u);
+  ASSERT_TRUE(training.stored_table().motion);
+  EXPECT_GT(training.stored_table().motion->instances(), 10000u);
 
   sf::TableMetadata metadata;
   metadata.field = field;
@@ -700,8 +700,8 @@ TEST(MotionPipeline, ARobotTheLastPacketDidNotSeeIsPredictedMovingAsItWasLastSee
   sf::MotionConfig motion = one_second(1);
   motion.step_s = 0.5;
   // An empty table: every robot is predicted by damped constant velocity from its kinematics.
-  const auto stored = std::make_shared<const sf::StoredTable>(
-      sf::StoredTable{sf::TransitionTable(grid), metadata, sf::MotionTable(motion)});
+  const auto stored = std::make_shared<const sf::StoredTable>(sf::StoredTable{
+      sf::TransitionTable(grid), metadata, std::make_shared<const sf::MotionTable>(motion)});
   std::size_t carried_over = 0;
   std::size_t checked = 0;
   sf::PredictionPipeline pipeline(config, [&](const sf::PredictedFormation& p) {

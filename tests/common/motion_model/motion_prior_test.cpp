@@ -8,7 +8,7 @@
 
 #include "hand_built_motion.hpp"
 #include "scratch_dir.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
 namespace ssl_formation {

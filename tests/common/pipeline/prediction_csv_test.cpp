@@ -339,9 +339,9 @@ TEST(PredictionCsv, TheLinesOfThePipelineMatchWhatItPredicted) {
     for (int k = 0; k < 40; ++k) {
       training.add(detection(100.0 + 0.7 * k, static_cast<std::uint32_t>(k), walk(k)));
     }
-    ASSERT_GT(training.table().transitions(), 0u);
-    const auto table =
-        std::make_shared<const StoredTable>(StoredTable{training.table(), {}, std::nullopt});
+    ASSERT_GT(training.stored_table().table.transitions(), 0u);
+    const auto table = std::make_shared<const StoredTable>(
+        StoredTable{training.stored_table().table, {}, nullptr});
 
     struct Seen {
       std::string csv;
@@ -389,8 +389,8 @@ TEST(PredictionCsv, TheMotionModelsLinesOfThePipelineCarryItsPositionsAndRadii) 
   for (int k = 0; k < 60 * 60; ++k) {
     training.add(detection(100.0 + k / 60.0, static_cast<std::uint32_t>(k), circling(k / 60.0)));
   }
-  ASSERT_NE(training.motion(), nullptr);
-  ASSERT_GT(training.motion()->instances(), 0u);
+  ASSERT_NE(training.stored_table().motion, nullptr);
+  ASSERT_GT(training.stored_table().motion->instances(), 0u);
   const auto table = std::make_shared<const StoredTable>(training.stored_table(TableMetadata{}));
 
   std::vector<std::string> csv;

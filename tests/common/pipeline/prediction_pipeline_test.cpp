@@ -69,7 +69,7 @@ std::shared_ptr<const StoredTable> trained_table(const SamplerConfig& config, in
   TableMetadata metadata;
   metadata.step_s = config.step_s;
   metadata.samples = training.samples();
-  return std::make_shared<const StoredTable>(StoredTable{training.table(), metadata});
+  return std::make_shared<const StoredTable>(StoredTable{training.stored_table().table, metadata});
 }
 
 // What a handler saw, copied: PredictedFormation is valid only during the call.

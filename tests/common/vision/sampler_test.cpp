@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
 namespace ssl_formation {

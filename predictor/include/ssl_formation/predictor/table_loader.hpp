@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/models/model.hpp"
+#include "ssl_formation/model_api/model.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/predictor/table_watcher.hpp"
 
 namespace ssl_formation::predictor {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 namespace ssl_formation::predictor {
 

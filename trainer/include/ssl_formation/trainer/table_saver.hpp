@@ -12,7 +12,7 @@
 #include <mutex>
 #include <thread>
 
-#include "ssl_formation/files/table_budget.hpp"
+#include "ssl_formation/models/table_budget.hpp"
 #include "ssl_formation/trainer/table_store.hpp"
 
 namespace ssl_formation::trainer {

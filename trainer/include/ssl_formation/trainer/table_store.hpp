@@ -6,8 +6,8 @@
 #include <memory>
 #include <optional>
 
-#include "ssl_formation/files/table_budget.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_budget.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/vision/sampler.hpp"
 
@@ -36,11 +36,7 @@ struct TableSaveReport {
 };
 
 // A training's table copied as it is now, to save while the training goes on.
-struct TableSnapshot {
-  TransitionTable table;
-  TableMetadata metadata;
-  std::optional<MotionTable> motion;
-};
+using TableSnapshot = StoredTable;
 // Copies the training's table.
 TableSnapshot snapshot_training(const Training& training);
 // Saves a snapshot atomically, as save_training does; logs and returns nothing on failure.

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "ssl_formation/app/options.hpp"
-#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/files/table_lock.hpp"
+#include "ssl_formation/models/table_budget.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/net/multicast.hpp"
 #include "ssl_formation/pipeline/training.hpp"

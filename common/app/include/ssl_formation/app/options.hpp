@@ -14,9 +14,9 @@
 
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/files/table_budget.hpp"
 #include "ssl_formation/match/match.hpp"
 #include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/models/table_budget.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/vision/sampler.hpp"

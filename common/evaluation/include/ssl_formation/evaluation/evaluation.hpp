@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "ssl_formation/base/formation.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
 
 namespace ssl_formation::evaluation {
 

@@ -22,7 +22,8 @@
 #include <string_view>
 
 #include "ssl_formation/base/grid.hpp"
-#include "ssl_formation/models/model.hpp"
+#include "ssl_formation/model_api/model.hpp"
+#include "ssl_formation/motion_model/motion_learning.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/vision/sampler.hpp"
@@ -67,6 +68,11 @@ struct ModelDescription {
   // hundredths of a second apart. False: it also takes a formation every --step.
   bool needs_every_frame = true;
   double default_step_s = 0.5;  // --step auto
+  // Predicts under every team's table (--prior-table, ModelSettings::prior_table).
+  bool takes_prior_table = false;
+  // Has an ablation that pools its rows (ModelSettings::pooled_motion), which ssl-evaluate
+  // reports beside it.
+  bool has_pooled_ablation = false;
 };
 
 const ModelDescription& describe(ModelKind kind);
@@ -114,7 +120,7 @@ struct ModelSettings {
   // this many rows, once it holds more than this: what training holds in memory stops growing
   // with the data, as the file does. 2^17 rows take about 40 MB; the file of a 4 MB budget
   // keeps fewer. 0: never (the table holds every row).
-  std::size_t motion_rows_in_memory = std::size_t{1} << 16;
+  std::size_t motion_rows_in_memory = default_motion_rows_in_memory;
   // The motion model's table settings for these (its step and horizons from above).
   MotionConfig motion_config() const;
 };
@@ -122,13 +128,18 @@ struct ModelSettings {
 // A learner of `kind` with nothing learned yet. Throws std::invalid_argument for settings the
 // model cannot learn with (an invalid step or horizon).
 std::unique_ptr<Learner> make_learner(ModelKind kind, const ModelSettings& settings);
-// A learner that goes on from a table's counts: the motion model's with its motion table, the
-// paper's without. Its kind, for the caller to check against --model.
+// The model a table serves: the motion model's with its motion section, the paper's without.
+ModelKind model_of_table(const StoredTable& table);
+// A learner that goes on from a table (of model_of_table). Its kind, for the caller to check
+// against --model.
 struct ResumedLearner {
   ModelKind kind;
   std::unique_ptr<Learner> learner;
 };
-ResumedLearner resume_learner(TransitionTable table, std::optional<MotionTable> motion);
+ResumedLearner resume_learner(StoredTable stored);
+// A learner with nothing learned yet for a table of `grid`: the motion model's with `motion`'s
+// settings, the paper's without (what a trainer starts a table from).
+ResumedLearner empty_table_learner(const Grid& grid, const std::optional<MotionConfig>& motion);
 
 // A forecaster of `kind`, without a table yet. Throws std::invalid_argument for settings it
 // cannot forecast with.

@@ -140,7 +140,7 @@ class MotionModel {
                const FieldSize& field, AttackDirection attacks, Prediction& out,
                const MotionRules& rules = {}) const;
   // The same, looking the robots' estimates up through `cache` (see Cache). With `advice` (for
-  // the same robots: SetPlayMemory::recall, models::advise_ball_placement), each forecast is
+  // the same robots: SetPlayMemory::recall, advise_ball_placement), each forecast is
   // moved towards where the set play takes the robot, by the advice's weight, before the rules.
   // Steps beyond the table's horizons extrapolate the forecasts before advice and rules.
   void predict(const std::vector<MotionRobot>& robots, int horizon, const StateCodec& codec,

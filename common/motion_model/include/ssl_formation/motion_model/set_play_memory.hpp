@@ -58,7 +58,7 @@ struct SetPlayEpisode {
 
 // Where a set play is taking each robot of a moment, per step, and how much that counts against
 // the model's forecast (0: nothing to say): recall() fills it from the earlier kick-offs,
-// models::advise_ball_placement from the path of the robot placing the ball.
+// advise_ball_placement from the path of the robot placing the ball.
 struct SetPlayAdvice {
   struct Robot {
     std::array<Point, 16> position{};

@@ -8,7 +8,7 @@
 
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/base/prediction.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
 
 namespace ssl_formation {
 

@@ -18,7 +18,7 @@
 #include "ssl_formation/match/match.hpp"
 #include "ssl_formation/match/match_event.hpp"
 #include "ssl_formation/match/tracked_vision.hpp"
-#include "ssl_formation/models/model.hpp"
+#include "ssl_formation/model_api/model.hpp"
 #include "ssl_formation/vision/ball_tracker.hpp"
 #include "ssl_formation/vision/sampler.hpp"
 

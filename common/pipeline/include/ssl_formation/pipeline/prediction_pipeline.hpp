@@ -10,9 +10,9 @@
 #include <optional>
 #include <string>
 
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/match/match.hpp"
 #include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/pipeline/live_score.hpp"
 #include "ssl_formation/pipeline/match_front_end.hpp"

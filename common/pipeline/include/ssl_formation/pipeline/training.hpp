@@ -8,11 +8,11 @@
 #include <optional>
 #include <string_view>
 
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/match/match.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
 #include "ssl_formation/pipeline/match_front_end.hpp"
 
 class SSL_WrapperPacket;
@@ -79,17 +79,20 @@ class Training final : public MatchEventSink {
 
   ModelKind model() const { return model_; }
   const Learner& learner() const { return *learner_; }
-  // The paper's counts, which every table model keeps (throws std::logic_error for a model that
+  // What its table holds so far, for a status line (throws std::logic_error for a model that
   // keeps no table).
-  const TransitionTable& table() const;
-  // The motion model's rows; none for the paper's model.
-  const MotionTable* motion() const { return learner_->motion(); }
+  TableSummary table_summary() const;
+  // Whether its model keeps a table.
+  bool keeps_table() const { return learner_->table_summary().has_value(); }
   // What a table file keeps of this training, with `metadata` (a copy: training may go on).
   // Throws std::logic_error for a model that keeps no table.
   StoredTable stored_table(const TableMetadata& metadata) const;
   // The same with the metadata of this training: the field its sampler uses, its step, and the
   // formations sampled.
   StoredTable stored_table() const;
+  // stored_table(metadata) without a copy, for a caller done with this training: it is left
+  // without what it learned.
+  StoredTable release_table(const TableMetadata& metadata);
   const MatchFrontEnd& front_end() const { return front_end_; }
   const FormationSampler& sampler() const { return front_end_.sampler(); }
   const MatchFollower& match() const { return front_end_.match(); }

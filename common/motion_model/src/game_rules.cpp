@@ -1,4 +1,4 @@
-#include "ssl_formation/models/game_rules.hpp"
+#include "ssl_formation/motion_model/game_rules.hpp"
 
 #include <algorithm>
 #include <array>
@@ -7,7 +7,7 @@
 #include <optional>
 #include <vector>
 
-namespace ssl_formation::models {
+namespace ssl_formation {
 
 namespace {
 
@@ -149,4 +149,4 @@ void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, P
   advice.any = advised > 0;
 }
 
-}  // namespace ssl_formation::models
+}  // namespace ssl_formation

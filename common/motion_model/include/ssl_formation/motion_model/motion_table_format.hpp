@@ -12,9 +12,9 @@
 #include <utility>
 #include <vector>
 
-#include "chunk_reader.hpp"
-#include "durable_file.hpp"
 #include "ssl_formation/base/result.hpp"
+#include "ssl_formation/files/chunk_reader.hpp"
+#include "ssl_formation/files/durable_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
 namespace ssl_formation::detail {

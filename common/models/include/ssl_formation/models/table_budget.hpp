@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "ssl_formation/base/result.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_table_pruning.hpp"
 
 namespace ssl_formation {

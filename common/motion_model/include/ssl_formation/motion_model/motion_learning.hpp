@@ -1,47 +1,49 @@
 #pragma once
-// The two models that learn into a table file: the paper's (transition counts on cells) and the
-// motion model (the paper's counts at every frame, plus how each robot moves). Made by the
-// factory only.
+// The motion model behind the model interface (model_api/model.hpp): it learns the paper's counts
+// at every frame and, beside them, how each robot moves (MotionTable); it forecasts with the
+// MotionModel built of a table, under the game's rules (game_rules.hpp), a kick-off's memory
+// (set_play_memory.hpp) and braking advice (braking_advice.hpp), recalibrating its radii as it
+// goes (online_calibration.hpp). Made by the factory (models/model_factory.hpp), which is the
+// only code that names it.
 
 #include <cstddef>
 #include <memory>
 #include <optional>
 #include <vector>
 
-#include "ssl_formation/files/table_file.hpp"
-#include "ssl_formation/models/model.hpp"
-#include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/model_api/model.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/motion_model/set_play_memory.hpp"
-#include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation::models {
+namespace ssl_formation {
 
-class PaperLearner : public Learner {
- public:
-  explicit PaperLearner(TransitionTable table) : table_(std::move(table)) {}
-  void observe(const MatchMoment&) override {}
-  void learn(const MatchMoment& moment) override;
-  void forget_match() override {}
-  void absorb(const Learner& other) override;
-  std::uint64_t progress() const override { return table_.transitions(); }
-  const TransitionTable* transitions() const override { return &table_; }
-  std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const override;
+// The rows a learner holds before it prunes (MotionLearner): 2^16 rows take about 20 MB.
+inline constexpr std::size_t default_motion_rows_in_memory = std::size_t{1} << 16;
 
- private:
-  TransitionTable table_;
+// How a motion forecaster predicts.
+struct MotionForecastSettings {
+  Grid grid{3, 2};
+  double step_s = 0.5;
+  // The recalibration while it predicts (none: as the table states).
+  std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{};
+  // Every team's table, under the opponent's own rows (none: damped constant velocity is the
+  // prior), and the field its probabilities are calibrated for until a table brings its own.
+  std::shared_ptr<const MotionTable> prior_table = nullptr;
+  FieldSize prior_field{9000.0, 6000.0};
+  // One fit for every robot and state instead of the keyed rows (the pooled ablation).
+  bool pooled = false;
 };
 
 class MotionLearner : public Learner {
  public:
   // `recalibration`: what the forecasters it makes recalibrate with.
-  // `pooled`: its forecasters are the pooled ablation (ModelSettings::pooled_motion).
-  // `rows_in_memory`: ModelSettings::motion_rows_in_memory.
+  // `pooled`: its forecasters are the pooled ablation.
+  // `rows_in_memory`: it prunes its table to half this many rows once it holds more (0: never).
   MotionLearner(
       TransitionTable table, MotionTable motion,
       std::optional<OnlineCalibrationSettings> recalibration = OnlineCalibrationSettings{},
-      bool pooled = false, std::size_t rows_in_memory = ModelSettings{}.motion_rows_in_memory);
+      bool pooled = false, std::size_t rows_in_memory = default_motion_rows_in_memory);
   void observe(const MatchMoment& moment) override;
   void learn(const MatchMoment& moment) override;
   void forget_match() override;
@@ -49,8 +51,9 @@ class MotionLearner : public Learner {
   std::uint64_t progress() const override {
     return table_.transitions() + motion_.instances() + motion_.held_out();
   }
-  const TransitionTable* transitions() const override { return &table_; }
-  const MotionTable* motion() const override { return &motion_; }
+  std::optional<StoredTable> stored(const TableMetadata& metadata) const override;
+  std::optional<StoredTable> release_table(const TableMetadata& metadata) override;
+  std::optional<TableSummary> table_summary() const override;
   std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const override;
   std::unique_ptr<Forecaster> forecaster(
       const TableMetadata& metadata, std::shared_ptr<const MotionTable> prior_table) const override;
@@ -68,26 +71,9 @@ class MotionLearner : public Learner {
   bool pooled_ = false;
 };
 
-class PaperForecaster : public Forecaster {
- public:
-  PreparedTable install_table(PreparedTable prepared) noexcept override {
-    PreparedTable old{std::move(table_), nullptr};
-    table_ = std::move(prepared.table);
-    return old;
-  }
-  bool ready() const override { return table_ != nullptr; }
-  void observe(const MatchMoment&) override {}
-  void forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse use) override;
-  void forget_match() override {}
-
- private:
-  std::shared_ptr<const StoredTable> table_;
-  std::vector<RobotStateById> robot_states_;  // reused from sample to sample
-};
-
 class MotionForecaster : public Forecaster {
  public:
-  explicit MotionForecaster(const ModelSettings& settings);
+  explicit MotionForecaster(const MotionForecastSettings& settings);
   // Builds the table's MotionModel (under the prior), which is what a table costs.
   PreparedTable prepare_table(std::shared_ptr<const StoredTable> table) const override;
   PreparedTable install_table(PreparedTable prepared) noexcept override;
@@ -99,7 +85,7 @@ class MotionForecaster : public Forecaster {
  private:
   MotionModelSettings model_settings() const {
     MotionModelSettings settings;
-    settings.pooled = settings_.pooled_motion;
+    settings.pooled = settings_.pooled;
     return settings;
   }
   // What the forecaster keeps of a table: the model built of its rows, and its kick-offs. Not
@@ -108,7 +94,7 @@ class MotionForecaster : public Forecaster {
     std::shared_ptr<const MotionModel> model;
     SetPlayMemory set_plays;
   };
-  ModelSettings settings_;
+  MotionForecastSettings settings_;
   std::shared_ptr<const BuiltTable> built_;
   // Every team's model (settings.prior_table), built for the first table's field; serves alone
   // until the opponent has a table. Like settings_, set once in the constructor: prepare_table
@@ -122,4 +108,4 @@ class MotionForecaster : public Forecaster {
   SetPlayAdvice set_play_advice_;    // reused from set play to set play
 };
 
-}  // namespace ssl_formation::models
+}  // namespace ssl_formation

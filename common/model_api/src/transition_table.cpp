@@ -1,4 +1,4 @@
-#include "ssl_formation/paper_model/transition_table.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
 
 #include <algorithm>
 #include <stdexcept>

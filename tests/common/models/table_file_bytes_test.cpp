@@ -16,7 +16,7 @@
 #include <filesystem>
 #include <string>
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "table_bytes.hpp"
 
@@ -188,7 +188,7 @@ Fingerprint fingerprint_of(const Bytes& bytes) {
 
 TEST_F(TableFileBytes, DenseCountsAreTheBytesTheyWere) {
   const Bytes bytes =
-      saved_bytes(StoredTable{tiny_table(TableStorage::dense), metadata_of(0.5), std::nullopt});
+      saved_bytes(StoredTable{tiny_table(TableStorage::dense), metadata_of(0.5), nullptr});
   EXPECT_EQ(hex_of(bytes),
             "53534c465441424c01000000020000000100000000000000000000000070c740000000000094c140"
             "000000000000e03f9210000000000000350100000100000008000000000000004000000000000000"
@@ -203,7 +203,7 @@ TEST_F(TableFileBytes, DenseCountsAreTheBytesTheyWere) {
 
 TEST_F(TableFileBytes, SparseCountsAreTheBytesTheyWere) {
   const Bytes bytes =
-      saved_bytes(StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5), std::nullopt});
+      saved_bytes(StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5), nullptr});
   EXPECT_EQ(hex_of(bytes),
             "53534c465441424c01000000020000000100000001000000000000000070c740000000000094c140"
             "000000000000e03f9210000000000000350100000100000003000000000000000500000000000000"
@@ -213,8 +213,9 @@ TEST_F(TableFileBytes, SparseCountsAreTheBytesTheyWere) {
 
 // Version 5, written since 2026-12-07: the compact rows and calibration instances.
 TEST_F(TableFileBytes, MotionRowsAreTheBytesTheyWere) {
-  const Bytes bytes = saved_bytes(
-      StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5), motion_table(0.5, 2, 2, 1)});
+  const Bytes bytes =
+      saved_bytes(StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5),
+                              std::make_shared<const MotionTable>(motion_table(0.5, 2, 2, 1))});
   EXPECT_EQ(hex_of(bytes),
             "53534c465441424c05000000020000000100000001000000000000000070c740000000000094c140"
             "000000000000e03f9210000000000000350100000100000003000000000000000500000000000000"
@@ -267,11 +268,12 @@ TEST_F(TableFileBytes, VersionThreeBytesStillLoad) {
   const LoadResult loaded = load_table(path, std::nullopt, TableStorage::sparse);
   ASSERT_TRUE(loaded) << message_of(loaded);
   EXPECT_EQ(loaded->format_version, table_file_motion_version);
-  ASSERT_TRUE(loaded->motion.has_value());
+  ASSERT_TRUE(loaded->motion != nullptr);
   EXPECT_TRUE(*loaded->motion == motion_table(0.5, 2, 2, 1));
-  EXPECT_EQ(saved_bytes(*loaded),
-            saved_bytes(StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5),
-                                    motion_table(0.5, 2, 2, 1)}));
+  EXPECT_EQ(
+      saved_bytes(*loaded),
+      saved_bytes(StoredTable{tiny_table(TableStorage::sparse), metadata_of(0.5),
+                              std::make_shared<const MotionTable>(motion_table(0.5, 2, 2, 1))}));
 }
 
 TEST_F(TableFileBytes, LargerTablesAreTheBytesTheyWere) {
@@ -284,16 +286,17 @@ TEST_F(TableFileBytes, LargerTablesAreTheBytesTheyWere) {
   ASSERT_FALSE(sparse.table.is_dense());
   EXPECT_EQ(fingerprint_of(saved_bytes(sparse)), (Fingerprint{24616, 0xea90437c, 0xea90437c}));
 
-  const StoredTable sparse_motion{larger_table(Grid(6, 4), TableStorage::automatic, 2000),
-                                  metadata_of(1.0), motion_table(1.0, 3, 300, 40)};
+  const StoredTable sparse_motion{
+      larger_table(Grid(6, 4), TableStorage::automatic, 2000), metadata_of(1.0),
+      std::make_shared<const MotionTable>(motion_table(1.0, 3, 300, 40))};
   ASSERT_FALSE(sparse_motion.table.is_dense());
   EXPECT_EQ(fingerprint_of(saved_bytes(sparse_motion)),
             (Fingerprint{69046, 0x3e48a2be, 0x3e48a2be}));
 
   // Every horizon a file can hold.
-  const StoredTable dense_motion{larger_table(Grid(3, 2), TableStorage::dense, 500),
-                                 metadata_of(1.0),
-                                 motion_table(1.0, MotionConfig::max_horizons, 100, 3)};
+  const StoredTable dense_motion{
+      larger_table(Grid(3, 2), TableStorage::dense, 500), metadata_of(1.0),
+      std::make_shared<const MotionTable>(motion_table(1.0, MotionConfig::max_horizons, 100, 3))};
   EXPECT_EQ(fingerprint_of(saved_bytes(dense_motion)),
             (Fingerprint{204692, 0x2f0dd7f0, 0x2f0dd7f0}));
 }

@@ -1,7 +1,7 @@
 // A table file kept within its budget: the motion table is pruned until the file fits, and the
 // file saved is the size the budget was checked against.
 
-#include "ssl_formation/files/table_budget.hpp"
+#include "ssl_formation/models/table_budget.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string>
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "table_bytes.hpp"
 
 namespace ssl_formation {

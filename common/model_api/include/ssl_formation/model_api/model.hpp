@@ -8,6 +8,7 @@
 // it on: observe() for every sample, in time order, so that each keeps what it needs of the
 // match so far (a robot's recent positions, its tracker); learn() or forecast() after it.
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -19,13 +20,26 @@
 #include "ssl_formation/base/state.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/match/referee.hpp"
+#include "ssl_formation/model_api/stored_table.hpp"
 
 namespace ssl_formation {
 
-class MotionTable;
-class TransitionTable;
-struct StoredTable;
-struct TableMetadata;
+// What a status line and a report say of a learner's table, without a copy of it.
+struct TableSummary {
+  Grid grid;
+  std::uint64_t transitions = 0;  // the counts on cells: their sum
+  std::uint64_t states_seen = 0;  // the states with a count from them
+  std::size_t memory_bytes = 0;   // what the table takes in memory, every section
+  // The motion model's section, when the model keeps one.
+  struct Motion {
+    double step_s = 0.0;
+    int horizons = 0;
+    std::uint64_t instances = 0;  // learned from
+    std::uint64_t held_out = 0;   // held out for the calibration
+    std::size_t rows = 0;
+  };
+  std::optional<Motion> motion;
+};
 
 // One sample of the match and what the front end knows of it.
 struct MatchMoment {
@@ -72,10 +86,18 @@ class Learner {
   // Grows with everything learned or absorbed: a daemon saves only when it changed.
   virtual std::uint64_t progress() const = 0;
 
-  // What a table file keeps of it: the paper's counts, and the motion model's rows. None for a
-  // model that keeps no table (the baselines).
-  virtual const TransitionTable* transitions() const { return nullptr; }
-  virtual const MotionTable* motion() const { return nullptr; }
+  // What a table file keeps of it, with `metadata`: a copy the caller may save or predict from.
+  // None for a model that keeps no table (the baselines).
+  virtual std::optional<StoredTable> stored(const TableMetadata& /*metadata*/) const {
+    return std::nullopt;
+  }
+  // stored(), leaving this learner without its table, so that a large one is not copied: for a
+  // caller done with learning (the evaluation, once it has trained).
+  virtual std::optional<StoredTable> release_table(const TableMetadata& metadata) {
+    return stored(metadata);
+  }
+  // What a status line says of that table, without copying it (none: no table).
+  virtual std::optional<TableSummary> table_summary() const { return std::nullopt; }
 
   // A forecaster of what was learned so far; `metadata` is the table's (its field and step).
   virtual std::unique_ptr<Forecaster> forecaster(const TableMetadata& metadata) const = 0;

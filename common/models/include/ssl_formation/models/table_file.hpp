@@ -93,8 +93,9 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/result.hpp"
 #include "ssl_formation/files/team_file_name.hpp"  // team_table_file_name, kept here for callers
+#include "ssl_formation/model_api/stored_table.hpp"
+#include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
-#include "ssl_formation/paper_model/transition_table.hpp"
 
 namespace ssl_formation {
 
@@ -110,25 +111,6 @@ inline constexpr std::uint32_t table_file_set_play_version = 4;
 inline constexpr std::uint32_t table_file_compact_motion_version = 5;
 // The version of motion tables keyed by the earlier features, refused with a reason.
 inline constexpr std::uint32_t table_file_retired_motion_version = 2;
-
-// What the counts mean, saved next to them.
-struct TableMetadata {
-  FieldSize field;
-  double step_s = 2.0;
-  std::uint64_t samples = 0;  // formations sampled while training
-  friend bool operator==(const TableMetadata&, const TableMetadata&) = default;
-};
-
-struct StoredTable {
-  TransitionTable table;
-  TableMetadata metadata;
-  // The motion model's counts (format version 3 to 5); none in a version-1 file, which serves only
-  // the paper's model.
-  std::optional<MotionTable> motion = std::nullopt;
-  // The format version it was read from (0 when it was not read from a file): a caller says
-  // once that an older version is saved as the current one.
-  std::uint32_t format_version = 0;
-};
 
 enum class TableFileError {
   cannot_open,    // missing, unreadable or not a regular file

@@ -1,4 +1,4 @@
-#include "motion_table_format.hpp"
+#include "ssl_formation/motion_model/motion_table_format.hpp"
 
 #include <algorithm>
 #include <array>

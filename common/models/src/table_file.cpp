@@ -2,7 +2,7 @@
 // (motion_table_format) and the durable write (durable_file) put together, with the checks in
 // the order table_file.hpp gives and the messages that name the file.
 
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -11,10 +11,10 @@
 #include <array>
 #include <cerrno>
 
-#include "chunk_reader.hpp"
-#include "durable_file.hpp"
-#include "file_descriptor.hpp"
-#include "motion_table_format.hpp"
+#include "ssl_formation/files/chunk_reader.hpp"
+#include "ssl_formation/files/durable_file.hpp"
+#include "ssl_formation/files/file_descriptor.hpp"
+#include "ssl_formation/motion_model/motion_table_format.hpp"
 #include "table_format.hpp"
 
 namespace ssl_formation {
@@ -252,7 +252,7 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
 
   // Counts, then the motion section. Both checksums matched, so a problem here comes from the
   // writer, not the disk.
-  StoredTable stored{TransitionTable(grid, storage), header.metadata, std::nullopt};
+  StoredTable stored{TransitionTable(grid, storage), header.metadata, nullptr};
   std::uint64_t sum = 0;
   ChunkReader reader(fd.get(), header_size, checksum_offset);
   if (const ReadProblem problem = read_counts(reader, header, stored.table, sum);
@@ -265,11 +265,13 @@ Result<StoredTable, TableLoadError> load_table(const std::filesystem::path& path
                             " transitions, the header says " + std::to_string(header.transitions));
   }
   if (const std::optional<MotionLayout> layout = motion_layout_of(header.version)) {
+    std::optional<MotionTable> motion;
     if (const ReadProblem problem =
-            read_motion_section(reader, header.metadata.step_s, *layout, stored.motion);
+            read_motion_section(reader, header.metadata.step_s, *layout, motion);
         problem.failed()) {
       return content_failure(path, problem);
     }
+    if (motion) stored.motion = std::make_shared<const MotionTable>(std::move(*motion));
   }
   stored.format_version = header.version;
   return stored;

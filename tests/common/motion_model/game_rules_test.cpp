@@ -2,7 +2,7 @@
 // motion_model and the rules' prior of motion_predictor): learned and predicted through the front
 // end from vision frames and referee messages, as the daemons do.
 
-#include "ssl_formation/models/game_rules.hpp"
+#include "ssl_formation/motion_model/game_rules.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "match_logs.hpp"
-#include "ssl_formation/files/table_file.hpp"
 #include "ssl_formation/models/model_factory.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/pipeline/match_front_end.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
@@ -474,7 +474,7 @@ TEST(BallPlacementPath, TheNearestRobotDrivesBehindTheBallThenCarriesItToTheSpot
   robots[2].robot_id = 4;
   robots[2].position = {500.0, 2000.0};
   SetPlayAdvice advice;
-  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 3, advice);
+  advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 3, advice);
   ASSERT_TRUE(advice.any);
   ASSERT_EQ(advice.robots.size(), 3u);
   // From standing, 2 m/s^2 up to 1.5 m/s (0.75 s): 250 mm in 0.5 s, 937.5 in 1 s, 1687.5 in
@@ -483,13 +483,13 @@ TEST(BallPlacementPath, TheNearestRobotDrivesBehindTheBallThenCarriesItToTheSpot
   for (std::size_t k = 0; k < 3; ++k) {
     EXPECT_NEAR(advice.robots[1].position[k].x, along[k], 1e-6) << k;
     EXPECT_NEAR(advice.robots[1].position[k].y, 0.0, 1e-6) << k;
-    EXPECT_DOUBLE_EQ(advice.robots[1].weight[k], models::BallPlacementPath::weight);
+    EXPECT_DOUBLE_EQ(advice.robots[1].weight[k], BallPlacementPath::weight);
     EXPECT_EQ(advice.robots[0].weight[k], 0.0);
     EXPECT_EQ(advice.robots[2].weight[k], 0.0);
   }
   // A tenth of a second ahead the path counts a fifth as much as from half a second on.
-  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.1, 1, advice);
-  EXPECT_DOUBLE_EQ(advice.robots[1].weight[0], models::BallPlacementPath::weight / 5.0);
+  advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.1, 1, advice);
+  EXPECT_DOUBLE_EQ(advice.robots[1].weight[0], BallPlacementPath::weight / 5.0);
 }
 
 TEST(BallPlacementPath, ABallOnItsSpotIsApproachedStraightAndNoRobotsGetNoAdvice) {
@@ -501,7 +501,7 @@ TEST(BallPlacementPath, ABallOnItsSpotIsApproachedStraightAndNoRobotsGetNoAdvice
   // The ball within the 0.15 m the rules allow, on its spot: robot 1 goes straight at it (not
   // round it) and stops 110 mm short, 390 mm on; 250 mm in the first 0.5 s from standing.
   for (const Point spot : {Point{1000.0, 0.0}, Point{1100.0, 100.0}}) {
-    models::advise_ball_placement(robots, Point{1000.0, 0.0}, spot, 0.5, 3, advice);
+    advise_ball_placement(robots, Point{1000.0, 0.0}, spot, 0.5, 3, advice);
     ASSERT_TRUE(advice.any);
     ASSERT_EQ(advice.robots.size(), 2u);
     EXPECT_NEAR(advice.robots[1].position[0].x, 1250.0, 1e-6);
@@ -509,11 +509,11 @@ TEST(BallPlacementPath, ABallOnItsSpotIsApproachedStraightAndNoRobotsGetNoAdvice
     EXPECT_NEAR(advice.robots[1].position[2].y, 0.0, 1e-6);
     for (const double w : advice.robots[0].weight) EXPECT_EQ(w, 0.0);
   }
-  models::advise_ball_placement({}, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 3, advice);
+  advise_ball_placement({}, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 3, advice);
   EXPECT_FALSE(advice.any);
   EXPECT_TRUE(advice.robots.empty());
   // More steps than an advice holds: the first 16 are advised, for robot 1, nearest the ball.
-  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 40, advice);
+  advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 0.5, 40, advice);
   EXPECT_TRUE(advice.any);
   EXPECT_GT(advice.robots[1].weight.back(), 0.0);
   EXPECT_EQ(advice.robots[0].weight.back(), 0.0);
@@ -526,7 +526,7 @@ TEST(BallPlacementPath, ARobotWithTheBallCarriesItOnAndStopsBehindTheSpot) {
   robots[0].has_velocity = true;
   robots[0].kinematics.velocity = {1500.0, 0.0};
   SetPlayAdvice advice;
-  models::advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 1.0, 2, advice);
+  advise_ball_placement(robots, Point{1000.0, 0.0}, Point{3000.0, 0.0}, 1.0, 2, advice);
   EXPECT_NEAR(advice.robots[0].position[0].x, 2390.0, 1e-6);
   // 2 m of the way in 1.33 s; there it stays, the ball on the spot at its feet.
   EXPECT_NEAR(advice.robots[0].position[1].x, 2890.0, 1e-6);

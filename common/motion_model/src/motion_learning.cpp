@@ -1,20 +1,20 @@
-#include "table_models.hpp"
+#include "ssl_formation/motion_model/motion_learning.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "ssl_formation/files/table_budget.hpp"
-#include "ssl_formation/models/braking_advice.hpp"
-#include "ssl_formation/models/game_rules.hpp"
+#include "ssl_formation/motion_model/braking_advice.hpp"
+#include "ssl_formation/motion_model/game_rules.hpp"
+#include "ssl_formation/motion_model/motion_table_pruning.hpp"
 
-namespace ssl_formation::models {
+namespace ssl_formation {
 
 namespace {
 
 // The history the motion model's predictions read velocities from: the step and horizons come
 // from the table, but velocities need only the window, which is the same for every table.
-MotionConfig prediction_history_config(const ModelSettings& settings) {
+MotionConfig prediction_history_config(const MotionForecastSettings& settings) {
   MotionConfig motion;
   motion.step_s = settings.step_s;
   motion.horizons = 1;
@@ -32,42 +32,6 @@ Point ball_velocity_of(const MatchMoment& moment) {
 }
 
 }  // namespace
-
-// ---- The paper's model ----------------------------------------------------------------------
-
-void PaperLearner::learn(const MatchMoment& moment) {
-  for (const Transition& t : moment.sample.transitions) table_.add(t.from, t.to);
-}
-
-void PaperLearner::absorb(const Learner& other) {
-  const auto* paper = dynamic_cast<const PaperLearner*>(&other);
-  if (!paper) throw std::invalid_argument("a training of another model cannot be added");
-  table_.merge(paper->table_);  // checks the grid
-}
-
-std::unique_ptr<Forecaster> PaperLearner::forecaster(const TableMetadata& metadata) const {
-  auto forecaster = std::make_unique<PaperForecaster>();
-  forecaster->set_table(std::make_shared<const StoredTable>(StoredTable{table_, metadata}));
-  return forecaster;
-}
-
-void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction& out, ForecastUse) {
-  robot_states_.clear();
-  for (const FormationRobot& robot : moment.formation().robots) {
-    robot_states_.push_back({robot.robot_id, robot.state});
-  }
-  predict(table_->table, robot_states_, steps, out);
-  // The paper's model states cells: their centres stand for its positions.
-  const Grid& grid = moment.codec.grid();
-  for (PredictedStep& step : out.steps) {
-    for (RobotPrediction& robot : step.robots) {
-      robot.normalised_position = grid.centre_of(robot.position, moment.field);
-      robot.feed_position = normalise(robot.normalised_position, moment.attacks);
-    }
-  }
-}
-
-// ---- The motion model -----------------------------------------------------------------------
 
 MotionLearner::MotionLearner(TransitionTable table, MotionTable motion,
                              std::optional<OnlineCalibrationSettings> recalibration, bool pooled,
@@ -101,10 +65,9 @@ void MotionLearner::bound_memory() {
   // robot row that goes on gaining starts again beneath its zone, and the next pruning waits
   // for half the bound's rows, so that its cost (one estimate per key) stays a fixed share of
   // the learning.
-  const TableBudget budget;
-  MotionPruning pruning = budget.pruning;
+  MotionPruning pruning;
   pruning.max_rows = std::max<std::size_t>(1, rows_in_memory_ / 2);
-  motion_ = prune_motion_table(motion_, budget.settings, pruning).table;
+  motion_ = prune_motion_table(motion_, MotionModelSettings{}, pruning).table;
 }
 
 void MotionLearner::forget_match() {
@@ -129,21 +92,39 @@ std::unique_ptr<Forecaster> MotionLearner::forecaster(const TableMetadata& metad
 
 std::unique_ptr<Forecaster> MotionLearner::forecaster(
     const TableMetadata& metadata, std::shared_ptr<const MotionTable> prior_table) const {
-  ModelSettings settings;
+  MotionForecastSettings settings;
   settings.prior_table = std::move(prior_table);
   settings.prior_field = metadata.field;
   settings.grid = table_.grid();
   settings.step_s = motion_.config().step_s;
-  settings.horizons = motion_.config().horizons;
   settings.recalibration = recalibration_;
-  settings.pooled_motion = pooled_;
+  settings.pooled = pooled_;
   auto forecaster = std::make_unique<MotionForecaster>(settings);
-  forecaster->set_table(
-      std::make_shared<const StoredTable>(StoredTable{table_, metadata, motion_}));
+  forecaster->set_table(std::make_shared<const StoredTable>(*stored(metadata)));
   return forecaster;
 }
 
-MotionForecaster::MotionForecaster(const ModelSettings& settings)
+std::optional<StoredTable> MotionLearner::stored(const TableMetadata& metadata) const {
+  return StoredTable{table_, metadata, std::make_shared<const MotionTable>(motion_)};
+}
+
+std::optional<TableSummary> MotionLearner::table_summary() const {
+  return TableSummary{
+      table_.grid(), table_.transitions(), table_.rows_seen(),
+      table_.memory_bytes() + motion_.memory_bytes(),
+      TableSummary::Motion{motion_.config().step_s, motion_.config().horizons, motion_.instances(),
+                           motion_.held_out(), motion_.rows()}};
+}
+
+std::optional<StoredTable> MotionLearner::release_table(const TableMetadata& metadata) {
+  StoredTable stored{std::move(table_), metadata,
+                     std::make_shared<const MotionTable>(std::move(motion_))};
+  table_ = TransitionTable(stored.table.grid());
+  motion_ = MotionTable(stored.motion->config());
+  return stored;
+}
+
+MotionForecaster::MotionForecaster(const MotionForecastSettings& settings)
     : settings_(settings),
       history_(prediction_history_config(settings)),
       calibration_(settings.recalibration.value_or(OnlineCalibrationSettings{})) {
@@ -253,4 +234,4 @@ void MotionForecaster::forget_match() {
   calibration_.clear();
 }
 
-}  // namespace ssl_formation::models
+}  // namespace ssl_formation

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "byte_codec.hpp"
+#include "ssl_formation/files/byte_codec.hpp"
 
 namespace ssl_formation::detail {
 

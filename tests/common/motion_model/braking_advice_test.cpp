@@ -1,7 +1,7 @@
 // Where a braking robot is advised to stop (models/src/braking_advice.cpp), as the forecaster
 // asks for it: normalised robots with the tracker's kinematics.
 
-#include "ssl_formation/models/braking_advice.hpp"
+#include "ssl_formation/motion_model/braking_advice.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,9 +7,9 @@
 #include <optional>
 #include <string>
 
-#include "chunk_reader.hpp"
-#include "durable_file.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/files/chunk_reader.hpp"
+#include "ssl_formation/files/durable_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 namespace ssl_formation::detail {
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "byte_codec.hpp"
 #include "ssl_formation/base/result.hpp"
+#include "ssl_formation/files/byte_codec.hpp"
 
 namespace ssl_formation::detail {
 

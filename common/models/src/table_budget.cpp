@@ -1,9 +1,9 @@
-#include "ssl_formation/files/table_budget.hpp"
+#include "ssl_formation/models/table_budget.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "motion_table_format.hpp"
+#include "ssl_formation/motion_model/motion_table_format.hpp"
 #include "table_format.hpp"
 
 namespace ssl_formation {

@@ -1,4 +1,4 @@
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

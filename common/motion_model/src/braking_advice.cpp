@@ -1,9 +1,9 @@
-#include "ssl_formation/models/braking_advice.hpp"
+#include "ssl_formation/motion_model/braking_advice.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace ssl_formation::models {
+namespace ssl_formation {
 
 bool braking_advice_holds(GamePhase phase) {
   return phase == GamePhase::stop || phase == GamePhase::ball_placement_opponent ||
@@ -42,4 +42,4 @@ void advise_braking(const std::vector<MotionRobot>& robots, double velocity_wind
   }
 }
 
-}  // namespace ssl_formation::models
+}  // namespace ssl_formation

@@ -22,7 +22,7 @@
 
 #include "circling_robots.hpp"
 #include "motion_section_bytes.hpp"
-#include "ssl_formation/files/table_file.hpp"
+#include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "ssl_formation/pipeline/training.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
@@ -155,11 +155,11 @@ class MotionTableFile : public ::testing::Test {
     metadata.step_s = step_s;
     metadata.samples = training->samples();
     const fs::path path = dir_ / "v2.bin";
-    EXPECT_TRUE(save_table(path, training->table(), metadata, *training->motion()));
+    EXPECT_TRUE(save_table(path, training->stored_table().table, metadata,
+                           *training->stored_table().motion));
     const fs::path v1 = dir_ / "v1.bin";
-    EXPECT_TRUE(save_table(v1, training->table(), metadata));
-    Saved saved{read_bytes(path), read_bytes(v1).size() - 4,
-                StoredTable{training->table(), metadata, *training->motion()}};
+    EXPECT_TRUE(save_table(v1, training->stored_table().table, metadata));
+    Saved saved{read_bytes(path), read_bytes(v1).size() - 4, training->stored_table(metadata)};
     return saved;
   }
 
@@ -186,7 +186,8 @@ TEST_F(MotionTableFile, TrainedTableRoundTrips) {
   const MotionConfig config = small_calibration_config(0.5);
   const auto training =
       train({circling_stream(10.0, 20.0, 1), circling_stream(100.0, 15.0, 2)}, config);
-  const MotionTable& motion = *training->motion();
+  const StoredTable stored = training->stored_table();
+  const MotionTable& motion = *stored.motion;
   ASSERT_GT(motion.instances(), 1000u);
   ASSERT_GT(motion.held_out(), 0u);
   for (int h = 0; h < config.horizons; ++h) ASSERT_FALSE(motion.calibration(h).empty()) << h;
@@ -196,14 +197,14 @@ TEST_F(MotionTableFile, TrainedTableRoundTrips) {
   metadata.step_s = 0.5;
   metadata.samples = training->samples();
   const fs::path path = dir_ / "table.bin";
-  ASSERT_TRUE(save_table(path, training->table(), metadata, motion));
+  ASSERT_TRUE(save_table(path, training->stored_table().table, metadata, motion));
   EXPECT_EQ(get_u32(read_bytes(path), version_offset), table_file_compact_motion_version);
 
   const LoadResult loaded = load_table(path, Grid(3, 2));
   ASSERT_TRUE(loaded) << message_of(loaded);
   EXPECT_EQ(loaded->metadata, metadata);
-  EXPECT_EQ(entries_of(loaded->table), entries_of(training->table()));
-  ASSERT_TRUE(loaded->motion.has_value());
+  EXPECT_EQ(entries_of(loaded->table), entries_of(training->stored_table().table));
+  ASSERT_TRUE(loaded->motion != nullptr);
   EXPECT_TRUE(*loaded->motion == motion);
   EXPECT_EQ(loaded->motion->config(), config);
   EXPECT_EQ(loaded->motion->instances(), motion.instances());
@@ -244,7 +245,7 @@ TEST_F(MotionTableFile, SparseGridAndSyntheticInstancesRoundTrip) {
   ASSERT_TRUE(loaded) << message_of(loaded);
   EXPECT_FALSE(loaded->table.is_dense());
   EXPECT_EQ(entries_of(loaded->table), entries_of(table));
-  ASSERT_TRUE(loaded->motion.has_value());
+  ASSERT_TRUE(loaded->motion != nullptr);
   EXPECT_EQ(loaded->motion->config(), config);
   EXPECT_TRUE(*loaded->motion == motion);
 }
@@ -257,7 +258,7 @@ TEST_F(MotionTableFile, EmptyMotionTableRoundTrips) {
   ASSERT_TRUE(save_table(path, TransitionTable(Grid(3, 2)), TableMetadata{}, motion));
   const LoadResult loaded = load_table(path);
   ASSERT_TRUE(loaded) << message_of(loaded);
-  ASSERT_TRUE(loaded->motion.has_value());
+  ASSERT_TRUE(loaded->motion != nullptr);
   EXPECT_TRUE(*loaded->motion == motion);
   EXPECT_EQ(loaded->motion->instances(), 0u);
 }
@@ -324,7 +325,7 @@ TEST_F(MotionTableFile, OlderVersionsLoadAndAreSavedAsVersionFive) {
     const LoadResult loaded = load_bytes(old_bytes);
     ASSERT_TRUE(loaded) << version << ": " << message_of(loaded);
     EXPECT_EQ(loaded->format_version, version);
-    ASSERT_TRUE(loaded->motion.has_value());
+    ASSERT_TRUE(loaded->motion != nullptr);
     EXPECT_TRUE(*loaded->motion == motion) << version;
     EXPECT_EQ(entries_of(loaded->table), entries_of(saved.stored.table));
 
@@ -344,13 +345,13 @@ TEST_F(MotionTableFile, VersionOneFilesLoadWithoutMotion) {
   const Saved saved = save_trained();
   const LoadResult v1 = load_table(dir_ / "v1.bin");
   ASSERT_TRUE(v1) << message_of(v1);
-  EXPECT_FALSE(v1->motion.has_value());
+  EXPECT_FALSE(v1->motion != nullptr);
   EXPECT_EQ(entries_of(v1->table), entries_of(saved.stored.table));
 
   // A version-1 file written before motion tables existed.
   const LoadResult golden = load_table(fs::path(SSLF_TEST_DATA_DIR) / "step-golden-6x4.bin");
   ASSERT_TRUE(golden) << message_of(golden);
-  EXPECT_FALSE(golden->motion.has_value());
+  EXPECT_FALSE(golden->motion != nullptr);
   EXPECT_GT(golden->table.transitions(), 0u);
 }
 
@@ -392,7 +393,7 @@ TEST_F(MotionTableFile, KickOffsRoundTripExactly) {
   EXPECT_EQ(bytes.size(), saved.bytes.size() + 2 * (4 + 40 * 144));
   const LoadResult loaded = load_table(path);
   ASSERT_TRUE(loaded) << message_of(loaded);
-  ASSERT_TRUE(loaded->motion.has_value());
+  ASSERT_TRUE(loaded->motion != nullptr);
   EXPECT_TRUE(*loaded->motion == motion);
   EXPECT_EQ(loaded->motion->set_plays(), motion.set_plays());
   const fs::path again = dir_ / "again.bin";
@@ -661,15 +662,16 @@ TEST_F(MotionTableFile, MergedFilesEqualTrainingOnBothStreams) {
   const auto trained_a = train({a}, config);
   const auto trained_b = train({b}, config);
   const auto together = train({a, b}, config);
-  ASSERT_GT(trained_a->motion()->instances(), 0u);
-  ASSERT_GT(trained_b->motion()->instances(), 0u);
-  ASSERT_GT(together->motion()->held_out(), 3u * config.calibration_capacity);
+  ASSERT_GT(trained_a->stored_table().motion->instances(), 0u);
+  ASSERT_GT(trained_b->stored_table().motion->instances(), 0u);
+  ASSERT_GT(together->stored_table().motion->held_out(), 3u * config.calibration_capacity);
 
   const auto save = [&](const Training& training, const fs::path& path) {
     TableMetadata metadata;
     metadata.step_s = config.step_s;
     metadata.samples = training.samples();
-    ASSERT_TRUE(save_table(path, training.table(), metadata, *training.motion()));
+    ASSERT_TRUE(
+        save_table(path, training.stored_table().table, metadata, *training.stored_table().motion));
   };
   save(*trained_a, dir_ / "a.bin");
   save(*trained_b, dir_ / "b.bin");
@@ -677,14 +679,16 @@ TEST_F(MotionTableFile, MergedFilesEqualTrainingOnBothStreams) {
   const LoadResult other = load_table(dir_ / "b.bin");
   ASSERT_TRUE(merged && other);
   merged->table.merge(other->table);
-  merged->motion->merge(*other->motion);
+  auto motion_sum = std::make_shared<MotionTable>(*merged->motion);
+  motion_sum->merge(*other->motion);
+  merged->motion = motion_sum;
 
-  EXPECT_EQ(entries_of(merged->table), entries_of(together->table()));
-  EXPECT_TRUE(*merged->motion == *together->motion());
-  EXPECT_EQ(merged->motion->instances(), together->motion()->instances());
-  EXPECT_EQ(merged->motion->held_out(), together->motion()->held_out());
+  EXPECT_EQ(entries_of(merged->table), entries_of(together->stored_table().table));
+  EXPECT_TRUE(*merged->motion == *together->stored_table().motion);
+  EXPECT_EQ(merged->motion->instances(), together->stored_table().motion->instances());
+  EXPECT_EQ(merged->motion->held_out(), together->stored_table().motion->held_out());
   for (int h = 0; h < config.horizons; ++h) {
-    EXPECT_EQ(merged->motion->calibration(h), together->motion()->calibration(h)) << h;
+    EXPECT_EQ(merged->motion->calibration(h), together->stored_table().motion->calibration(h)) << h;
   }
 }
 
