@@ -491,7 +491,7 @@ PredictionConfig prediction_config(const PredictorOptions& options) {
   if (options.model.opponent_team == "all") {
     throw app::UsageError("--opponent-team all is for ssl-trainer --from-log: name the opponent");
   }
-  if (!options.prior_table.empty() && config.model != ModelKind::motion) {
+  if (!options.prior_table.empty() && !describe(config.model).takes_prior_table) {
     throw app::UsageError("--prior-table is the motion model's prior: use it with --model motion");
   }
   config.prior_table = app::loaded_prior_table(options.prior_table, config.sampler.step_s);

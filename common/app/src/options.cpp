@@ -129,7 +129,7 @@ void take_table_settings(ModelOptions& model, const std::string& table_path) {
     model.grid = loaded->table.grid().to_string();
     taken.push_back("--grid " + model.grid);
   }
-  const ModelKind table_model = loaded->motion ? ModelKind::motion : ModelKind::paper;
+  const ModelKind table_model = model_of_table(*loaded);
   if (model.model == "auto") {
     model.model = std::string(to_string(table_model));
     taken.push_back("--model " + model.model);
