@@ -1,6 +1,6 @@
 // ssl-predictor's daemon: the match's events through the core's PredictionPipeline, each
-// prediction multicast as a FormationPrediction and printed as one readable line, the table
-// followed as the trainer replaces it, and the live field view (--http-port).
+// prediction multicast as a FormationPrediction and printed as one readable line, and the table
+// followed as the trainer replaces it. Its status and field view: predictor_status.cpp.
 
 #include "ssl_formation/predictor/predictor_daemon.hpp"
 
@@ -13,22 +13,6 @@
 #include "ssl_formation/pipeline/prediction_message.hpp"
 
 namespace ssl_formation::predictor {
-
-int list_states(const Grid& grid) {
-  const StateCodec codec(grid);
-  std::string out;
-  for (StateIndex index = 0; index < codec.state_count(); ++index) {
-    out += codec.describe(index);
-    out += '\n';
-    if (out.size() > (1 << 20)) {
-      std::cout << out;
-      out.clear();
-    }
-  }
-  std::cout << out << std::flush;
-  return std::cout ? 0 : 1;
-}
-
 namespace {
 
 std::string prediction_interface(const PredictorOptions& options) {
@@ -191,79 +175,6 @@ void PredictorDaemon::on_event(const MatchEvent& event) {
   release_retired();
 }
 
-void PredictorDaemon::publish_status(const net::LiveMatchEvents* live) {
-  if (!web_) return;
-  const double now = clock_.steady_s();
-  web::FieldViewStatus status;
-  status.setup = view_setup();
-  // The socket the vision comes in on: raw, or the tracker's.
-  const net::ReceiverCounters* counters = !live             ? nullptr
-                                          : live->tracker() ? &live->tracker()->counters()
-                                                            : &live->vision().counters();
-  const std::uint64_t packets =
-      counters ? counters->datagrams.load() : pipeline_.sampler().counters().packets;
-  status.packets = packets;
-  // The rate over at least a quarter of a second: a status sent between two periodic ones (a
-  // page joining) says the last rate rather than one of a few milliseconds' packets.
-  if (!last_rate_s_ || now - *last_rate_s_ >= 0.25) {
-    if (last_rate_s_ && now > *last_rate_s_) {
-      packets_per_s_ = static_cast<double>(packets - last_rate_packets_) / (now - *last_rate_s_);
-    }
-    last_rate_s_ = now;
-    last_rate_packets_ = packets;
-  }
-  status.packets_per_s = packets_per_s_;
-  // The age of the last datagram on this process's own clocks: steady for the age, the wall
-  // clock only to date it (never the feed's t_capture, which is the simulator's or camera's).
-  const std::int64_t wall_now = clock_.unix_ms();
-  status.server_unix_ms = wall_now;
-  if (last_packet_s_) {
-    const double age = std::max(now - *last_packet_s_, 0.0);
-    status.since_packet_s = age;
-    status.last_packet_unix_ms = wall_now - static_cast<std::int64_t>(age * 1000.0);
-  }
-  if (counters) {
-    status.parse_errors = counters->parse_errors.load();
-    status.kernel_drops = counters->kernel_drops.load();
-  }
-  status.formations = pipeline_.sampler().counters().samples;
-  status.predictions = pipeline_.predictions();
-  if (const auto& table = pipeline_.table()) {
-    const StoredTable& stored = *table;
-    status.table_loaded = true;
-    status.table_transitions = stored.table.transitions();
-    status.table_formations = stored.metadata.samples;
-    if (stored.motion) status.table_motion_instances = stored.motion->instances();
-    status.table_states_seen = stored.table.rows_seen();
-  }
-  status.table_reloads = table_reloads_;
-  status.table_loaded_unix_ms = table_loaded_unix_ms_;
-  status.table_error = table_error_;
-  const web::FieldViewCounters web_counters = web_->counters();
-  status.clients = web_counters.live_clients;
-  status.dropped_frames = web_counters.dropped_frames;
-  status.ours = ours_.current();
-  status.opponent = describe(pipeline_.match().opponent(), pipeline_.sampler().attacks());
-  status.game_state = std::string(to_string(pipeline_.match().game_state()));
-  status.referee = describe(pipeline_.match().referee());
-  status.referee_heard = pipeline_.match().referee().heard();
-  status.referee_view = pipeline_.match().referee().view();
-  status.phase = pipeline_.front_end().phase_now();
-  status.ball = &ball_;
-  const LiveScore& live_score = pipeline_.live_score();
-  status.live_score = live_score.horizons();
-  for (const GamePhase phase : all_game_phases) {
-    // Only the phases whose predictions have been checked (not those still waiting for their
-    // instant).
-    const auto& horizons = live_score.horizons(phase);
-    if (std::any_of(horizons.begin(), horizons.end(),
-                    [](const LiveScore::Horizon& h) { return h.robots > 0.0; })) {
-      status.live_score_by_phase.push_back(web::PhaseLiveScore{phase, live_score.horizons(phase)});
-    }
-  }
-  web_->broadcast(web::MessageKind::status, web::status_json(status));
-}
-
 void PredictorDaemon::check_table() {
   if (!feed_problem_said_) {
     if (const auto problem = pipeline_.feed_problem()) {
@@ -363,46 +274,6 @@ std::filesystem::path PredictorDaemon::table_path(const std::string& opponent) c
   return std::filesystem::path(options_.table_dir) / team_table_file_name(opponent);
 }
 
-void PredictorDaemon::log_status(const net::LiveMatchEvents* live, app::StatusMoment moment) {
-  const auto& c = pipeline_.sampler().counters();
-  app::StatusLine status;
-  app::add_reception(status, live, pipeline_.front_end());
-  status.figure("predictions", pipeline_.predictions());
-  // Why nothing is predicted, when that is why.
-  if (pipeline_.needs_table() && !pipeline_.table()) status.note("no table yet");
-  if (const std::string error = describe_for_status(pipeline_.live_score()); !error.empty()) {
-    status.figure("live_error", error);
-  }
-  app::add_match(status, pipeline_.front_end());
-  status.detail("formations", c.samples)
-      .detail("table_reloads", table_reloads_)
-      .detail("warm_ups", warm_ups_)
-      .detail("referee_messages", pipeline_.match().referee().counters().messages);
-  // Every prediction is sent at once: one not sent is a send that failed (and was logged).
-  status.problem("send_errors",
-                 pipeline_.predictions() - std::min(pipeline_.predictions(), output_.sent()));
-  app::add_sampler_counters(status, c);
-  app::add_reception_details(status, live, pipeline_.front_end());
-  status.log("status", moment);
-  // One warning per kind of bad input as it appears, so a hostile or broken feed is visible.
-  for (const std::string& line : new_rejections(reported_, c)) spdlog::warn("input: {}", line);
-  reported_ = c;
-  if (web_) {
-    const web::FieldViewCounters w = web_->counters();
-    app::StatusLine view;
-    if (w.live_clients == 0) view.note("no viewers");
-    view.figure("viewers", w.live_clients)
-        .detail("connections", w.connections)
-        .problem("refused", w.refused)
-        .problem("dropped_frames", w.dropped_frames)
-        .problem("stalled", w.stalled_clients)
-        .problem("bad_requests", w.bad_requests);
-    view.log("field view", moment);
-  }
-}
-
-// The hot path, from the prediction to the datagram: no allocation once warmed up, and the wire
-// format written directly (see encode_prediction).
 void PredictorDaemon::on_prediction(const PredictedFormation& predicted) {
   encode_prediction(predicted.formation(), predicted.prediction, predicted.context, datagram_);
   output_.send(std::as_bytes(std::span(datagram_.data(), datagram_.size())));
@@ -458,100 +329,6 @@ void PredictorDaemon::schedule_warm_up() {
     });
     ++warm_ups_;
   });
-}
-
-web::FieldViewSetup PredictorDaemon::view_setup() const {
-  // The opponent in use: the referee's or inferred side (the configured one until then).
-  const SamplerConfig& now = pipeline_.sampler().config();
-  return web::FieldViewSetup{pipeline_.sampler().field(), config_.grid,
-                             pipeline_.sampler().attacks().value_or(now.opponent_attacks),
-                             now.opponent_color,
-                             web::markings_for(pipeline_.sampler().field(), stated_markings_)};
-}
-
-PredictionConfig prediction_config(const PredictorOptions& options) {
-  PredictionConfig config;
-  config.sampler = options.model.sampler_config();
-  config.model = options.model.parsed_model();
-  const ModelDescription& model = describe(config.model);
-  if (model.learns && !model.keeps_table) {
-    throw app::UsageError("--model " + std::string(model.name) +
-                          " fits its damping on a training part, which only ssl-evaluate has: "
-                          "compare it there; ssl-predictor runs paper, motion, persistence, "
-                          "constant-velocity and constant-acceleration");
-  }
-  if (options.horizon < 1 || options.horizon > PredictionConfig::max_horizon) {
-    throw app::UsageError("--horizons must be 1 to " +
-                          std::to_string(PredictionConfig::max_horizon) + " steps");
-  }
-  config.horizon = options.horizon;
-  config.recalibration = app::recalibration_settings(options.recalibration_half_life_s);
-  config.opponent = options.model.opponent_choice();
-  config.tracked_vision = options.network.tracked();
-  if (options.model.opponent_team == "all") {
-    throw app::UsageError("--opponent-team all is for ssl-trainer --from-log: name the opponent");
-  }
-  if (!options.prior_table.empty() && !describe(config.model).takes_prior_table) {
-    throw app::UsageError("--prior-table is the motion model's prior: use it with --model motion");
-  }
-  config.prior_table = app::loaded_prior_table(options.prior_table, config.sampler.step_s);
-  return config;
-}
-
-int run_daemon(const PredictorOptions& options) {
-  const PredictionConfig config = prediction_config(options);
-  if (options.ttl < 0 || options.ttl > 255) throw app::UsageError("--ttl must be 0 to 255");
-  const auto reload_period = app::seconds_option("reload-interval", options.reload_interval_s);
-  const auto status_period = app::seconds_option("status-interval", options.status_interval_s);
-  if ((options.http_port < 0 && options.http_port != PredictorOptions::http_port_default) ||
-      options.http_port > 65535)
-    throw app::UsageError("--http-port must be 0 to 65535");
-  if (options.http_max_clients < 1 || options.http_max_clients > 10000) {
-    throw app::UsageError("--http-max-clients must be 1 to 10000");
-  }
-  if (options.http_send_buffer_bytes < 0)
-    throw app::UsageError("--http-send-buffer must be 0 or more");
-  if (!(options.warm_up_lead_ms >= 0.0 && options.warm_up_lead_ms <= 100.0))
-    throw app::UsageError("--warm-up-lead must be 0 to 100 milliseconds");
-  const auto web_status_period =
-      app::seconds_option("http-status-interval", options.http_status_interval_s);
-  const net::LiveFeeds feeds = app::live_feeds(options.network, options.receive_buffer_bytes);
-
-  boost::asio::io_context io;
-  const app::SystemClock clock;
-  MulticastPredictionOutput output(io, options);
-  PredictorDaemon daemon(io, options, config, clock, output);
-  net::LiveMatchEvents events(io, feeds, [&clock] { return clock.steady_s(); });
-  // Signals are caught from before the first log line on, so a SIGTERM right after start-up
-  // stops the daemon cleanly; the handler runs inside io.run(), after everything below exists.
-  std::optional<app::RepeatingTimer> reload;
-  std::optional<app::RepeatingTimer> status;
-  std::optional<app::RepeatingTimer> web_status;
-  app::StopSignals signals(io, [&](int signal) {
-    spdlog::info("signal {}: stopping", signal);
-    events.stop();
-    daemon.stop();
-    reload->cancel();
-    status->cancel();
-    if (web_status) web_status->cancel();
-    io.stop();
-  });
-  output.open();
-  daemon.start();
-  events.start(daemon);
-  app::ReadyFile ready(options.daemon.ready_file);
-  ready.mark_ready("ssl-predictor", daemon.ready_facts());
-  reload.emplace(io, reload_period, [&] { daemon.check_table(); });
-  status.emplace(io, status_period, [&] { daemon.log_status(&events); });
-  if (daemon.serving_web()) {
-    web_status.emplace(io, web_status_period, [&] { daemon.publish_status(&events); });
-    // A page that just connected is told at once that it is watching, not up to a period later
-    // by a status that still counts the viewers before it.
-    daemon.when_viewer_joins([&] { daemon.publish_status(&events); });
-  }
-  io.run();
-  daemon.log_status(&events, app::StatusMoment::at_stop);
-  return 0;
 }
 
 }  // namespace ssl_formation::predictor
