@@ -1,6 +1,6 @@
-// The training side of the motion model (common/motion_model/src/motion_model.cpp): whole_mm's
-// rounding (one value or a point's two at once), on which every learned row depends, kept bit for
-// bit through its speed-ups.
+// The training side of the motion model (common/motion_model/src/motion_history.cpp and
+// motion_features.cpp): whole_mm's rounding (one value or a point's two at once), on which every
+// learned row depends, kept bit for bit through its speed-ups.
 
 #include <gtest/gtest.h>
 
