@@ -121,10 +121,10 @@ sf::net::InterfaceChoice interface_option(const std::string& text) {
 int make_table(const std::string& path, std::uint64_t formations, std::uint64_t seed, double step_s,
                sf::ModelKind model) {
   const bool motion = model == sf::ModelKind::motion;
-  sf::sim::SimulationConfig simulation;
+  sf::simulation::SimulationConfig simulation;
   simulation.seed = seed;
   simulation.step_s = motion ? 1.0 / 60.0 : step_s;
-  sf::sim::SimulatedVision vision(simulation);
+  sf::simulation::SimulatedVision vision(simulation);
   sf::SamplerConfig config;
   config.step_s = motion ? sf::describe(sf::ModelKind::motion).default_step_s : step_s;
   config.field = simulation.field;
@@ -378,12 +378,12 @@ void print_gaps(const PathTimes& times, std::size_t skip, std::uint64_t replacem
 // One detection packet per formation of a one-camera simulated feed, t_capture advancing by one
 // step each, so every packet completes one sample and the predictor answers every packet.
 std::vector<std::string> latency_packets(const LatencyOptions& o, std::size_t count) {
-  sf::sim::SimulationConfig simulation;
+  sf::simulation::SimulationConfig simulation;
   simulation.seed = o.seed;
   simulation.step_s = o.step_s;
   simulation.start_time_s = o.start_time_s;
   simulation.cameras = 1;
-  sf::sim::SimulatedVision vision(simulation);
+  sf::simulation::SimulatedVision vision(simulation);
   std::vector<std::string> packets;
   packets.reserve(count);
   while (packets.size() < count) {
@@ -612,14 +612,14 @@ int run_load(const LoadOptions& o) {
   const auto total = static_cast<std::size_t>(std::llround(o.rate * o.seconds));
 
   // Every packet is built and serialised before the clock starts: the sender only sends.
-  sf::sim::SimulationConfig simulation;
+  sf::simulation::SimulationConfig simulation;
   simulation.seed = o.seed;
   simulation.step_s = o.frame_dt_s;
   simulation.start_time_s = o.start_time_s;
   simulation.cameras = o.cameras;
   // A geometry packet about every 3 s of wall time, as SSL-Vision does.
   simulation.geometry_interval_s = 3.0 * o.rate / o.cameras * o.frame_dt_s;
-  sf::sim::SimulatedVision vision(simulation);
+  sf::simulation::SimulatedVision vision(simulation);
   std::vector<std::vector<std::string>> frames;  // the packets of one instant, sent together
   std::size_t packets = 0;
   std::size_t detection_packets = 0;

@@ -50,7 +50,7 @@ class SimulatedFeed {
     if (referee_) line.detail("referee_sent", referee_->sent());
     line.detail("drop_rate_dropped", dropped_)
         .problem("send_errors", sender_.send_errors() + (referee_ ? referee_->send_errors() : 0));
-    const sim::SimulatedGameController* game = simulation_->game_controller();
+    const simulation::SimulatedGameController* game = simulation_->game_controller();
     if (referee_ && game) describe_game_controller(*game, line);
     line.log(what, moment);
   }
@@ -116,7 +116,7 @@ int run_simulation(const ProducerOptions& options) {
   // The game controller runs whatever --referee-address says: the simulation is the same as
   // --write-log's for the same options, and `none` only keeps its messages off the network.
   std::unique_ptr<SimulationSource> simulation = make_simulation_source(options, true);
-  const sim::SimulatedGameController* game = simulation->game_controller();
+  const simulation::SimulatedGameController* game = simulation->game_controller();
 
   boost::asio::io_context io;
   net::ProtoMulticastSender<SSL_WrapperPacket> sender(io, group, interface.address, options.ttl);

@@ -55,7 +55,7 @@ int run_write_log(const ProducerOptions& options) {
     return std::runtime_error(writer->error() + "; " + options.write_log +
                               " not written (an earlier file there is as it was)");
   };
-  const sim::SimulatedGameController* game = simulation->game_controller();
+  const simulation::SimulatedGameController* game = simulation->game_controller();
   spdlog::info(
       "writing the {} simulation to {}: {}, {} s of data time a step, {} camera(s), "
       "seed {}, {}",

@@ -58,8 +58,8 @@ void apply_feed_settings(const ProducerOptions& options, Config& config) {
 
 }  // namespace
 
-sim::SimulationConfig simulation_config(const ProducerOptions& options) {
-  sim::SimulationConfig config;
+simulation::SimulationConfig simulation_config(const ProducerOptions& options) {
+  simulation::SimulationConfig config;
   config.seed = options.seed;
   if (options.step_s != 0.0) {
     if (!(options.step_s > 0.0) || !std::isfinite(options.step_s)) {
@@ -75,13 +75,13 @@ sim::SimulationConfig simulation_config(const ProducerOptions& options) {
   return config;
 }
 
-sim::MatchSimulationConfig match_simulation_config(const ProducerOptions& options) {
-  sim::MatchSimulationConfig config;
+simulation::MatchSimulationConfig match_simulation_config(const ProducerOptions& options) {
+  simulation::MatchSimulationConfig config;
   config.seed = options.seed;
   if (options.division == "A" || options.division == "a") {
-    config.division = sim::Division::a;
+    config.division = simulation::Division::a;
   } else if (options.division == "B" || options.division == "b") {
-    config.division = sim::Division::b;
+    config.division = simulation::Division::b;
   } else {
     throw app::UsageError("--division must be A or B, not '" + options.division + "'");
   }
@@ -91,13 +91,14 @@ sim::MatchSimulationConfig match_simulation_config(const ProducerOptions& option
   config.frame_rate_hz = options.frame_rate_hz;
   config.start_time_s = options.start_time_s;
   apply_feed_settings(options, config);
-  Result<sim::Playbook> playbook = sim::builtin_or_file_playbook(options.playbook);
+  Result<simulation::Playbook> playbook = simulation::builtin_or_file_playbook(options.playbook);
   if (!playbook) throw app::UsageError("--playbook: " + playbook.error().message);
   config.playbook = std::move(*playbook);
   return config;
 }
 
-std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOptions& options) {
+std::optional<simulation::GameControllerConfig> game_controller_config(
+    const ProducerOptions& options) {
   if (!options.referee) return std::nullopt;
   if (!(options.half_length_s > 0.0) || !std::isfinite(options.half_length_s)) {
     throw app::UsageError("--half-length must be a positive number of seconds");
@@ -111,7 +112,7 @@ std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOp
         "--our-team and --opponent-team must differ: the daemons tell the "
         "teams apart by name");
   }
-  sim::GameControllerConfig config;
+  simulation::GameControllerConfig config;
   config.seed = options.seed;
   config.our_name = options.our_team;
   config.opponent_name = options.opponent_team;

@@ -11,18 +11,18 @@ namespace {
 // The paper's simulated opponent: a formation every --step seconds, sent every --period.
 class PaperSource final : public SimulationSource {
  public:
-  PaperSource(const ProducerOptions& options, std::optional<sim::GameControllerConfig> game)
+  PaperSource(const ProducerOptions& options, std::optional<simulation::GameControllerConfig> game)
       : simulation_(simulation_config(options), std::move(game)), period_s_(options.period_s) {}
 
   SimulatedStep next() override {
-    sim::RefereedFormation step = simulation_.next();
+    simulation::RefereedFormation step = simulation_.next();
     SimulatedStep out;
     out.index = step.formation.index;
     out.t_capture = step.formation.t_capture;
     out.referee = std::move(step.referee);
     out.packets = std::move(step.formation.packets);
     out.dropped_packets = step.formation.dropped_packets;
-    if (step.formation.source == sim::FormationSource::play) ++play_formations_;
+    if (step.formation.source == simulation::FormationSource::play) ++play_formations_;
     return out;
   }
   const char* steps_name() const override { return "formations"; }
@@ -40,12 +40,12 @@ class PaperSource final : public SimulationSource {
       line.detail("random", fmt::format("{} ({:.1f}%)", random, 100.0 * random / total));
     }
   }
-  const sim::SimulatedGameController* game_controller() const override {
+  const simulation::SimulatedGameController* game_controller() const override {
     return simulation_.game_controller();
   }
 
  private:
-  sim::RefereedSimulation simulation_;
+  simulation::RefereedSimulation simulation_;
   double period_s_;
   std::uint64_t play_formations_ = 0;
 };
@@ -53,10 +53,10 @@ class PaperSource final : public SimulationSource {
 // The match: 60 frames a second of a team running its playbook, sent in real time.
 class MatchSource final : public SimulationSource {
  public:
-  explicit MatchSource(sim::MatchSimulationConfig config) : match_(std::move(config)) {}
+  explicit MatchSource(simulation::MatchSimulationConfig config) : match_(std::move(config)) {}
 
   SimulatedStep next() override {
-    sim::MatchFrame frame = match_.next();
+    simulation::MatchFrame frame = match_.next();
     SimulatedStep out;
     out.index = frame.index;
     out.t_capture = frame.t_capture;
@@ -78,17 +78,18 @@ class MatchSource final : public SimulationSource {
         .detail("shots", match_.shots())
         .detail("goals", match_.goals());
   }
-  const sim::SimulatedGameController* game_controller() const override {
+  const simulation::SimulatedGameController* game_controller() const override {
     return match_.game_controller();
   }
 
  private:
-  sim::MatchSimulation match_;
+  simulation::MatchSimulation match_;
 };
 
 }  // namespace
 
-void describe_game_controller(const sim::SimulatedGameController& game, app::StatusLine& line) {
+void describe_game_controller(const simulation::SimulatedGameController& game,
+                              app::StatusLine& line) {
   const Referee& message = game.message();
   line.figure("game", to_string(game.state()))
       .figure("attacks", to_string(game.opponent_attacks()))
@@ -109,13 +110,13 @@ std::unique_ptr<SimulationSource> make_simulation_source(const ProducerOptions& 
   if (!(options.duration_s >= 0.0) || !std::isfinite(options.duration_s)) {
     throw app::UsageError("--duration must be a number of seconds >= 0 (0: no limit)");
   }
-  std::optional<sim::GameControllerConfig> game =
+  std::optional<simulation::GameControllerConfig> game =
       with_referee ? game_controller_config(options) : std::nullopt;
   if (options.simulation == "paper") {
     return std::make_unique<PaperSource>(options, std::move(game));
   }
   if (options.simulation == "match") {
-    sim::MatchSimulationConfig config = match_simulation_config(options);
+    simulation::MatchSimulationConfig config = match_simulation_config(options);
     config.game = std::move(game);
     return std::make_unique<MatchSource>(std::move(config));
   }

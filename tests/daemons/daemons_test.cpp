@@ -41,10 +41,10 @@ using testing::PredictionListener;
 // (SamplerConfig's defaults: step sampling every 2 s, no motion table).
 TransitionTable reference_table(std::uint64_t seed, int count, int cameras = 1,
                                 std::uint64_t* samples = nullptr) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
   config.cameras = cameras;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
   for (int i = 0; i < count; ++i) {
     for (const auto& packet : vision.next().packets) training.add(packet);
@@ -137,7 +137,7 @@ TEST(Daemons, PredictionsOnTheWireEqualTheLibrarysPredictions) {
   ASSERT_EQ(received.size(), 60u);
 
   // The same stream through the library.
-  sim::SimulatedVision vision_stream(sim::SimulationConfig{.seed = 4});
+  simulation::SimulatedVision vision_stream(simulation::SimulationConfig{.seed = 4});
   std::vector<std::string> expected;
   PredictionConfig config;
   config.horizon = 3;

@@ -188,7 +188,7 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
         dir.path(), "write-log", 20s);
     ASSERT_EQ(result.exit_code, 0) << result.err;
 
-    sim::SimulationConfig config;
+    simulation::SimulationConfig config;
     config.seed = 7;
     config.cameras = 3;
     config.jitter_mm = 12.0;
@@ -196,7 +196,7 @@ TEST(Logs, WriteLogHoldsExactlyTheSimulatedStream) {
     config.opponent_color = TeamColor::blue;
     config.step_s = 0.5;
     config.start_time_s = 100.0;
-    sim::SimulatedVision vision(config);
+    simulation::SimulatedVision vision(config);
     std::vector<std::pair<std::int64_t, std::string>> expected;
     for (int i = 0; i < 80; ++i) {
       const auto formation = vision.next();
@@ -505,7 +505,7 @@ TEST(Logs, RecordingOfTheLiveProducerSamplesLikeTheLibrary) {
   const std::string group = new_group();
   const auto path = dir / "match.log.gz";
   std::vector<SSL_WrapperPacket> expected;
-  sim::SimulatedVision vision(sim::SimulationConfig{.seed = 3});
+  simulation::SimulatedVision vision(simulation::SimulationConfig{.seed = 3});
   for (int i = 0; i < 100; ++i) {
     for (auto& packet : vision.next().packets) expected.push_back(std::move(packet));
   }

@@ -26,14 +26,14 @@ const std::filesystem::path producer_program = SSLF_PRODUCER_PATH;
 // Writes the simulated stream of `seed` as an official log, as a recorder would.
 void write_simulated_log(const std::filesystem::path& path, std::uint64_t seed, int formations,
                          int cameras = 1) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
   config.cameras = cameras;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   auto writer = LogWriter::create(path);
   ASSERT_TRUE(writer) << writer.error().message;
   for (int i = 0; i < formations; ++i) {
-    const sim::SimulatedFormation f = vision.next();
+    const simulation::SimulatedFormation f = vision.next();
     for (const auto& packet : f.packets) {
       ASSERT_TRUE(writer->write_vision(packet, static_cast<std::int64_t>(f.t_capture * 1e9)));
     }

@@ -176,7 +176,7 @@ DirtyStream dirty_stream(const std::vector<SSL_WrapperPacket>& clean, std::uint6
 
 TEST(Reliability, BadInputIsCountedAndChangesNothing) {
   TempDir dir;
-  sim::SimulationConfig simulation;
+  simulation::SimulationConfig simulation;
   simulation.seed = 41;
   const std::vector<SSL_WrapperPacket> clean = simulated_packets(simulation, 400);
   const DirtyStream dirty = dirty_stream(clean, 6);
@@ -189,7 +189,7 @@ TEST(Reliability, BadInputIsCountedAndChangesNothing) {
             entries(clean_training->stored_table().table))
       << "the library itself is disturbed by the bad input";
   const SamplerCounters& expected = dirty_training->sampler().counters();
-  sim::SimulationConfig table_simulation;
+  simulation::SimulationConfig table_simulation;
   table_simulation.seed = 3;
   const auto predictor_training = train(simulated_packets(table_simulation, 2000));
   const StoredTable predictor_stored = predictor_training->stored_table();

@@ -23,11 +23,11 @@ const FieldSize division_a{12000, 9000};
 // The packets of each simulated formation, one vector per formation.
 Formations formations(std::uint64_t seed, int count, double start_time_s,
                       FieldSize field = {9000, 6000}) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
   config.start_time_s = start_time_s;
   config.field = field;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   Formations out;
   for (int i = 0; i < count; ++i) out.push_back(vision.next().packets);
   return out;
@@ -178,7 +178,7 @@ TEST(ReliabilityFeedFaults, DaemonsSurviveEveryFaultAndAgreeWithTheLibrary) {
   ASSERT_EQ(c.clock_conflicts, 1u);
   ASSERT_EQ(c.field_changes, 1u);
   ASSERT_EQ(c.samples, 280u);
-  sim::SimulationConfig table_simulation;
+  simulation::SimulationConfig table_simulation;
   table_simulation.seed = 3;
   const auto fixed = train(simulated_packets(table_simulation, 2000));
   ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->stored_table().table, TableMetadata{}));
@@ -226,7 +226,7 @@ TEST(ReliabilityFeedFaults, TrainerBesideTwoRealProducersReportsTheConflict) {
   TempDir dir;
   const std::string group = new_group();
   // What the two producers send: the library's streams for their seeds and clocks.
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = 71;
   const auto a_packets = simulated_packets(config, 300);
   const auto a = train(a_packets);

@@ -75,13 +75,13 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   // Every packet built before the clock starts: one burst per frame, one packet per camera, the
   // data clock advancing a step per frame (each frame completes a formation, the worst case: with
   // --model paper, whose 2 s step the simulation keeps, every frame is a sample and a prediction).
-  sim::SimulationConfig simulation;
+  simulation::SimulationConfig simulation;
   simulation.seed = 11;
   simulation.cameras = cameras;
   simulation.start_time_s = 1000.0;
   simulation.geometry_interval_s =
       3.0 * rate / cameras * simulation.step_s;  // every ~3 s of wall time
-  sim::SimulatedVision vision(simulation);
+  simulation::SimulatedVision vision(simulation);
   const auto total = static_cast<std::size_t>(rate * seconds);
   std::vector<std::vector<std::string>> bursts;
   std::size_t packets = 0;
@@ -93,7 +93,7 @@ TEST(Reliability, FiftyThousandPacketsPerSecondKeepMemoryFlatAndEveryDropCounted
   }
   const std::size_t trailing_bursts = 10;  // sent slowly after the load, so late drops show
 
-  sim::SimulationConfig table_simulation;
+  simulation::SimulationConfig table_simulation;
   table_simulation.seed = 3;
   const auto fixed = train(simulated_packets(table_simulation, 2000));
   ASSERT_TRUE(save_table(dir / "fixed.bin", fixed->stored_table().table, TableMetadata{}));

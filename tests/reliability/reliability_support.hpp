@@ -52,8 +52,9 @@ using Entries = testing::TableEntries;
 const auto entries = testing::table_entries;
 
 // The simulated producer's packets for `count` formations.
-inline std::vector<SSL_WrapperPacket> simulated_packets(sim::SimulationConfig config, int count) {
-  sim::SimulatedVision vision(config);
+inline std::vector<SSL_WrapperPacket> simulated_packets(simulation::SimulationConfig config,
+                                                        int count) {
+  simulation::SimulatedVision vision(config);
   std::vector<SSL_WrapperPacket> packets;
   for (int i = 0; i < count; ++i) {
     for (auto& packet : vision.next().packets) packets.push_back(std::move(packet));

@@ -169,9 +169,9 @@ TEST(FieldViewStatus, TheRealPredictorSendsAPositiveAgeTheTablesFormationsAndHor
 // A version-3 table (the paper's counts and the motion model's) from the simulated feed, sampled
 // at every frame as the motion model needs.
 StoredTable motion_reference_table(std::uint64_t seed, int count) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   SamplerConfig sampler;
   sampler.sampling = Sampling::frame;
   MotionConfig motion;

@@ -81,9 +81,9 @@ inline std::uint16_t free_tcp_port() {
 
 // The table the library learns from `count` formations of the simulated producer with `seed`.
 inline TransitionTable reference_table(std::uint64_t seed, int count) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
   for (int i = 0; i < count; ++i) {
     for (const auto& packet : vision.next().packets) training.add(packet);
@@ -97,9 +97,9 @@ struct ReferenceTable {
   TableMetadata metadata;
 };
 inline ReferenceTable reference_stored_table(std::uint64_t seed, int count) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   Training training(SamplerConfig{}, TransitionTable(Grid(3, 2)));
   for (int i = 0; i < count; ++i) {
     for (const auto& packet : vision.next().packets) training.add(packet);
@@ -114,9 +114,9 @@ inline ReferenceTable reference_stored_table(std::uint64_t seed, int count) {
 // How many datagrams the simulated producer with `seed` sends for `count` formations (geometry
 // included), by default options.
 inline std::uint64_t simulated_packet_count(std::uint64_t seed, int count) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
-  sim::SimulatedVision vision(config);
+  simulation::SimulatedVision vision(config);
   std::uint64_t packets = 0;
   for (int i = 0; i < count; ++i) packets += vision.next().packets.size();
   return packets;

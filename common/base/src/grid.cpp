@@ -4,7 +4,7 @@
 #include <charconv>
 #include <cmath>
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 bool FieldSize::valid() const {
   return std::isfinite(length_mm) && std::isfinite(width_mm) && length_mm > 0.0 && width_mm > 0.0;
@@ -64,4 +64,4 @@ std::string Grid::to_string() const {
   return std::to_string(length_) + "x" + std::to_string(width_);
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <new>
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 namespace {
 // Below this an array is allocated as usual: a huge page would be mostly empty.
@@ -48,4 +48,4 @@ void free_probed(void* memory, std::size_t bytes) {
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

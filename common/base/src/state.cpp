@@ -1,6 +1,6 @@
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 std::string StateCodec::describe(StateIndex index) const {
   const RobotState s = decode(index);
@@ -13,4 +13,4 @@ std::string StateCodec::describe(StateIndex index) const {
   return out;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <cstdio>
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 namespace {
 
@@ -84,4 +84,4 @@ std::string printable_wire_text(std::string_view raw, std::size_t max_chars) {
   return out;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

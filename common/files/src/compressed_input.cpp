@@ -15,7 +15,7 @@
 #include <isa-l/igzip_lib.h>
 #endif
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 namespace {
 
@@ -284,4 +284,4 @@ Inflater CompressedInput::inflater() const {
   return source_ ? source_->inflater() : Inflater::zlib;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

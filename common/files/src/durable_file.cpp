@@ -11,7 +11,7 @@
 #include "ssl_formation/files/file_descriptor.hpp"
 #include "ssl_formation/files/replacing_file.hpp"
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline files::detail {
 
 void FileWriter::write(const std::uint8_t* data, std::size_t size) {
   if (error_ != 0) return;
@@ -131,4 +131,4 @@ Result<DurableFileWritten> write_file_durably(const std::filesystem::path& path,
   return DurableFileWritten{};
 }
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline files::detail

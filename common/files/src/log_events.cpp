@@ -2,7 +2,7 @@
 
 #include <string>
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 bool LogEvents::next(MatchEvent& event) {
   LogReader::MatchInput kind{};
@@ -65,4 +65,4 @@ Result<RecordedLog> read_recorded_log(const std::filesystem::path& path) {
   return log;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

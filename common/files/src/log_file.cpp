@@ -11,7 +11,7 @@
 #include "ssl_formation/files/replacing_file.hpp"
 #include "zlib_errors.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 namespace {
 
@@ -539,4 +539,4 @@ Result<LogVisionPackets> read_vision_log(const std::filesystem::path& path) {
   return out;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

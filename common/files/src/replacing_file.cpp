@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <system_error>
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 std::filesystem::path temporary_beside(const std::filesystem::path& target) {
   // The pid keeps processes apart, the counter keeps concurrent writes of one process apart.
@@ -61,4 +61,4 @@ void ReplacingFile::discard() {
   std::filesystem::remove(temporary_, ignored);
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

@@ -9,7 +9,7 @@
 #include <cstring>
 #include <utility>
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 namespace {
 
@@ -113,4 +113,4 @@ TableWriterLock::~TableWriterLock() {
 TableWriterLock::TableWriterLock(TableWriterLock&& other) noexcept
     : path_(std::move(other.path_)), fd_(std::exchange(other.fd_, -1)) {}
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

@@ -8,7 +8,7 @@
 
 #include "ssl_formation/match/match.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 namespace {
 
@@ -190,4 +190,4 @@ std::string team_table_file_name(std::string_view team) {
   return name + ".bin";
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline files::detail {
 
 // gzopen and gzclose leave errno at 0 when they fail for want of memory.
 inline std::string zlib_errno_text(int err) {
@@ -20,4 +20,4 @@ inline std::string without_path(std::string message, const std::filesystem::path
   return message;
 }
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline files::detail

@@ -2,7 +2,7 @@
 
 #include "ssl_gc_referee_message.pb.h"
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 std::string_view to_string(GamePhase phase) {
   switch (phase) {
@@ -90,4 +90,4 @@ GamePhase GamePhaseTracker::phase(double time_s, TeamColor opponent) const {
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

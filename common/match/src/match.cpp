@@ -3,7 +3,7 @@
 #include <cctype>
 #include <utility>
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 std::string_view to_string(Because because) {
   switch (because) {
@@ -152,4 +152,4 @@ void MatchFollower::remember_opponent() {
   if (!opponent_.name.empty()) last_named_ = opponent_.name;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

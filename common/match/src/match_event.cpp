@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 std::string_view to_string(MatchEventKind kind) {
   switch (kind) {
@@ -62,4 +62,4 @@ std::pair<RecordedMatch, RecordedMatch> RecordedMatch::split(double fraction) co
   return {std::move(head), std::move(tail)};
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

@@ -4,7 +4,7 @@
 
 #include "ssl_formation/base/wire_text.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 namespace {
 // Metres (as the tracker sends them) to millimetres, in double.
@@ -92,4 +92,4 @@ bool TrackedVision::add(std::string_view payload, double receive_s, VisionFrame&
   return true;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

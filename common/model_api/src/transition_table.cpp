@@ -5,7 +5,7 @@
 #include <unordered_map>
 #include <utility>
 
-namespace ssl_formation {
+namespace ssl_formation::inline model_api {
 
 namespace {
 
@@ -256,4 +256,4 @@ void TransitionTable::merge(const TransitionTable& other) {
   other.for_each_nonzero([this](StateIndex from, StateIndex to, Count c) { add(from, to, c); });
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline model_api

@@ -6,9 +6,11 @@
 #include "ssl_formation/motion_model/motion_table_format.hpp"
 #include "table_format.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline models {
 
 using namespace detail;
+using namespace files::detail;
+using namespace motion_model::detail;
 
 TableBudget table_budget_mb(double megabytes) {
   TableBudget budget;
@@ -55,4 +57,4 @@ Result<BudgetFit> fit_table_to_budget(const TransitionTable& counts, const Table
   return result;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline models

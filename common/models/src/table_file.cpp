@@ -17,9 +17,11 @@
 #include "ssl_formation/motion_model/motion_table_format.hpp"
 #include "table_format.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline models {
 
 using namespace detail;
+using namespace files::detail;
+using namespace motion_model::detail;
 
 std::string_view to_string(TableFileError error) {
   switch (error) {
@@ -336,4 +338,4 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTab
                         stored.motion ? &*stored.motion : nullptr, hooks);
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline models

@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline models::detail {
 
 TableHeader header_for(const TransitionTable& table, const TableMetadata& metadata,
                        std::uint32_t version) {
@@ -218,4 +218,4 @@ std::optional<std::string> write_counts(FileWriter& writer, const TransitionTabl
   return std::nullopt;
 }
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline models::detail

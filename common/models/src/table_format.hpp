@@ -11,7 +11,10 @@
 #include "ssl_formation/files/durable_file.hpp"
 #include "ssl_formation/models/table_file.hpp"
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline models::detail {
+
+// Written with the file codec (files/byte_codec.hpp, chunk_reader.hpp, durable_file.hpp).
+using namespace files::detail;
 
 inline constexpr std::array<std::uint8_t, 8> table_magic = {'S', 'S', 'L', 'F', 'T', 'A', 'B', 'L'};
 inline constexpr std::uint64_t version_offset = 8;
@@ -56,4 +59,4 @@ ReadProblem read_counts(ChunkReader& reader, const TableHeader& header, Transiti
 // listed them out of order (its bytes are then not a table).
 std::optional<std::string> write_counts(FileWriter& writer, const TransitionTable& table);
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline models::detail

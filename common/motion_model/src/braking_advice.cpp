@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 bool braking_advice_holds(GamePhase phase) {
   return phase == GamePhase::stop || phase == GamePhase::ball_placement_opponent ||
@@ -42,4 +42,4 @@ void advise_braking(const std::vector<MotionRobot>& robots, double velocity_wind
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 
@@ -241,4 +241,4 @@ double motion_log_likelihood(const MotionRow& row, const MotionEstimate& estimat
   return -n * std::log(spread) - std::max(squares, 0.0) / spread;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

@@ -15,7 +15,7 @@
 #include <emmintrin.h>
 #endif
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 // No robot data for this long: the play moved on.
@@ -294,4 +294,4 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   table.add(std::span<const MotionTable::Learned>(batch.data(), pending));
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

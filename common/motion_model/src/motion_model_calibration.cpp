@@ -11,7 +11,7 @@
 
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 
@@ -155,4 +155,4 @@ MotionModel::IsotonicMap MotionModel::IsotonicMap::fit(
   return map;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

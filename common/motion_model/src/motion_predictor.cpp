@@ -8,7 +8,7 @@
 #include <optional>
 #include <stdexcept>
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 
@@ -553,4 +553,4 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

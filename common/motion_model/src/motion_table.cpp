@@ -15,7 +15,7 @@
 #include <emmintrin.h>
 #endif
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 
@@ -317,4 +317,4 @@ bool operator==(const MotionTable& a, const MotionTable& b) {
   return true;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline motion_model::detail {
 
 namespace {
 
@@ -505,4 +505,4 @@ ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, Motio
   return {};
 }
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline motion_model::detail

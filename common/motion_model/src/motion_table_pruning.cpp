@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 
@@ -141,4 +141,4 @@ MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSetti
   return MotionPruner(table, settings).prune(pruning);
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

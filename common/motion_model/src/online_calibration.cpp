@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 // Predictions remembered per step at most, the oldest going first: 16 robots remembered 10
@@ -324,4 +324,4 @@ void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase, bool pre
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

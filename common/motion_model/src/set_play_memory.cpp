@@ -6,7 +6,7 @@
 
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 namespace {
 
@@ -233,4 +233,4 @@ void SetPlayRecorder::finish(SetPlayMemory& memory) {
   over_since_s_.reset();
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-namespace ssl_formation {
+namespace ssl_formation::inline paper_model {
 
 void PaperLearner::learn(const MatchMoment& moment) {
   for (const Transition& t : moment.sample.transitions) table_.add(t.from, t.to);
@@ -45,4 +45,4 @@ void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction&
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline paper_model

@@ -1,6 +1,6 @@
 #include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline paper_model {
 
 namespace {
 
@@ -100,4 +100,4 @@ std::vector<RobotStateById> robot_states(const PredictedStep& step) {
   return robots;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline paper_model

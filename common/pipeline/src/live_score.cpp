@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 namespace {
 
@@ -145,4 +145,4 @@ std::string describe_for_status(const LiveScore& score) {
   return text;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

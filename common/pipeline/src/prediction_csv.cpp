@@ -8,7 +8,7 @@
 #include <optional>
 #include <sstream>
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 namespace {
 
@@ -96,9 +96,9 @@ void append_prediction_csv(const PredictedFormation& predicted, std::string& out
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 namespace {
 
@@ -259,4 +259,4 @@ Result<RecordedPredictions> read_prediction_csv(const std::string& path) {
   return parse_prediction_csv(text.str(), path);
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

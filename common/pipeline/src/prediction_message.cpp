@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstring>
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 namespace {
 
@@ -351,4 +351,4 @@ std::string describe_prediction(const Formation& current, const Prediction& pred
   return describe(current, prediction, &context);
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

@@ -4,7 +4,7 @@
 #include <string>
 #include <utility>
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 namespace {
 
@@ -149,4 +149,4 @@ bool PredictionPipeline::predict(const MatchMoment& moment, ForecastUse use) {
   return true;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 FrontEndConfig Training::front_end_config(const TrainingConfig& config) {
   FrontEndConfig front;
@@ -137,4 +137,4 @@ void Training::on_sample(const MatchMoment& moment) {
   }
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

@@ -9,7 +9,7 @@
 
 #include "ssl_formation/simulation/playbook.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 namespace {
 
@@ -278,4 +278,4 @@ std::optional<std::string_view> builtin_playbook_text(std::string_view name) {
   return std::nullopt;
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

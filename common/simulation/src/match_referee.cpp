@@ -9,7 +9,7 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 using namespace detail;
 
@@ -240,4 +240,4 @@ void MatchSimulation::follow_referee(const Referee& message, double now_s) {
   }
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

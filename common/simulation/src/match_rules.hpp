@@ -8,7 +8,7 @@
 
 #include "ssl_formation/simulation/match_simulation.hpp"
 
-namespace ssl_formation::sim::detail {
+namespace ssl_formation::simulation::detail {
 
 constexpr double kPi = 3.14159265358979323846;
 // The ball: at a holder's feet this far ahead of its centre, passed and shot at these speeds,
@@ -138,4 +138,4 @@ inline MotionLimits within_boundary(MotionLimits limits, const FieldSize& field)
   return limits;
 }
 
-}  // namespace ssl_formation::sim::detail
+}  // namespace ssl_formation::simulation::detail

@@ -8,7 +8,7 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_formation/vision/vision_packet.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 using namespace detail;
 
@@ -434,4 +434,4 @@ void MatchSimulation::build_packets(MatchFrame& frame) {
   frame.dropped_packets += append_camera_packets(layout, instant, noise_random_, frame.packets);
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 namespace {
 
@@ -235,4 +235,4 @@ Result<Playbook> builtin_or_file_playbook(const std::string& name_or_path) {
   return load_playbook(name_or_path);
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 namespace {
 
@@ -204,4 +204,4 @@ void TeamMotion::step(double dt_s, const std::vector<Point>& targets, double spe
   }
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 namespace {
 
@@ -37,4 +37,4 @@ RecordedMatch record_paper_simulation(SimulationConfig config, int formations,
   return match;
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -7,7 +7,7 @@
 
 #include "ssl_formation/match/match.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 namespace {
 
@@ -448,4 +448,4 @@ RefereedFormation RefereedSimulation::next() {
   return step;
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -6,7 +6,7 @@
 
 #include "ssl_formation/vision/vision_packet.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 namespace {
 
@@ -206,4 +206,4 @@ int append_camera_packets(const CameraLayout& layout, const SeenInstant& instant
   return dropped;
 }
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

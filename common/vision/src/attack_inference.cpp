@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 void AttackInference::reset() {
   tracks_.clear();
@@ -58,4 +58,4 @@ bool AttackInference::add(double time_s, const std::vector<Robot>& robots, const
   return true;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

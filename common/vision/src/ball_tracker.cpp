@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 namespace {
 // Times equal but for rounding (a window edge that falls on a frame time).
@@ -171,4 +171,4 @@ void BallTracker::update_velocity() {
   state_->velocity = Point{s_tx / s_tt, s_ty / s_tt};
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

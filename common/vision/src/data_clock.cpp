@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 namespace {
 constexpr double time_epsilon_s = 1e-9;
@@ -185,4 +185,4 @@ void DataClock::reset() {
   conflict_ = false;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

@@ -6,7 +6,7 @@
 
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 namespace {
 constexpr double time_epsilon_s = 1e-9;
@@ -554,4 +554,4 @@ std::vector<std::string> new_rejections(const SamplerCounters& before,
   return out;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

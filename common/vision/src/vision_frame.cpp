@@ -7,7 +7,7 @@
 
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 namespace {
 
@@ -406,4 +406,4 @@ VisionDatagram read_vision_datagram(std::span<const std::byte> datagram, VisionF
   return VisionDatagram::parsed_by_protobuf;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

@@ -1,6 +1,6 @@
 #include "ssl_formation/vision/vision_packet.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 namespace {
 
@@ -65,4 +65,4 @@ SSL_WrapperPacket make_geometry_packet(const FieldSize& field) {
   return packet;
 }
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

@@ -10,26 +10,26 @@ ev::EventStream in_memory(RecordedMatch match) {
 }
 
 RecordedMatch paper_simulation(const EvaluateOptions& options, std::uint64_t seed, int formations) {
-  sim::SimulationConfig config;
+  simulation::SimulationConfig config;
   config.seed = seed;
   config.jitter_mm = options.jitter_mm;
   config.cameras = options.cameras;
-  return sim::record_paper_simulation(config, formations);
+  return simulation::record_paper_simulation(config, formations);
 }
 
 RecordedMatch match_simulation(const EvaluateOptions& options, std::uint64_t seed, double seconds) {
-  sim::MatchSimulationConfig config;
+  simulation::MatchSimulationConfig config;
   config.seed = seed;
-  Result<sim::Playbook> playbook = sim::builtin_or_file_playbook(options.playbook);
+  Result<simulation::Playbook> playbook = simulation::builtin_or_file_playbook(options.playbook);
   if (!playbook) throw app::UsageError("--playbook: " + playbook.error().message);
   config.playbook = std::move(*playbook);
   config.jitter_mm = options.jitter_mm;
   config.cameras = options.cameras;
-  sim::GameControllerConfig game;
+  simulation::GameControllerConfig game;
   game.seed = seed;
   game.random_stoppages = false;  // the match calls its own stoppages
   config.game = game;
-  return sim::record_match_simulation(std::move(config), seconds);
+  return simulation::record_match_simulation(std::move(config), seconds);
 }
 
 std::pair<Streams, Streams> holdout_streams(const EvaluateOptions& options,

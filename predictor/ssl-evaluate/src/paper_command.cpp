@@ -35,10 +35,10 @@ int run_paper(const EvaluateOptions& options) {
   const TransitionTable& table = stored.table;
 
   std::vector<ev::PlayStates> plays;
-  for (int p = 0; p < sim::play_count; ++p) {
+  for (int p = 0; p < simulation::play_count; ++p) {
     std::vector<std::vector<Point>> positions;
-    for (int f = 0; f < sim::formations_per_play; ++f) {
-      const auto& team = sim::play_formation(p, f);
+    for (int f = 0; f < simulation::formations_per_play; ++f) {
+      const auto& team = simulation::play_formation(p, f);
       positions.emplace_back(team.begin(), team.end());
     }
     plays.push_back(ev::play_states(table.codec(), field, positions));
@@ -53,7 +53,7 @@ int run_paper(const EvaluateOptions& options) {
   csv << "test,count_per_play,distance_per_play,count_per_formation,distance_per_formation,"
          "confidence_1,confidence_2\n";
   for (int t = 0; t < options.tests; ++t) {
-    std::vector<FormationRobot> robots(sim::robots_per_team);
+    std::vector<FormationRobot> robots(simulation::robots_per_team);
     for (std::size_t id = 0; id < robots.size(); ++id) {
       robots[id].robot_id = static_cast<std::uint32_t>(id);
       robots[id].position = Point{x(random), y(random)};

@@ -16,7 +16,7 @@
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/simulation/match_simulation.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 namespace {
 
 constexpr double kFrameRateHz = 60.0;
@@ -345,4 +345,4 @@ TEST(MatchShape, InStopAndPlacementTheOpponentKeepsToTheRulesSpeedAndDistance) {
 }
 
 }  // namespace
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

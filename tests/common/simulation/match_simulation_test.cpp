@@ -6,7 +6,7 @@
 #include <optional>
 #include <set>
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 namespace {
 
 MatchSimulationConfig config_with(const std::string& playbook, Division division,
@@ -297,4 +297,4 @@ TEST(MatchSimulation, ConfigsItCannotRunAreRefused) {
 }
 
 }  // namespace
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

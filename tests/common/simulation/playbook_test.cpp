@@ -7,7 +7,7 @@
 
 #include "scratch_dir.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 namespace {
 
 Playbook parsed(std::string_view text) {
@@ -145,4 +145,4 @@ TEST(Playbook, LoadingAFileReadsItAndAMissingFileIsNamed) {
 }
 
 }  // namespace
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 namespace {
 
 constexpr double dt = 1.0 / 60.0;
@@ -226,4 +226,4 @@ TEST(TeamMotion, RobotsKeepOutOfTheDiscButForTheOnePlacingTheBall) {
 }
 
 }  // namespace
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -9,7 +9,7 @@
 
 #include "ssl_formation/match/referee.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 namespace {
 
 // Every message of `seconds` of data time, one every `step_s`, as the producer asks for them.
@@ -440,4 +440,4 @@ TEST(RefereedSimulation, TheVisionIsTheSeedsOwnAndTheOpponentChangesEndsWithTheR
 }
 
 }  // namespace
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -4,7 +4,7 @@
 
 #include "ssl_formation/vision/sampler.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 namespace {
 
 TEST(SimulatedVision, NinetyPercentOfFormationsComeFromPlays) {
@@ -141,4 +141,4 @@ TEST(SimulatedVision, SameSeedSamePackets) {
 }
 
 }  // namespace
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -63,12 +63,13 @@ struct ProducerOptions {
 };
 
 // The simulation the options describe; throws app::UsageError naming the bad option.
-sim::SimulationConfig simulation_config(const ProducerOptions& options);
+simulation::SimulationConfig simulation_config(const ProducerOptions& options);
 // The match simulation the options describe (--simulation match); the game controller is set
 // apart (game_controller_config).
-sim::MatchSimulationConfig match_simulation_config(const ProducerOptions& options);
+simulation::MatchSimulationConfig match_simulation_config(const ProducerOptions& options);
 // Its game controller: none with --referee off.
-std::optional<sim::GameControllerConfig> game_controller_config(const ProducerOptions& options);
+std::optional<simulation::GameControllerConfig> game_controller_config(
+    const ProducerOptions& options);
 
 // The three modes; each returns the exit status.
 int run_simulation(const ProducerOptions& options);  // live_feed.cpp

@@ -36,13 +36,14 @@ class SimulationSource {
   virtual double live_period_s() const = 0;
   // What has happened so far, on a status line: "frames=12000 match_time=200.0s plays=40 ...".
   virtual void describe(std::uint64_t steps, app::StatusLine& line) const = 0;
-  virtual const sim::SimulatedGameController* game_controller() const = 0;
+  virtual const simulation::SimulatedGameController* game_controller() const = 0;
 };
 
 // The simulated game controller on a status line: the figures game=running attacks=-x
 // score=1:0(yellow:blue) (the side the opponent attacks), and the details stage and match (how
 // many matches began).
-void describe_game_controller(const sim::SimulatedGameController& game, app::StatusLine& line);
+void describe_game_controller(const simulation::SimulatedGameController& game,
+                              app::StatusLine& line);
 
 // Whether `steps` steps of `step_s` each are all that --count or --duration ask for.
 bool simulation_done(const ProducerOptions& options, std::uint64_t steps, double step_s);

@@ -11,7 +11,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 enum class TeamColor { yellow, blue };
 std::optional<TeamColor> parse_team_color(std::string_view text);
@@ -67,4 +67,4 @@ struct FormationSample {
   std::vector<Transition> transitions;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

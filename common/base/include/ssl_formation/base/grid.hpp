@@ -13,7 +13,7 @@
 
 #include "ssl_formation/base/result.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 // A point on the field in millimetres, centre of the field at (0, 0).
 struct Point {
@@ -113,4 +113,4 @@ class Grid {
   int width_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

@@ -5,7 +5,7 @@
 
 #include <optional>
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 class IntervalGate {
  public:
@@ -26,4 +26,4 @@ class IntervalGate {
   std::optional<double> last_s_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

@@ -12,7 +12,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 struct RobotPrediction {
   std::uint32_t robot_id = 0;
@@ -56,4 +56,4 @@ struct Prediction {
   std::vector<PredictedStep> steps;  // steps[0] is the next formation
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

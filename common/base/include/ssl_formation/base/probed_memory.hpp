@@ -4,7 +4,7 @@
 
 #include <cstddef>
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 // Memory for large arrays probed at random: whole 2 MiB pages, with transparent huge pages
 // asked for (Linux, where /sys/kernel/mm/transparent_hugepage/enabled allows it), so that one TLB
@@ -25,4 +25,4 @@ struct ProbedAllocator {
   friend bool operator==(const ProbedAllocator&, const ProbedAllocator&) { return true; }
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

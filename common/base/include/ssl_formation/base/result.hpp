@@ -28,7 +28,7 @@
 #include <utility>
 #include <variant>
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 // The error of a caller that only needs to know what went wrong.
 struct Error {
@@ -187,4 +187,4 @@ class [[nodiscard]] Result<void, E> {
   std::variant<std::monostate, E> state_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

@@ -8,7 +8,7 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline base {
 
 using StateIndex = std::uint32_t;
 
@@ -57,4 +57,4 @@ class StateCodec {
   StateIndex cells_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline base

@@ -13,7 +13,7 @@
 
 #include "ssl_formation/files/byte_codec.hpp"
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline files::detail {
 
 class ChunkReader {
  public:
@@ -80,4 +80,4 @@ struct ReadProblem {
 // The CRC-32 of the bytes [begin, end) of `fd` into `crc`; 0 or an errno value as ChunkReader.
 int crc_of_range(int fd, std::uint64_t begin, std::uint64_t end, std::uint32_t& crc);
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline files::detail

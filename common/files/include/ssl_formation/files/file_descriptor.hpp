@@ -9,7 +9,7 @@
 #include <string>
 #include <utility>
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline files::detail {
 
 inline std::string errno_text(int error) { return std::strerror(error); }
 
@@ -36,4 +36,4 @@ class FileDescriptor {
   int fd_;
 };
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline files::detail

@@ -19,7 +19,7 @@
 
 struct gzFile_s;  // zlib's file (the writer's), kept out of this header
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 enum class LogMessageType : std::int32_t {
   blank = 0,
@@ -234,4 +234,4 @@ struct LogVisionPackets {
 // damage after the header is reported in the packets' `stopped_early`.
 Result<LogVisionPackets> read_vision_log(const std::filesystem::path& path);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

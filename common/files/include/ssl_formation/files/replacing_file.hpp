@@ -11,7 +11,7 @@
 #include <ostream>
 #include <string>
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 class ReplacingFile {
  public:
@@ -47,4 +47,4 @@ std::filesystem::path temporary_beside(const std::filesystem::path& target);
 // file (a device, a pipe, a terminal).
 bool written_in_place(const std::filesystem::path& target);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

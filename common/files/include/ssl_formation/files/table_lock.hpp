@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace ssl_formation {
+namespace ssl_formation::inline files {
 
 class TableLockError : public std::runtime_error {
  public:
@@ -44,4 +44,4 @@ class TableWriterLock {
   int fd_ = -1;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline files

@@ -24,7 +24,7 @@
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/match/referee.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 enum class GamePhase : std::uint8_t {
   running,
@@ -82,4 +82,4 @@ class GamePhaseTracker {
   int restart_ = -1;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

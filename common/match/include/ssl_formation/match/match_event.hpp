@@ -16,7 +16,7 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 enum class MatchEventKind : std::uint8_t {
   vision,          // an SSL_WrapperPacket (detection and/or geometry)
@@ -93,4 +93,4 @@ class RecordedMatch {
   std::size_t referee_events_ = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

@@ -19,7 +19,7 @@
 
 class Referee;
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 // The match's state as the followed game controller's last command left it.
 enum class GameState : std::uint8_t {
@@ -187,4 +187,4 @@ std::string stage_name(int stage);
 // on +x", or "no referee heard", for status lines.
 std::string describe(const RefereeFollower& referee);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

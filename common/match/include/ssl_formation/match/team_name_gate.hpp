@@ -10,7 +10,7 @@
 #include <optional>
 #include <string>
 
-namespace ssl_formation {
+namespace ssl_formation::inline match {
 
 class TeamNameGate {
  public:
@@ -46,4 +46,4 @@ class TeamNameGate {
   std::uint64_t refused_ = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline match

@@ -22,7 +22,7 @@
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/model_api/stored_table.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline model_api {
 
 // What a status line and a report say of a learner's table, without a copy of it.
 struct TableSummary {
@@ -152,4 +152,4 @@ class Forecaster {
   virtual void forget_match() = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline model_api

@@ -14,9 +14,11 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/model_api/transition_table.hpp"
 
-namespace ssl_formation {
-
+namespace ssl_formation::inline motion_model {
 class MotionTable;
+}  // namespace ssl_formation::inline motion_model
+
+namespace ssl_formation::inline model_api {
 
 // What the counts mean, saved next to them.
 struct TableMetadata {
@@ -37,4 +39,4 @@ struct StoredTable {
   std::uint32_t format_version = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline model_api

@@ -17,7 +17,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline model_api {
 
 enum class TableStorage { automatic, dense, sparse };
 
@@ -87,4 +87,4 @@ class TransitionTable {
   std::uint64_t transitions_ = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline model_api

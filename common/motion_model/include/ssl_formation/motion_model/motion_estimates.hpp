@@ -18,7 +18,7 @@
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 struct MotionModelSettings {
   // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
@@ -152,4 +152,4 @@ class MotionLevelEstimates {
 double motion_log_likelihood(const MotionRow& row, const MotionEstimate& estimate,
                              double mean_weight);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

@@ -17,7 +17,10 @@
 #include "ssl_formation/files/durable_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::detail {
+namespace ssl_formation::inline motion_model::detail {
+
+// Written with the file codec (files/byte_codec.hpp, chunk_reader.hpp, durable_file.hpp).
+using namespace files::detail;
 
 inline constexpr std::uint64_t motion_config_size = 68;
 // The configuration, then the u64 instances, held-out instances seen and row count.
@@ -63,4 +66,4 @@ MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit, Mot
 ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, MotionLayout layout,
                                 std::optional<MotionTable>& out);
 
-}  // namespace ssl_formation::detail
+}  // namespace ssl_formation::inline motion_model::detail

@@ -18,7 +18,7 @@
 #include "ssl_formation/motion_model/motion_estimates.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline motion_model {
 
 struct MotionPruning {
   // A row of running play is kept when its own estimate fits its instances better than its
@@ -67,4 +67,4 @@ class MotionPruner {
 MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSettings& settings,
                                 const MotionPruning& pruning);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline motion_model

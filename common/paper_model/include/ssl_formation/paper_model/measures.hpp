@@ -6,7 +6,7 @@
 #include "ssl_formation/base/state.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline paper_model {
 
 // Reference robots whose predicted state differs, or that the prediction lacks.
 int count_measure(const std::vector<RobotStateById>& predicted,
@@ -16,4 +16,4 @@ int count_measure(const std::vector<RobotStateById>& predicted,
 int distance_measure(const StateCodec& codec, const std::vector<RobotStateById>& predicted,
                      const std::vector<RobotStateById>& reference);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline paper_model

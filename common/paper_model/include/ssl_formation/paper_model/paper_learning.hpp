@@ -10,7 +10,7 @@
 #include "ssl_formation/model_api/model.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline paper_model {
 
 class PaperLearner : public Learner {
  public:
@@ -45,4 +45,4 @@ class PaperForecaster : public Forecaster {
   std::vector<RobotStateById> robot_states_;  // reused from sample to sample
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline paper_model

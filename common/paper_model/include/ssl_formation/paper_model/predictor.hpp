@@ -10,7 +10,7 @@
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/model_api/transition_table.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline paper_model {
 
 // One robot as the predictor sees it: an id and a state.
 struct RobotStateById {
@@ -27,4 +27,4 @@ Prediction predict(const TransitionTable& table, const Formation& formation, int
 std::vector<RobotStateById> robot_states(const Formation& formation);
 std::vector<RobotStateById> robot_states(const PredictedStep& step);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline paper_model

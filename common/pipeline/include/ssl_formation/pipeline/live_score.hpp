@@ -20,7 +20,7 @@
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 struct LiveScoreSettings {
   double half_life_s = 30.0;          // of the data clock
@@ -94,4 +94,4 @@ class LiveScore {
 // as "140mm at 1.0s (stays 307mm)", or "" before anything was scored.
 std::string describe_for_status(const LiveScore& score);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

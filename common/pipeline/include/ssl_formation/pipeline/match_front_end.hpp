@@ -24,7 +24,7 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 struct FrontEndConfig {
   SamplerConfig sampler;
@@ -128,4 +128,4 @@ class MatchFrontEnd final : public MatchEventSink {
   std::size_t frame_gaps_seen_ = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

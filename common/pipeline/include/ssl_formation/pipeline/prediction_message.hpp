@@ -11,7 +11,7 @@
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/models/model_factory.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 struct PredictionContext {
   const StateCodec* codec = nullptr;
@@ -56,4 +56,4 @@ std::string summarize_prediction(const Formation& current, const Prediction& pre
 std::string describe_prediction(const Formation& current, const Prediction& prediction,
                                 const PredictionContext& context);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

@@ -20,7 +20,7 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 struct PredictionConfig {
   SamplerConfig sampler = sampler_config_for(default_model);
@@ -145,4 +145,4 @@ class PredictionPipeline final : public MatchEventSink {
   std::uint64_t samples_without_table_ = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

@@ -17,7 +17,7 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation {
+namespace ssl_formation::inline pipeline {
 
 // How training follows the match: who the opponent is, and which game states it learns in.
 struct MatchRules {
@@ -129,4 +129,4 @@ class Training final : public MatchEventSink {
   std::uint64_t saved_samples_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline pipeline

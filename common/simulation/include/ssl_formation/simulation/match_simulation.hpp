@@ -33,7 +33,7 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 enum class Division { a, b };
 // 11 robots a team on 12 x 9 m (A), 6 on 9 x 6 m (B).
@@ -195,4 +195,4 @@ class MatchSimulation {
   std::uint64_t goals_ = 0;
 };
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

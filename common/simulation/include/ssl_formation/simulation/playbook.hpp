@@ -31,7 +31,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/result.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 inline constexpr std::uint32_t playbook_max_robot_id = 10;  // Division A's 11 robots
 
@@ -77,4 +77,4 @@ std::optional<std::string_view> builtin_playbook_text(std::string_view name);
 // A built-in playbook by name, else the playbook file of that path.
 Result<Playbook> builtin_or_file_playbook(const std::string& name_or_path);
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

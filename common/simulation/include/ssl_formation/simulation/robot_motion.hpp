@@ -25,7 +25,7 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 struct MotionLimits {
   double max_speed_mm_s = 3000.0;
@@ -94,4 +94,4 @@ class TeamMotion {
   std::vector<Point> next_velocities_;  // reused by step()
 };
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -11,7 +11,7 @@
 #include "ssl_formation/simulation/simulated_game_controller.hpp"
 #include "ssl_formation/simulation/simulated_vision.hpp"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 // `duration_s` of data time of a simulated match (with its game controller if config.game).
 RecordedMatch record_match_simulation(MatchSimulationConfig config, double duration_s);
@@ -20,4 +20,4 @@ RecordedMatch record_match_simulation(MatchSimulationConfig config, double durat
 RecordedMatch record_paper_simulation(SimulationConfig config, int formations,
                                       std::optional<GameControllerConfig> game = std::nullopt);
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

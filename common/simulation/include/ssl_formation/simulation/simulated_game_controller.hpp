@@ -34,7 +34,7 @@
 #include "ssl_formation/simulation/simulated_vision.hpp"
 #include "ssl_gc_referee_message.pb.h"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 // A duration drawn from bands by weight, each band uniform: a typical length and a long tail.
 struct DurationBands {
@@ -237,4 +237,4 @@ class RefereedSimulation {
   std::optional<SimulatedGameController> game_;
 };
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

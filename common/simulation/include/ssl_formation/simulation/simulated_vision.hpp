@@ -16,7 +16,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation::sim {
+namespace ssl_formation::simulation {
 
 inline constexpr int robots_per_team = 6;
 inline constexpr int play_count = 3;
@@ -143,4 +143,4 @@ class SimulatedVision {
   int current_step_ = 0;
 };
 
-}  // namespace ssl_formation::sim
+}  // namespace ssl_formation::simulation

@@ -13,7 +13,7 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 class AttackInference {
  public:
@@ -49,4 +49,4 @@ class AttackInference {
   std::uint64_t switches_ = 0;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

@@ -21,7 +21,7 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 struct BallTrackerSettings {
   // Ball candidates below this confidence are left out. SSL-Vision rates every orange blob by how
@@ -108,4 +108,4 @@ class BallTracker {
   std::vector<CameraSums> sums_scratch_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

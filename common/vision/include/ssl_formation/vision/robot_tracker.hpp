@@ -17,7 +17,7 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 struct RobotTrackerSettings {
   // The vision's noise on a position, one standard deviation per axis.
@@ -66,4 +66,4 @@ class RobotTracker {
   std::array<std::array<double, 3>, 3> covariance_{};
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

@@ -27,7 +27,7 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 // How often formations are sampled.
 //   step   one every step_s of the data clock; a transition joins two consecutive samples. The
@@ -260,4 +260,4 @@ class FormationSampler : private DataClockListener {
   FormationSample sample_scratch_;
 };
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision

@@ -14,7 +14,7 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation {
+namespace ssl_formation::inline vision {
 
 struct VisionRobot {
   std::uint32_t robot_id = 0;
@@ -85,4 +85,4 @@ enum class VisionDatagram { decoded_directly, parsed_by_protobuf, invalid };
 VisionDatagram read_vision_datagram(std::span<const std::byte> datagram, VisionFrame& frame,
                                     SSL_WrapperPacket& scratch);
 
-}  // namespace ssl_formation
+}  // namespace ssl_formation::inline vision
