@@ -1,6 +1,7 @@
 #include "ssl_formation/base/formation.hpp"
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 std::optional<TeamColor> parse_team_color(std::string_view text) {
   if (text == "yellow") return TeamColor::yellow;
@@ -12,4 +13,5 @@ std::string_view to_string(TeamColor color) {
   return color == TeamColor::yellow ? "yellow" : "blue";
 }
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -4,7 +4,8 @@
 #include <charconv>
 #include <cmath>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 bool FieldSize::valid() const {
   return std::isfinite(length_mm) && std::isfinite(width_mm) && length_mm > 0.0 && width_mm > 0.0;
@@ -64,4 +65,5 @@ std::string Grid::to_string() const {
   return std::to_string(length_) + "x" + std::to_string(width_);
 }
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

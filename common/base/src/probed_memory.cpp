@@ -5,7 +5,8 @@
 #include <cstdint>
 #include <new>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 namespace {
 // Below this an array is allocated as usual: a huge page would be mostly empty.
@@ -48,4 +49,5 @@ void free_probed(void* memory, std::size_t bytes) {
   }
 }
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -1,6 +1,7 @@
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 std::string StateCodec::describe(StateIndex index) const {
   const RobotState s = decode(index);
@@ -13,4 +14,5 @@ std::string StateCodec::describe(StateIndex index) const {
   return out;
 }
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

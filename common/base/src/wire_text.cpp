@@ -3,7 +3,8 @@
 #include <cstdint>
 #include <cstdio>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 namespace {
 
@@ -84,4 +85,5 @@ std::string printable_wire_text(std::string_view raw, std::size_t max_chars) {
   return out;
 }
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 std::uint32_t crc_initial() { return static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0)); }
 
@@ -25,4 +27,6 @@ std::uint32_t crc_of(const std::uint8_t* data, std::size_t size) {
   return crc_update(crc_initial(), data, size);
 }
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

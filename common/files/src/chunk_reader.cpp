@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cerrno>
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 int ChunkReader::crc_update_to_end(std::uint32_t& crc) {
   while (true) {
@@ -40,4 +42,6 @@ int crc_of_range(int fd, std::uint64_t begin, std::uint64_t end, std::uint32_t& 
   return reader.crc_update_to_end(crc);
 }
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

@@ -15,7 +15,8 @@
 #include <isa-l/igzip_lib.h>
 #endif
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 namespace {
 
@@ -284,4 +285,5 @@ Inflater CompressedInput::inflater() const {
   return source_ ? source_->inflater() : Inflater::zlib;
 }
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -11,7 +11,9 @@
 #include "ssl_formation/files/file_descriptor.hpp"
 #include "ssl_formation/files/replacing_file.hpp"
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 void FileWriter::write(const std::uint8_t* data, std::size_t size) {
   if (error_ != 0) return;
@@ -131,4 +133,6 @@ Result<DurableFileWritten> write_file_durably(const std::filesystem::path& path,
   return DurableFileWritten{};
 }
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

@@ -2,7 +2,8 @@
 
 #include <string>
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 bool LogEvents::next(MatchEvent& event) {
   LogReader::MatchInput kind{};
@@ -65,4 +66,5 @@ Result<RecordedLog> read_recorded_log(const std::filesystem::path& path) {
   return log;
 }
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

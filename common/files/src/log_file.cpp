@@ -11,7 +11,8 @@
 #include "ssl_formation/files/replacing_file.hpp"
 #include "zlib_errors.hpp"
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 namespace {
 
@@ -539,4 +540,5 @@ Result<LogVisionPackets> read_vision_log(const std::filesystem::path& path) {
   return out;
 }
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

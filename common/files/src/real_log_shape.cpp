@@ -18,7 +18,8 @@
 #include "ssl_gc_referee_message.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 std::optional<RealLogMess> parse_real_log_mess(std::string_view text) {
   RealLogMess mess;
@@ -401,4 +402,5 @@ Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
   return counts;
 }
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -6,7 +6,8 @@
 #include <stdexcept>
 #include <system_error>
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 std::filesystem::path temporary_beside(const std::filesystem::path& target) {
   // The pid keeps processes apart, the counter keeps concurrent writes of one process apart.
@@ -61,4 +62,5 @@ void ReplacingFile::discard() {
   std::filesystem::remove(temporary_, ignored);
 }
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -9,7 +9,8 @@
 #include <cstring>
 #include <utility>
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 namespace {
 
@@ -113,4 +114,5 @@ TableWriterLock::~TableWriterLock() {
 TableWriterLock::TableWriterLock(TableWriterLock&& other) noexcept
     : path_(std::move(other.path_)), fd_(std::exchange(other.fd_, -1)) {}
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

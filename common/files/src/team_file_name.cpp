@@ -8,7 +8,8 @@
 
 #include "ssl_formation/match/match.hpp"
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 namespace {
 
@@ -190,4 +191,5 @@ std::string team_table_file_name(std::string_view team) {
   return name + ".bin";
 }
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <string>
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 // gzopen and gzclose leave errno at 0 when they fail for want of memory.
 inline std::string zlib_errno_text(int err) {
@@ -20,4 +22,6 @@ inline std::string without_path(std::string message, const std::filesystem::path
   return message;
 }
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

@@ -2,7 +2,8 @@
 
 #include "ssl_gc_referee_message.pb.h"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 std::string_view to_string(GamePhase phase) {
   switch (phase) {
@@ -90,4 +91,5 @@ GamePhase GamePhaseTracker::phase(double time_s, TeamColor opponent) const {
   }
 }
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

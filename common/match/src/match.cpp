@@ -3,7 +3,8 @@
 #include <cctype>
 #include <utility>
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 std::string_view to_string(Because because) {
   switch (because) {
@@ -152,4 +153,5 @@ void MatchFollower::remember_opponent() {
   if (!opponent_.name.empty()) last_named_ = opponent_.name;
 }
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

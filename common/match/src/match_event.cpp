@@ -2,7 +2,8 @@
 
 #include <algorithm>
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 std::string_view to_string(MatchEventKind kind) {
   switch (kind) {
@@ -62,4 +63,5 @@ std::pair<RecordedMatch, RecordedMatch> RecordedMatch::split(double fraction) co
   return {std::move(head), std::move(tail)};
 }
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

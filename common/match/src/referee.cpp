@@ -7,7 +7,8 @@
 #include "ssl_formation/base/wire_text.hpp"
 #include "ssl_gc_referee_message.pb.h"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 namespace {
 constexpr std::array<std::string_view, game_state_count> game_state_names{
@@ -242,4 +243,5 @@ std::string describe(const RefereeFollower& referee) {
   return out;
 }
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

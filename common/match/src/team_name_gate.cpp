@@ -1,6 +1,7 @@
 #include "ssl_formation/match/team_name_gate.hpp"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 bool TeamNameGate::take_over(const std::string& followed_yellow, const std::string& followed_blue,
                              const std::string& yellow, const std::string& blue, double receive_s) {
@@ -39,4 +40,5 @@ bool TeamNameGate::take_over(const std::string& followed_yellow, const std::stri
   return true;
 }
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

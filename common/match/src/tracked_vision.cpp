@@ -4,7 +4,8 @@
 
 #include "ssl_formation/base/wire_text.hpp"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 namespace {
 // Metres (as the tracker sends them) to millimetres, in double.
@@ -92,4 +93,5 @@ bool TrackedVision::add(std::string_view payload, double receive_s, VisionFrame&
   return true;
 }
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

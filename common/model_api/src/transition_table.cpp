@@ -5,7 +5,8 @@
 #include <unordered_map>
 #include <utility>
 
-namespace ssl_formation::inline model_api {
+namespace ssl_formation {
+inline namespace model_api {
 
 namespace {
 
@@ -256,4 +257,5 @@ void TransitionTable::merge(const TransitionTable& other) {
   other.for_each_nonzero([this](StateIndex from, StateIndex to, Count c) { add(from, to, c); });
 }
 
-}  // namespace ssl_formation::inline model_api
+}  // namespace model_api
+}  // namespace ssl_formation

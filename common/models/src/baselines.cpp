@@ -7,7 +7,8 @@
 #include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 // ---- BaselineTracks -------------------------------------------------------------------------
 
@@ -242,4 +243,5 @@ std::unique_ptr<Forecaster> BaselineLearner::forecaster(const TableMetadata&) co
   return std::make_unique<BaselineForecaster>(extrapolation_, settings_, factors());
 }
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

@@ -12,7 +12,8 @@
 #include "ssl_formation/models/model_factory.hpp"
 #include "ssl_formation/vision/robot_tracker.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 // Each robot's tracker over the samples, in normalised coordinates, and what it said at each
 // sample of the last `keep_s` seconds. A track starts again where the robot jumped (a ghost or a
@@ -113,4 +114,5 @@ class BaselineLearner : public Learner {
   std::uint64_t fitted_ = 0;
 };
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

@@ -9,7 +9,8 @@
 #include "ssl_formation/motion_model/motion_learning.hpp"
 #include "ssl_formation/paper_model/paper_learning.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 namespace {
 
@@ -180,4 +181,5 @@ std::unique_ptr<Forecaster> make_forecaster(ModelKind kind, const ModelSettings&
   throw std::invalid_argument("unknown model");
 }
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

@@ -6,7 +6,8 @@
 #include "ssl_formation/motion_model/motion_table_format.hpp"
 #include "table_format.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 using namespace detail;
 using namespace files::detail;
@@ -57,4 +58,5 @@ Result<BudgetFit> fit_table_to_budget(const TransitionTable& counts, const Table
   return result;
 }
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

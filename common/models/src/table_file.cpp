@@ -17,7 +17,8 @@
 #include "ssl_formation/motion_model/motion_table_format.hpp"
 #include "table_format.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 using namespace detail;
 using namespace files::detail;
@@ -338,4 +339,5 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTab
                         stored.motion ? &*stored.motion : nullptr, hooks);
 }
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

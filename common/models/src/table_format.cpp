@@ -5,7 +5,9 @@
 #include <utility>
 #include <vector>
 
-namespace ssl_formation::inline models::detail {
+namespace ssl_formation {
+inline namespace models {
+namespace detail {
 
 TableHeader header_for(const TransitionTable& table, const TableMetadata& metadata,
                        std::uint32_t version) {
@@ -218,4 +220,6 @@ std::optional<std::string> write_counts(FileWriter& writer, const TransitionTabl
   return std::nullopt;
 }
 
-}  // namespace ssl_formation::inline models::detail
+}  // namespace detail
+}  // namespace models
+}  // namespace ssl_formation

@@ -11,7 +11,9 @@
 #include "ssl_formation/files/durable_file.hpp"
 #include "ssl_formation/models/table_file.hpp"
 
-namespace ssl_formation::inline models::detail {
+namespace ssl_formation {
+inline namespace models {
+namespace detail {
 
 // Written with the file codec (files/byte_codec.hpp, chunk_reader.hpp, durable_file.hpp).
 using namespace files::detail;
@@ -59,4 +61,6 @@ ReadProblem read_counts(ChunkReader& reader, const TableHeader& header, Transiti
 // listed them out of order (its bytes are then not a table).
 std::optional<std::string> write_counts(FileWriter& writer, const TransitionTable& table);
 
-}  // namespace ssl_formation::inline models::detail
+}  // namespace detail
+}  // namespace models
+}  // namespace ssl_formation

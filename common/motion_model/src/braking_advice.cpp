@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 bool braking_advice_holds(GamePhase phase) {
   return phase == GamePhase::stop || phase == GamePhase::ball_placement_opponent ||
@@ -42,4 +43,5 @@ void advise_braking(const std::vector<MotionRobot>& robots, double velocity_wind
   }
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -7,7 +7,8 @@
 #include <optional>
 #include <vector>
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -149,4 +150,5 @@ void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, P
   advice.any = advised > 0;
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -241,4 +242,5 @@ double motion_log_likelihood(const MotionRow& row, const MotionEstimate& estimat
   return -n * std::log(spread) - std::max(squares, 0.0) / spread;
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

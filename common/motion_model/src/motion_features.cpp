@@ -10,7 +10,8 @@
 #include "ssl_formation/motion_model/motion_model.hpp"
 #include "whole_mm.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 std::int32_t whole_mm(double value) { return detail::whole_mm_of(value); }
 
@@ -192,4 +193,5 @@ MotionKinematics MotionInstance::kinematics() const {
   return {p(v_x, v_y), p(a_x, a_y), p(g_x, g_y), p(s_x, s_y), p(t_x, t_y)};
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

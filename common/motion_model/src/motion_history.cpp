@@ -15,7 +15,8 @@
 #include <emmintrin.h>
 #endif
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 // No robot data for this long: the play moved on.
@@ -294,4 +295,5 @@ void learn_motion(MotionTable& table, MotionHistory& history, const Formation& n
   table.add(std::span<const MotionTable::Learned>(batch.data(), pending));
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -8,7 +8,8 @@
 #include "ssl_formation/motion_model/game_rules.hpp"
 #include "ssl_formation/motion_model/motion_table_pruning.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -234,4 +235,5 @@ void MotionForecaster::forget_match() {
   calibration_.clear();
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

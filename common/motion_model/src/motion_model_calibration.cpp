@@ -11,7 +11,8 @@
 
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -155,4 +156,5 @@ MotionModel::IsotonicMap MotionModel::IsotonicMap::fit(
   return map;
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

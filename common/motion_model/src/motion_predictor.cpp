@@ -8,7 +8,8 @@
 #include <optional>
 #include <stdexcept>
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -553,4 +554,5 @@ void MotionModel::predict(const std::vector<MotionRobot>& robots, int horizon,
   }
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

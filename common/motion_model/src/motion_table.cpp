@@ -15,7 +15,8 @@
 #include <emmintrin.h>
 #endif
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -317,4 +318,5 @@ bool operator==(const MotionTable& a, const MotionTable& b) {
   return true;
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

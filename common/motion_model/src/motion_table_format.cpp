@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 
-namespace ssl_formation::inline motion_model::detail {
+namespace ssl_formation {
+inline namespace motion_model {
+namespace detail {
 
 namespace {
 
@@ -505,4 +507,6 @@ ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, Motio
   return {};
 }
 
-}  // namespace ssl_formation::inline motion_model::detail
+}  // namespace detail
+}  // namespace motion_model
+}  // namespace ssl_formation

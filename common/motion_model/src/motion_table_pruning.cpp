@@ -7,7 +7,8 @@
 #include <utility>
 #include <vector>
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -141,4 +142,5 @@ MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSetti
   return MotionPruner(table, settings).prune(pruning);
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -4,7 +4,8 @@
 #include <cmath>
 #include <cstring>
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 // Predictions remembered per step at most, the oldest going first: 16 robots remembered 10
@@ -324,4 +325,5 @@ void OnlineCalibration::adjust(Prediction& prediction, GamePhase phase, bool pre
   }
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

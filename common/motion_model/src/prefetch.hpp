@@ -4,7 +4,9 @@
 
 #include <cstddef>
 
-namespace ssl_formation::inline motion_model::detail {
+namespace ssl_formation {
+inline namespace motion_model {
+namespace detail {
 
 // Fetches every cache line `object` spans into the cache (a hint: nothing waits for it).
 template <typename T>
@@ -14,4 +16,6 @@ void prefetch_object(const T& object) {
   __builtin_prefetch(bytes + sizeof(T) - 1);  // an object not aligned to a line spans one more
 }
 
-}  // namespace ssl_formation::inline motion_model::detail
+}  // namespace detail
+}  // namespace motion_model
+}  // namespace ssl_formation

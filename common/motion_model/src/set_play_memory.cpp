@@ -6,7 +6,8 @@
 
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 namespace {
 
@@ -233,4 +234,5 @@ void SetPlayRecorder::finish(SetPlayMemory& memory) {
   over_since_s_.reset();
 }
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -13,7 +13,9 @@
 #include <emmintrin.h>
 #endif
 
-namespace ssl_formation::inline motion_model::detail {
+namespace ssl_formation {
+inline namespace motion_model {
+namespace detail {
 
 inline std::int32_t whole_mm_of(double value) {
   // Round half away from zero without std::round's call: this runs for every value of every
@@ -43,4 +45,6 @@ inline WholePoint whole_mm_of(Point p) {
 #endif
 }
 
-}  // namespace ssl_formation::inline motion_model::detail
+}  // namespace detail
+}  // namespace motion_model
+}  // namespace ssl_formation

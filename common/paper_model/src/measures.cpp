@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cstdlib>
 
-namespace ssl_formation::inline paper_model {
+namespace ssl_formation {
+inline namespace paper_model {
 
 namespace {
 const RobotStateById* find(const std::vector<RobotStateById>& robots, std::uint32_t robot_id) {
@@ -37,4 +38,5 @@ int distance_measure(const StateCodec& codec, const std::vector<RobotStateById>&
   return distance;
 }
 
-}  // namespace ssl_formation::inline paper_model
+}  // namespace paper_model
+}  // namespace ssl_formation

@@ -2,7 +2,8 @@
 
 #include <stdexcept>
 
-namespace ssl_formation::inline paper_model {
+namespace ssl_formation {
+inline namespace paper_model {
 
 void PaperLearner::learn(const MatchMoment& moment) {
   for (const Transition& t : moment.sample.transitions) table_.add(t.from, t.to);
@@ -45,4 +46,5 @@ void PaperForecaster::forecast(const MatchMoment& moment, int steps, Prediction&
   }
 }
 
-}  // namespace ssl_formation::inline paper_model
+}  // namespace paper_model
+}  // namespace ssl_formation

@@ -1,6 +1,7 @@
 #include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation::inline paper_model {
+namespace ssl_formation {
+inline namespace paper_model {
 
 namespace {
 
@@ -100,4 +101,5 @@ std::vector<RobotStateById> robot_states(const PredictedStep& step) {
   return robots;
 }
 
-}  // namespace ssl_formation::inline paper_model
+}  // namespace paper_model
+}  // namespace ssl_formation

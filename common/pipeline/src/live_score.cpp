@@ -5,7 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 namespace {
 
@@ -145,4 +146,5 @@ std::string describe_for_status(const LiveScore& score) {
   return text;
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

@@ -4,7 +4,8 @@
 #include <cmath>
 #include <utility>
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 MatchFrontEnd::MatchFrontEnd(FrontEndConfig config, Handlers handlers)
     : config_(std::move(config)),
@@ -157,4 +158,5 @@ double MatchFrontEnd::recent_frame_gap_s() const {
   return *std::min_element(frame_gaps_s_.begin(), frame_gaps_s_.end());
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

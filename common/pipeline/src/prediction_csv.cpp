@@ -8,7 +8,8 @@
 #include <optional>
 #include <sstream>
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 namespace {
 
@@ -96,9 +97,11 @@ void append_prediction_csv(const PredictedFormation& predicted, std::string& out
   }
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 namespace {
 
@@ -259,4 +262,5 @@ Result<RecordedPredictions> read_prediction_csv(const std::string& path) {
   return parse_prediction_csv(text.str(), path);
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

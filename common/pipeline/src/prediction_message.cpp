@@ -6,7 +6,8 @@
 #include <cstdio>
 #include <cstring>
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 namespace {
 
@@ -351,4 +352,5 @@ std::string describe_prediction(const Formation& current, const Prediction& pred
   return describe(current, prediction, &context);
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

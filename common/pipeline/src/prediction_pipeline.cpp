@@ -4,7 +4,8 @@
 #include <string>
 #include <utility>
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 namespace {
 
@@ -149,4 +150,5 @@ bool PredictionPipeline::predict(const MatchMoment& moment, ForecastUse use) {
   return true;
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

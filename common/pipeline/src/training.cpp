@@ -4,7 +4,8 @@
 #include <stdexcept>
 #include <utility>
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 FrontEndConfig Training::front_end_config(const TrainingConfig& config) {
   FrontEndConfig front;
@@ -137,4 +138,5 @@ void Training::on_sample(const MatchMoment& moment) {
   }
 }
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

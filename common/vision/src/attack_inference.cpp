@@ -3,7 +3,8 @@
 #include <cmath>
 #include <limits>
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 void AttackInference::reset() {
   tracks_.clear();
@@ -58,4 +59,5 @@ bool AttackInference::add(double time_s, const std::vector<Robot>& robots, const
   return true;
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

@@ -4,7 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 namespace {
 // Times equal but for rounding (a window edge that falls on a frame time).
@@ -171,4 +172,5 @@ void BallTracker::update_velocity() {
   state_->velocity = Point{s_tx / s_tt, s_ty / s_tt};
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

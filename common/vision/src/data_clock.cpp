@@ -5,7 +5,8 @@
 #include <stdexcept>
 #include <utility>
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 namespace {
 constexpr double time_epsilon_s = 1e-9;
@@ -185,4 +186,5 @@ void DataClock::reset() {
   conflict_ = false;
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

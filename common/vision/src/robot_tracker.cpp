@@ -2,7 +2,8 @@
 
 #include <cmath>
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 bool RobotTrackerSettings::valid() const {
   return std::isfinite(position_noise_mm) && position_noise_mm > 0.0 &&
@@ -74,4 +75,5 @@ void RobotTracker::observe(double time_s, Point position) {
   c = {{{n00, n01, n02}, {n01, n11, n12}, {n02, n12, n22}}};
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

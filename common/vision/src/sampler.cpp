@@ -6,7 +6,8 @@
 
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 namespace {
 constexpr double time_epsilon_s = 1e-9;
@@ -554,4 +555,5 @@ std::vector<std::string> new_rejections(const SamplerCounters& before,
   return out;
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

@@ -7,7 +7,8 @@
 
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 namespace {
 
@@ -406,4 +407,5 @@ VisionDatagram read_vision_datagram(std::span<const std::byte> datagram, VisionF
   return VisionDatagram::parsed_by_protobuf;
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

@@ -1,6 +1,7 @@
 #include "ssl_formation/vision/vision_packet.hpp"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 namespace {
 
@@ -65,4 +66,5 @@ SSL_WrapperPacket make_geometry_packet(const FieldSize& field) {
   return packet;
 }
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

@@ -11,7 +11,8 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 enum class TeamColor { yellow, blue };
 std::optional<TeamColor> parse_team_color(std::string_view text);
@@ -67,4 +68,5 @@ struct FormationSample {
   std::vector<Transition> transitions;
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

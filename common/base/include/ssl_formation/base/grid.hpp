@@ -13,7 +13,8 @@
 
 #include "ssl_formation/base/result.hpp"
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 // A point on the field in millimetres, centre of the field at (0, 0).
 struct Point {
@@ -113,4 +114,5 @@ class Grid {
   int width_;
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

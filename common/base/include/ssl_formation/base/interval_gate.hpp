@@ -5,7 +5,8 @@
 
 #include <optional>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 class IntervalGate {
  public:
@@ -26,4 +27,5 @@ class IntervalGate {
   std::optional<double> last_s_;
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -12,7 +12,8 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 struct RobotPrediction {
   std::uint32_t robot_id = 0;
@@ -56,4 +57,5 @@ struct Prediction {
   std::vector<PredictedStep> steps;  // steps[0] is the next formation
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

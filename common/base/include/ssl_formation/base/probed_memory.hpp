@@ -4,7 +4,8 @@
 
 #include <cstddef>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 // Memory for large arrays probed at random: whole 2 MiB pages, with transparent huge pages
 // asked for (Linux, where /sys/kernel/mm/transparent_hugepage/enabled allows it), so that one TLB
@@ -25,4 +26,5 @@ struct ProbedAllocator {
   friend bool operator==(const ProbedAllocator&, const ProbedAllocator&) { return true; }
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -28,7 +28,8 @@
 #include <utility>
 #include <variant>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 // The error of a caller that only needs to know what went wrong.
 struct Error {
@@ -187,4 +188,5 @@ class [[nodiscard]] Result<void, E> {
   std::variant<std::monostate, E> state_;
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -8,7 +8,8 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 using StateIndex = std::uint32_t;
 
@@ -57,4 +58,5 @@ class StateCodec {
   StateIndex cells_;
 };
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -10,7 +10,8 @@
 #include <string>
 #include <string_view>
 
-namespace ssl_formation::inline base {
+namespace ssl_formation {
+inline namespace base {
 
 // Longer than any SSL team's name or a UUID.
 inline constexpr std::size_t wire_text_max_chars = 64;
@@ -26,4 +27,5 @@ inline constexpr std::size_t wire_text_max_chars = 64;
 // Text that is printable and short comes back unchanged.
 std::string printable_wire_text(std::string_view raw, std::size_t max_chars = wire_text_max_chars);
 
-}  // namespace ssl_formation::inline base
+}  // namespace base
+}  // namespace ssl_formation

@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <limits>
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 static_assert(std::numeric_limits<double>::is_iec559, "doubles are stored as IEEE-754 bits");
 
@@ -81,4 +83,6 @@ std::uint32_t crc_initial();
 std::uint32_t crc_update(std::uint32_t crc, const std::uint8_t* data, std::size_t size);
 std::uint32_t crc_of(const std::uint8_t* data, std::size_t size);
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

@@ -13,7 +13,9 @@
 
 #include "ssl_formation/files/byte_codec.hpp"
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 class ChunkReader {
  public:
@@ -80,4 +82,6 @@ struct ReadProblem {
 // The CRC-32 of the bytes [begin, end) of `fd` into `crc`; 0 or an errno value as ChunkReader.
 int crc_of_range(int fd, std::uint64_t begin, std::uint64_t end, std::uint32_t& crc);
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

@@ -12,7 +12,8 @@
 
 #include "ssl_formation/base/result.hpp"
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 // What inflates gzip data. automatic: ISA-L wherever it can, else zlib. The other two are for
 // tests and benchmarks that compare them; isal on a build without ISA-L is refused.
@@ -63,4 +64,5 @@ class CompressedInput {
   std::uint64_t compressed_size_ = 0;
 };
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

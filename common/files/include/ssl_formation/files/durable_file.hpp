@@ -16,7 +16,9 @@
 #include "ssl_formation/base/result.hpp"
 #include "ssl_formation/files/byte_codec.hpp"
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 // Writes through a fixed buffer, keeping the CRC-32 of everything written and the first error,
 // so that callers inside a visitor (which cannot stop early) just keep going until the end.
@@ -81,4 +83,6 @@ Result<DurableFileWritten> write_file_durably(const std::filesystem::path& path,
                                               const WriteContent& write_content,
                                               const DurableFileHooks& hooks = {});
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

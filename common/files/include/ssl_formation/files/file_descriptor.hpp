@@ -9,7 +9,9 @@
 #include <string>
 #include <utility>
 
-namespace ssl_formation::inline files::detail {
+namespace ssl_formation {
+inline namespace files {
+namespace detail {
 
 inline std::string errno_text(int error) { return std::strerror(error); }
 
@@ -36,4 +38,6 @@ class FileDescriptor {
   int fd_;
 };
 
-}  // namespace ssl_formation::inline files::detail
+}  // namespace detail
+}  // namespace files
+}  // namespace ssl_formation

@@ -12,7 +12,8 @@
 #include "ssl_formation/files/log_file.hpp"
 #include "ssl_formation/match/match_event.hpp"
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 class LogEvents {
  public:
@@ -45,4 +46,5 @@ struct RecordedLog {
 // An error only when the file cannot be opened or has no valid header.
 Result<RecordedLog> read_recorded_log(const std::filesystem::path& path);
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -19,7 +19,8 @@
 
 struct gzFile_s;  // zlib's file (the writer's), kept out of this header
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 enum class LogMessageType : std::int32_t {
   blank = 0,
@@ -234,4 +235,5 @@ struct LogVisionPackets {
 // damage after the header is reported in the packets' `stopped_early`.
 Result<LogVisionPackets> read_vision_log(const std::filesystem::path& path);
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -14,7 +14,8 @@
 
 #include "ssl_formation/base/result.hpp"
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 // Each part of real logs' mess, placed at fixed fractions of the recording so that a held-out
 // split (the first two thirds to train) has some of each on both sides.
@@ -77,4 +78,5 @@ struct RealLogCounts {
 Result<RealLogCounts> write_as_real_log(const std::filesystem::path& recording,
                                         const std::filesystem::path& out, const RealLogMess& mess);
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -11,7 +11,8 @@
 #include <ostream>
 #include <string>
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 class ReplacingFile {
  public:
@@ -47,4 +48,5 @@ std::filesystem::path temporary_beside(const std::filesystem::path& target);
 // file (a device, a pipe, a terminal).
 bool written_in_place(const std::filesystem::path& target);
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -13,7 +13,8 @@
 #include <stdexcept>
 #include <string>
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 class TableLockError : public std::runtime_error {
  public:
@@ -44,4 +45,5 @@ class TableWriterLock {
   int fd_ = -1;
 };
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

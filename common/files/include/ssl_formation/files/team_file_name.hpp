@@ -27,10 +27,12 @@
 #include <string>
 #include <string_view>
 
-namespace ssl_formation::inline files {
+namespace ssl_formation {
+inline namespace files {
 
 inline constexpr std::size_t team_file_name_max_length = 64;  // before ".bin"
 
 std::string team_table_file_name(std::string_view team);
 
-}  // namespace ssl_formation::inline files
+}  // namespace files
+}  // namespace ssl_formation

@@ -24,7 +24,8 @@
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/match/referee.hpp"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 enum class GamePhase : std::uint8_t {
   running,
@@ -82,4 +83,5 @@ class GamePhaseTracker {
   int restart_ = -1;
 };
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

@@ -17,7 +17,8 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/match/referee.hpp"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 // Why the opponent's colour or side is what it is.
 enum class Because : std::uint8_t { default_setting, option, referee, inferred };
@@ -109,4 +110,5 @@ class MatchFollower {
   bool ever_known_ = false;
 };
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

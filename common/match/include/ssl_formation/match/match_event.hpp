@@ -16,7 +16,8 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 enum class MatchEventKind : std::uint8_t {
   vision,          // an SSL_WrapperPacket (detection and/or geometry)
@@ -93,4 +94,5 @@ class RecordedMatch {
   std::size_t referee_events_ = 0;
 };
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

@@ -19,7 +19,8 @@
 
 class Referee;
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 // The match's state as the followed game controller's last command left it.
 enum class GameState : std::uint8_t {
@@ -187,4 +188,5 @@ std::string stage_name(int stage);
 // on +x", or "no referee heard", for status lines.
 std::string describe(const RefereeFollower& referee);
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

@@ -10,7 +10,8 @@
 #include <optional>
 #include <string>
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 class TeamNameGate {
  public:
@@ -46,4 +47,5 @@ class TeamNameGate {
   std::uint64_t refused_ = 0;
 };
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

@@ -20,7 +20,8 @@
 #include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper_tracked.pb.h"
 
-namespace ssl_formation::inline match {
+namespace ssl_formation {
+inline namespace match {
 
 struct TrackerCounters {
   std::uint64_t packets = 0;
@@ -75,4 +76,5 @@ void to_vision_frame(const TrackedFrame& tracked, VisionFrame& frame, std::uint6
 // ball. The height and the vertical velocity of a chipped ball are left out.
 std::optional<BallState> tracked_ball(const TrackedFrame& tracked);
 
-}  // namespace ssl_formation::inline match
+}  // namespace match
+}  // namespace ssl_formation

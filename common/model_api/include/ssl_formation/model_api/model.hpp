@@ -22,7 +22,8 @@
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/model_api/stored_table.hpp"
 
-namespace ssl_formation::inline model_api {
+namespace ssl_formation {
+inline namespace model_api {
 
 // What a status line and a report say of a learner's table, without a copy of it.
 struct TableSummary {
@@ -152,4 +153,5 @@ class Forecaster {
   virtual void forget_match() = 0;
 };
 
-}  // namespace ssl_formation::inline model_api
+}  // namespace model_api
+}  // namespace ssl_formation

@@ -14,11 +14,14 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/model_api/transition_table.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 class MotionTable;
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation
 
-namespace ssl_formation::inline model_api {
+namespace ssl_formation {
+inline namespace model_api {
 
 // What the counts mean, saved next to them.
 struct TableMetadata {
@@ -39,4 +42,5 @@ struct StoredTable {
   std::uint32_t format_version = 0;
 };
 
-}  // namespace ssl_formation::inline model_api
+}  // namespace model_api
+}  // namespace ssl_formation

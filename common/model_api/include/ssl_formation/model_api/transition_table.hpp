@@ -17,7 +17,8 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/base/state.hpp"
 
-namespace ssl_formation::inline model_api {
+namespace ssl_formation {
+inline namespace model_api {
 
 enum class TableStorage { automatic, dense, sparse };
 
@@ -87,4 +88,5 @@ class TransitionTable {
   std::uint64_t transitions_ = 0;
 };
 
-}  // namespace ssl_formation::inline model_api
+}  // namespace model_api
+}  // namespace ssl_formation

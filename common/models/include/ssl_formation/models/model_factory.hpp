@@ -28,7 +28,8 @@
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/vision/sampler.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 enum class ModelKind {
   paper,
@@ -145,4 +146,5 @@ ResumedLearner empty_table_learner(const Grid& grid, const std::optional<MotionC
 // cannot forecast with.
 std::unique_ptr<Forecaster> make_forecaster(ModelKind kind, const ModelSettings& settings);
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

@@ -9,7 +9,8 @@
 #include "ssl_formation/models/table_file.hpp"
 #include "ssl_formation/motion_model/motion_table_pruning.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 // A season of one opponent fits in a few megabytes once the rows that add nothing are folded
 // (docs/benchmarks.md, the scale benchmark); the budget bounds what is left.
@@ -38,4 +39,5 @@ struct BudgetFit {
 Result<BudgetFit> fit_table_to_budget(const TransitionTable& counts, const TableMetadata& metadata,
                                       const MotionTable& motion, const TableBudget& budget);
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

@@ -97,7 +97,8 @@
 #include "ssl_formation/model_api/transition_table.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline models {
+namespace ssl_formation {
+inline namespace models {
 
 // The version of a file without a motion table (the paper's counts only).
 inline constexpr std::uint32_t table_file_version = 1;
@@ -183,4 +184,5 @@ Result<TableSaved> save_table(const std::filesystem::path& path, const Transitio
 Result<TableSaved> save_table(const std::filesystem::path& path, const StoredTable& stored,
                               const SaveHooks& hooks = {});
 
-}  // namespace ssl_formation::inline models
+}  // namespace models
+}  // namespace ssl_formation

@@ -12,7 +12,8 @@
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 #include "ssl_formation/motion_model/set_play_memory.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 struct BrakingPath {
   // A robot braking at least this hard, at least this fast, is stopping (the tracker's
@@ -48,4 +49,5 @@ bool braking_advice_holds(GamePhase phase);
 void advise_braking(const std::vector<MotionRobot>& robots, double velocity_window_s, double step_s,
                     int steps, SetPlayAdvice& advice);
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -10,7 +10,8 @@
 #include "ssl_formation/model_api/model.hpp"
 #include "ssl_formation/motion_model/motion_predictor.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 // A ball slower than this has not been kicked: at a free kick the defenders keep their distance
 // until "the ball is in play" (it moved), and after that the rule no longer holds.
@@ -49,4 +50,5 @@ struct BallPlacementPath {
 void advise_ball_placement(const std::vector<MotionRobot>& robots, Point ball, Point spot,
                            double step_s, int steps, SetPlayAdvice& advice);
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -18,7 +18,8 @@
 #include "ssl_formation/match/game_phase.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 struct MotionModelSettings {
   // How many instances a row needs to weigh as much as its coarser row. Frames 16 ms apart
@@ -152,4 +153,5 @@ class MotionLevelEstimates {
 double motion_log_likelihood(const MotionRow& row, const MotionEstimate& estimate,
                              double mean_weight);
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

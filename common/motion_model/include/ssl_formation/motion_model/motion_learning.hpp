@@ -16,7 +16,8 @@
 #include "ssl_formation/motion_model/online_calibration.hpp"
 #include "ssl_formation/motion_model/set_play_memory.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 // The rows a learner holds before it prunes (MotionLearner): 2^16 rows take about 20 MB.
 inline constexpr std::size_t default_motion_rows_in_memory = std::size_t{1} << 16;
@@ -108,4 +109,5 @@ class MotionForecaster : public Forecaster {
   SetPlayAdvice set_play_advice_;    // reused from set play to set play
 };
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -36,7 +36,8 @@
 #include "ssl_formation/motion_model/set_play_memory.hpp"
 #include "ssl_formation/vision/robot_tracker.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 // What a motion table's rows mean; saved with them, and equal for tables that merge.
 struct MotionConfig {
@@ -528,4 +529,5 @@ class MotionHistory {
 void learn_motion(MotionTable& table, MotionHistory& history, const Formation& now,
                   double learn_from_s = -std::numeric_limits<double>::infinity());
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

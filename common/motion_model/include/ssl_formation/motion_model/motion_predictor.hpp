@@ -18,7 +18,8 @@
 #include "ssl_formation/motion_model/motion_estimates.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 // What the rules of the game say of where the opponent's robots can go under the referee's
 // current command, normalised (the opponent attacks +x). The forecast is moved the least
@@ -236,4 +237,5 @@ class MotionModel {
   std::uint32_t long_settled_context_ = MotionFeatures::standing_contexts;
 };
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

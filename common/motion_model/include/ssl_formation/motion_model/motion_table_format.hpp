@@ -17,7 +17,9 @@
 #include "ssl_formation/files/durable_file.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline motion_model::detail {
+namespace ssl_formation {
+inline namespace motion_model {
+namespace detail {
 
 // Written with the file codec (files/byte_codec.hpp, chunk_reader.hpp, durable_file.hpp).
 using namespace files::detail;
@@ -66,4 +68,6 @@ MotionExtent motion_extent(int fd, std::uint64_t begin, std::uint64_t limit, Mot
 ReadProblem read_motion_section(ChunkReader& reader, double header_step_s, MotionLayout layout,
                                 std::optional<MotionTable>& out);
 
-}  // namespace ssl_formation::inline motion_model::detail
+}  // namespace detail
+}  // namespace motion_model
+}  // namespace ssl_formation

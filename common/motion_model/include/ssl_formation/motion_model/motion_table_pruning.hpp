@@ -18,7 +18,8 @@
 #include "ssl_formation/motion_model/motion_estimates.hpp"
 #include "ssl_formation/motion_model/motion_model.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 struct MotionPruning {
   // A row of running play is kept when its own estimate fits its instances better than its
@@ -67,4 +68,5 @@ class MotionPruner {
 MotionPruned prune_motion_table(const MotionTable& table, const MotionModelSettings& settings,
                                 const MotionPruning& pruning);
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -38,7 +38,8 @@
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 struct OnlineCalibrationSettings {
   // How fast old evidence fades, in seconds of the data clock. On the inner splits (the first
@@ -221,4 +222,5 @@ class OnlineCalibration {
   double radius_growth_;  // 2^(1 / radius_half_count)
 };
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

@@ -29,7 +29,8 @@
 #include "ssl_formation/base/formation.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 
-namespace ssl_formation::inline motion_model {
+namespace ssl_formation {
+inline namespace motion_model {
 
 // Where a kick-off stands: prepared (before NORMAL_START), taken (after it, within the restart
 // window) or over (later: kept only as where the robots went).
@@ -140,4 +141,5 @@ class SetPlayRecorder {
   std::optional<double> over_since_s_;  // when the open kick-off's restart window ended
 };
 
-}  // namespace ssl_formation::inline motion_model
+}  // namespace motion_model
+}  // namespace ssl_formation

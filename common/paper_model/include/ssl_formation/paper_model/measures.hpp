@@ -6,7 +6,8 @@
 #include "ssl_formation/base/state.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation::inline paper_model {
+namespace ssl_formation {
+inline namespace paper_model {
 
 // Reference robots whose predicted state differs, or that the prediction lacks.
 int count_measure(const std::vector<RobotStateById>& predicted,
@@ -16,4 +17,5 @@ int count_measure(const std::vector<RobotStateById>& predicted,
 int distance_measure(const StateCodec& codec, const std::vector<RobotStateById>& predicted,
                      const std::vector<RobotStateById>& reference);
 
-}  // namespace ssl_formation::inline paper_model
+}  // namespace paper_model
+}  // namespace ssl_formation

@@ -10,7 +10,8 @@
 #include "ssl_formation/model_api/model.hpp"
 #include "ssl_formation/paper_model/predictor.hpp"
 
-namespace ssl_formation::inline paper_model {
+namespace ssl_formation {
+inline namespace paper_model {
 
 class PaperLearner : public Learner {
  public:
@@ -45,4 +46,5 @@ class PaperForecaster : public Forecaster {
   std::vector<RobotStateById> robot_states_;  // reused from sample to sample
 };
 
-}  // namespace ssl_formation::inline paper_model
+}  // namespace paper_model
+}  // namespace ssl_formation

@@ -10,7 +10,8 @@
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/model_api/transition_table.hpp"
 
-namespace ssl_formation::inline paper_model {
+namespace ssl_formation {
+inline namespace paper_model {
 
 // One robot as the predictor sees it: an id and a state.
 struct RobotStateById {
@@ -27,4 +28,5 @@ Prediction predict(const TransitionTable& table, const Formation& formation, int
 std::vector<RobotStateById> robot_states(const Formation& formation);
 std::vector<RobotStateById> robot_states(const PredictedStep& step);
 
-}  // namespace ssl_formation::inline paper_model
+}  // namespace paper_model
+}  // namespace ssl_formation

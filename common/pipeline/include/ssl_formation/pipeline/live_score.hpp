@@ -20,7 +20,8 @@
 #include "ssl_formation/base/prediction.hpp"
 #include "ssl_formation/match/game_phase.hpp"
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 struct LiveScoreSettings {
   double half_life_s = 30.0;          // of the data clock
@@ -94,4 +95,5 @@ class LiveScore {
 // as "140mm at 1.0s (stays 307mm)", or "" before anything was scored.
 std::string describe_for_status(const LiveScore& score);
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

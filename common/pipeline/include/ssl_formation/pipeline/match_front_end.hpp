@@ -24,7 +24,8 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 struct FrontEndConfig {
   SamplerConfig sampler;
@@ -128,4 +129,5 @@ class MatchFrontEnd final : public MatchEventSink {
   std::size_t frame_gaps_seen_ = 0;
 };
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

@@ -37,7 +37,8 @@
 #include "ssl_formation/base/result.hpp"
 #include "ssl_formation/pipeline/prediction_pipeline.hpp"
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 // The header line, with its newline.
 std::string_view prediction_csv_header();
@@ -73,4 +74,5 @@ struct RecordedPredictions {
 Result<RecordedPredictions> parse_prediction_csv(std::string_view text, std::string_view source);
 Result<RecordedPredictions> read_prediction_csv(const std::string& path);
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

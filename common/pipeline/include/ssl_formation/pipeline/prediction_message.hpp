@@ -11,7 +11,8 @@
 #include "ssl_formation/match/referee.hpp"
 #include "ssl_formation/models/model_factory.hpp"
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 struct PredictionContext {
   const StateCodec* codec = nullptr;
@@ -56,4 +57,5 @@ std::string summarize_prediction(const Formation& current, const Prediction& pre
 std::string describe_prediction(const Formation& current, const Prediction& prediction,
                                 const PredictionContext& context);
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

@@ -20,7 +20,8 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 struct PredictionConfig {
   SamplerConfig sampler = sampler_config_for(default_model);
@@ -145,4 +146,5 @@ class PredictionPipeline final : public MatchEventSink {
   std::uint64_t samples_without_table_ = 0;
 };
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

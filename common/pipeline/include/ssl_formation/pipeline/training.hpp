@@ -17,7 +17,8 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation::inline pipeline {
+namespace ssl_formation {
+inline namespace pipeline {
 
 // How training follows the match: who the opponent is, and which game states it learns in.
 struct MatchRules {
@@ -129,4 +130,5 @@ class Training final : public MatchEventSink {
   std::uint64_t saved_samples_;
 };
 
-}  // namespace ssl_formation::inline pipeline
+}  // namespace pipeline
+}  // namespace ssl_formation

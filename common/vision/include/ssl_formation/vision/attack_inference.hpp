@@ -13,7 +13,8 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 class AttackInference {
  public:
@@ -49,4 +50,5 @@ class AttackInference {
   std::uint64_t switches_ = 0;
 };
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

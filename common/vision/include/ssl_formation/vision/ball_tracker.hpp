@@ -21,7 +21,8 @@
 #include "ssl_formation/base/grid.hpp"
 #include "ssl_formation/vision/vision_frame.hpp"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 struct BallTrackerSettings {
   // Ball candidates below this confidence are left out. SSL-Vision rates every orange blob by how
@@ -108,4 +109,5 @@ class BallTracker {
   std::vector<CameraSums> sums_scratch_;
 };
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

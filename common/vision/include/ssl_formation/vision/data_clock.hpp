@@ -12,7 +12,8 @@
 #include <optional>
 #include <vector>
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 // The clock's settings, each rule stated here once. SamplerConfig inherits them, so programs and
 // tests set them by these names on a SamplerConfig.
@@ -201,4 +202,5 @@ class DataClock {
   std::optional<std::int64_t> open_k_;
 };
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

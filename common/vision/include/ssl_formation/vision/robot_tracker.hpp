@@ -17,7 +17,8 @@
 
 #include "ssl_formation/base/grid.hpp"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 struct RobotTrackerSettings {
   // The vision's noise on a position, one standard deviation per axis.
@@ -66,4 +67,5 @@ class RobotTracker {
   std::array<std::array<double, 3>, 3> covariance_{};
 };
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

@@ -27,7 +27,8 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 // How often formations are sampled.
 //   step   one every step_s of the data clock; a transition joins two consecutive samples. The
@@ -260,4 +261,5 @@ class FormationSampler : private DataClockListener {
   FormationSample sample_scratch_;
 };
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

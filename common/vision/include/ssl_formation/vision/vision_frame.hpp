@@ -14,7 +14,8 @@
 
 class SSL_WrapperPacket;
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 struct VisionRobot {
   std::uint32_t robot_id = 0;
@@ -85,4 +86,5 @@ enum class VisionDatagram { decoded_directly, parsed_by_protobuf, invalid };
 VisionDatagram read_vision_datagram(std::span<const std::byte> datagram, VisionFrame& frame,
                                     SSL_WrapperPacket& scratch);
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation

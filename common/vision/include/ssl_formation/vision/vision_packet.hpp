@@ -9,7 +9,8 @@
 #include "ssl_formation/vision/vision_frame.hpp"
 #include "ssl_vision_wrapper.pb.h"
 
-namespace ssl_formation::inline vision {
+namespace ssl_formation {
+inline namespace vision {
 
 struct RobotDetection {
   std::uint32_t robot_id = 0;
@@ -40,4 +41,5 @@ FieldMarkings rules_markings(const FieldSize& field);
 void fill_geometry(SSL_GeometryData& geometry, const FieldSize& field);
 SSL_WrapperPacket make_geometry_packet(const FieldSize& field);
 
-}  // namespace ssl_formation::inline vision
+}  // namespace vision
+}  // namespace ssl_formation
